@@ -1,0 +1,32 @@
+#pragma once
+// Reading and writing the file contracts of DESIGN.md: scenario files (YAML, explicit or
+// random-plant form) and schedule files (JSON). Every malformed input throws InputError naming
+// the file, the field and what was expected.
+//
+//   Scenario s = loadScenarioFile("scenarios/default.yaml");
+//   RateSchedule r = loadScheduleFile("plan.json", s);
+//   writeScheduleFile("plan.json", r, {{"surrogate", "info"}});
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "sensornet/core/rate_schedule.hpp"
+#include "sensornet/core/scenario.hpp"
+
+namespace sensornet {
+
+// Parses and validates; `source` names the input in error messages.
+[[nodiscard]] Scenario parseScenarioYaml(const std::string& text, const std::string& source);
+[[nodiscard]] Scenario loadScenarioFile(const std::string& path);
+
+// Parses {"horizon": T, "intervals": N, "rates": [[...] x N]}; extra keys are allowed. When a
+// scenario is given, the shape and feasibility are checked against it.
+[[nodiscard]] RateSchedule parseScheduleJson(const std::string& text, const std::string& source);
+[[nodiscard]] RateSchedule loadScheduleFile(const std::string& path);
+[[nodiscard]] RateSchedule loadScheduleFile(const std::string& path, const Scenario& scenario);
+[[nodiscard]] nlohmann::json scheduleToJson(const RateSchedule& schedule);
+// Writes scheduleToJson(schedule) merged with `extra` keys.
+void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
+                       const nlohmann::json& extra = nlohmann::json::object());
+
+}  // namespace sensornet

@@ -1,0 +1,1 @@
+#include "sensornet/io/scenario_file.hpp"
