@@ -101,7 +101,9 @@ void validateScenario(const Scenario& s, const std::string& source) {
     throw InputError(source, "intervals", "an integer >= 1, got " + std::to_string(s.intervals));
   }
   const Eigen::Index n = s.plant.A.rows();
-  if (n < 1) throw InputError(source, "plant.A", "a non-empty square matrix");
+  if (n < 1 || s.plant.A.cols() != n) {
+    throw InputError(source, "plant.A", "a non-empty square matrix, got " + shapeOf(s.plant.A));
+  }
   MatrixCheck(source, "plant.A", s.plant.A).shape(n, n).finite();
   MatrixCheck(source, "plant.Q", s.plant.Q).shape(n, n).finite().symmetric().definite(false);
   MatrixCheck(source, "plant.P0", s.plant.P0).shape(n, n).finite().symmetric().definite(true);

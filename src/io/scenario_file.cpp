@@ -1,1 +1,366 @@
 #include "sensornet/io/scenario_file.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet {
+namespace {
+
+std::string readFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "a readable " + what + " file (cannot open it)");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Reads typed values out of a YAML tree; every failure names the file, line and field path.
+class YamlReader {
+ public:
+  explicit YamlReader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& field,
+                         const std::string& expected) const {
+    std::string where = source_;
+    if (node.IsDefined() && node.Mark().line >= 0) {
+      where += ":" + std::to_string(node.Mark().line + 1);
+    }
+    throw InputError(where, field, expected);
+  }
+
+  YAML::Node required(const YAML::Node& parent, const std::string& key,
+                      const std::string& field) const {
+    const YAML::Node child = parent[key];
+    if (!child.IsDefined() || child.IsNull()) fail(parent, field, "a value (the field is missing)");
+    return child;
+  }
+
+  double number(const YAML::Node& node, const std::string& field) const {
+    if (!node.IsScalar()) fail(node, field, "a number");
+    const std::string& text = node.Scalar();
+    // yaml-cpp accepts .inf/.nan; we reject every non-finite number explicitly.
+    double value = 0.0;
+    try {
+      value = node.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(node, field, "a number, got '" + text + "'");
+    }
+    if (!std::isfinite(value)) fail(node, field, "a finite number, got '" + text + "'");
+    return value;
+  }
+
+  long integer(const YAML::Node& node, const std::string& field) const {
+    const double value = number(node, field);
+    if (value != std::floor(value) || std::abs(value) > 1e15) {
+      fail(node, field, "an integer, got '" + node.Scalar() + "'");
+    }
+    return static_cast<long>(value);
+  }
+
+  Eigen::MatrixXd matrix(const YAML::Node& node, const std::string& field) const {
+    if (!node.IsSequence() || node.size() == 0) fail(node, field, "a non-empty list of rows");
+    const auto rows = static_cast<Eigen::Index>(node.size());
+    Eigen::Index cols = -1;
+    Eigen::MatrixXd m;
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      const YAML::Node row = node[static_cast<std::size_t>(i)];
+      const std::string row_field = field + "[" + std::to_string(i) + "]";
+      if (!row.IsSequence()) fail(row, row_field, "a row: a list of numbers");
+      if (cols < 0) {
+        cols = static_cast<Eigen::Index>(row.size());
+        if (cols == 0) fail(row, row_field, "a non-empty row");
+        m.resize(rows, cols);
+      } else if (static_cast<Eigen::Index>(row.size()) != cols) {
+        fail(row, row_field,
+             std::to_string(cols) + " entries like row 0, got " + std::to_string(row.size()));
+      }
+      for (Eigen::Index j = 0; j < cols; ++j) {
+        m(i, j) = number(row[static_cast<std::size_t>(j)],
+                         row_field + "[" + std::to_string(j) + "]");
+      }
+    }
+    return m;
+  }
+
+  Eigen::VectorXd vector(const YAML::Node& node, const std::string& field) const {
+    if (!node.IsSequence() || node.size() == 0) fail(node, field, "a non-empty list of numbers");
+    Eigen::VectorXd v(static_cast<Eigen::Index>(node.size()));
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      v(static_cast<Eigen::Index>(i)) = number(node[i], field + "[" + std::to_string(i) + "]");
+    }
+    return v;
+  }
+
+  void rejectUnknownKeys(const YAML::Node& node, const std::string& field,
+                         std::initializer_list<const char*> known) const {
+    if (!node.IsMap()) fail(node, field.empty() ? "(top level)" : field, "a mapping of keys");
+    for (const auto& entry : node) {
+      const std::string key = entry.first.as<std::string>();
+      bool ok = false;
+      for (const char* k : known) ok = ok || key == k;
+      if (!ok) {
+        std::string list;
+        for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+        fail(entry.first, field.empty() ? key : field + "." + key,
+             "one of the known keys (" + list + "), got unknown key '" + key + "'");
+      }
+    }
+  }
+
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+void readRandomForm(const YamlReader& in, const YAML::Node& random, Scenario& s) {
+  in.rejectUnknownKeys(random, "random",
+                       {"states", "sensors", "rows_per_sensor", "seed", "budget", "noise_scale"});
+  RandomPlantSpec spec;
+  spec.horizon_s = s.horizon_s;
+  spec.intervals = s.intervals;
+  spec.state_dim = static_cast<int>(in.integer(in.required(random, "states", "random.states"),
+                                               "random.states"));
+  spec.sensor_count = static_cast<int>(
+      in.integer(in.required(random, "sensors", "random.sensors"), "random.sensors"));
+  if (random["rows_per_sensor"]) {
+    spec.rows_per_sensor =
+        static_cast<int>(in.integer(random["rows_per_sensor"], "random.rows_per_sensor"));
+  }
+  const long seed = in.integer(in.required(random, "seed", "random.seed"), "random.seed");
+  if (seed < 0) in.fail(random["seed"], "random.seed", "an integer >= 0");
+  spec.seed = static_cast<std::uint64_t>(seed);
+  if (random["budget"]) spec.budget = in.number(random["budget"], "random.budget");
+  if (random["noise_scale"]) {
+    spec.noise_scale = in.number(random["noise_scale"], "random.noise_scale");
+  }
+  if (spec.state_dim < 1) in.fail(random["states"], "random.states", "an integer >= 1");
+  if (spec.sensor_count < 1) in.fail(random["sensors"], "random.sensors", "an integer >= 1");
+  if (spec.rows_per_sensor < 1 || spec.rows_per_sensor > spec.state_dim) {
+    in.fail(random["rows_per_sensor"], "random.rows_per_sensor",
+            "an integer between 1 and random.states");
+  }
+  if (spec.budget <= 0.0) in.fail(random["budget"], "random.budget", "a number > 0");
+  if (spec.noise_scale <= 0.0) {
+    in.fail(random["noise_scale"], "random.noise_scale", "a number > 0");
+  }
+  const double horizon = s.horizon_s;
+  const int intervals = s.intervals;
+  s = generateRandomScenario(spec);
+  s.horizon_s = horizon;
+  s.intervals = intervals;
+}
+
+void readExplicitForm(const YamlReader& in, const YAML::Node& root, Scenario& s) {
+  const YAML::Node plant = in.required(root, "plant", "plant");
+  in.rejectUnknownKeys(plant, "plant", {"A", "Q", "P0", "m0"});
+  s.plant.A = in.matrix(in.required(plant, "A", "plant.A"), "plant.A");
+  const Eigen::Index n = s.plant.A.rows();
+  s.plant.Q = in.matrix(in.required(plant, "Q", "plant.Q"), "plant.Q");
+  s.plant.P0 = in.matrix(in.required(plant, "P0", "plant.P0"), "plant.P0");
+  s.plant.m0 = plant["m0"] ? Eigen::VectorXd(in.vector(plant["m0"], "plant.m0"))
+                           : Eigen::VectorXd::Zero(n);
+
+  const YAML::Node sensors = in.required(root, "sensors", "sensors");
+  if (!sensors.IsSequence() || sensors.size() == 0) {
+    in.fail(sensors, "sensors", "a non-empty list of sensors, each with H and R");
+  }
+  for (std::size_t j = 0; j < sensors.size(); ++j) {
+    const std::string field = "sensors[" + std::to_string(j) + "]";
+    in.rejectUnknownKeys(sensors[j], field, {"H", "R", "name"});
+    SensorModel sensor;
+    sensor.H = in.matrix(in.required(sensors[j], "H", field + ".H"), field + ".H");
+    sensor.R = in.matrix(in.required(sensors[j], "R", field + ".R"), field + ".R");
+    s.sensors.push_back(std::move(sensor));
+  }
+  const auto m = static_cast<Eigen::Index>(s.sensors.size());
+
+  s.cost.W = Eigen::MatrixXd::Zero(n, n);
+  s.cost.WT = Eigen::MatrixXd::Identity(n, n);
+  if (const YAML::Node cost = root["cost"]) {
+    in.rejectUnknownKeys(cost, "cost", {"W", "WT"});
+    if (cost["W"]) s.cost.W = in.matrix(cost["W"], "cost.W");
+    if (cost["WT"]) s.cost.WT = in.matrix(cost["WT"], "cost.WT");
+  }
+  const YAML::Node constraints = in.required(root, "constraints", "constraints");
+  in.rejectUnknownKeys(constraints, "constraints", {"C", "b"});
+  s.constraints.C = constraints["C"] ? in.matrix(constraints["C"], "constraints.C")
+                                     : Eigen::MatrixXd::Ones(1, m);
+  s.constraints.b = in.vector(in.required(constraints, "b", "constraints.b"), "constraints.b");
+}
+
+// The node a validation field path such as "sensors[1].R" or "constraints.b[0]" points at,
+// or the deepest existing ancestor, so that semantic errors can name a line too.
+YAML::Node locate(const YAML::Node& root, const std::string& field) {
+  YAML::Node node = root;
+  std::size_t at = 0;
+  while (at < field.size()) {
+    const std::size_t end = field.find_first_of(".[", at);
+    const std::string key = field.substr(at, end == std::string::npos ? end : end - at);
+    YAML::Node child;
+    if (!key.empty()) {
+      child = node[key];
+    } else if (field[at] == '[') {
+      const std::size_t close = field.find(']', at);
+      if (close == std::string::npos) break;
+      const auto index = std::stoul(field.substr(at + 1, close - at - 1));
+      if (!node.IsSequence() || index >= node.size()) break;
+      child = node[index];
+      at = close + 1;
+      if (at < field.size() && field[at] == '.') ++at;
+      node.reset(child);
+      continue;
+    }
+    if (!child.IsDefined()) break;
+    node.reset(child);
+    if (end == std::string::npos) break;
+    at = field[end] == '.' ? end + 1 : end;
+  }
+  return node;
+}
+
+}  // namespace
+
+Scenario parseScenarioYaml(const std::string& text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "",
+                     "valid YAML (" + e.msg + ")");
+  }
+  const YamlReader in(source);
+  if (!root.IsMap()) in.fail(root, "(top level)", "a mapping with horizon, intervals, ...");
+  in.rejectUnknownKeys(root, "", {"horizon", "intervals", "plant", "sensors", "cost",
+                                  "constraints", "random", "name", "description"});
+  Scenario s;
+  s.horizon_s = in.number(in.required(root, "horizon", "horizon"), "horizon");
+  if (s.horizon_s <= 0.0) in.fail(root["horizon"], "horizon", "a number > 0");
+  const long intervals = in.integer(in.required(root, "intervals", "intervals"), "intervals");
+  if (intervals < 1 || intervals > 1000000) {
+    in.fail(root["intervals"], "intervals", "an integer between 1 and 1000000");
+  }
+  s.intervals = static_cast<int>(intervals);
+
+  if (const YAML::Node random = root["random"]) {
+    for (const char* key : {"plant", "sensors", "cost", "constraints"}) {
+      if (root[key]) {
+        in.fail(root[key], key, "either the random form or the explicit form, not both");
+      }
+    }
+    readRandomForm(in, random, s);
+  } else {
+    readExplicitForm(in, root, s);
+  }
+  try {
+    validateScenario(s, source);
+  } catch (const InputError& e) {
+    const YAML::Node node = root["random"] ? root["random"] : locate(root, e.field());
+    throw e.relocated(source + ":" + std::to_string(node.Mark().line + 1));
+  }
+  return s;
+}
+
+Scenario loadScenarioFile(const std::string& path) {
+  return parseScenarioYaml(readFile(path, "scenario"), path);
+}
+
+RateSchedule parseScheduleJson(const std::string& text, const std::string& source) {
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(source, "", std::string("valid JSON (") + e.what() + ")");
+  }
+  if (!doc.is_object()) throw InputError(source, "(top level)", "a JSON object");
+  auto requireNumber = [&](const char* key) {
+    if (!doc.contains(key)) throw InputError(source, key, "a value (the field is missing)");
+    if (!doc[key].is_number()) throw InputError(source, key, "a number");
+    return doc[key].get<double>();
+  };
+  const double horizon = requireNumber("horizon");
+  if (!std::isfinite(horizon) || horizon <= 0.0) {
+    throw InputError(source, "horizon", "a finite number > 0");
+  }
+  const double intervals_value = requireNumber("intervals");
+  if (intervals_value < 1 || intervals_value != std::floor(intervals_value)) {
+    throw InputError(source, "intervals", "an integer >= 1");
+  }
+  const auto intervals = static_cast<Eigen::Index>(intervals_value);
+  if (!doc.contains("rates")) throw InputError(source, "rates", "a value (the field is missing)");
+  const auto& rows = doc["rates"];
+  if (!rows.is_array() || static_cast<Eigen::Index>(rows.size()) != intervals) {
+    throw InputError(source, "rates",
+                     "a list of " + std::to_string(intervals) + " rows (one per interval)");
+  }
+  Eigen::MatrixXd rates;
+  for (Eigen::Index k = 0; k < intervals; ++k) {
+    const auto& row = rows[static_cast<std::size_t>(k)];
+    const std::string field = "rates[" + std::to_string(k) + "]";
+    if (!row.is_array() || row.empty()) throw InputError(source, field, "a non-empty list of rates");
+    if (k == 0) rates.resize(intervals, static_cast<Eigen::Index>(row.size()));
+    if (static_cast<Eigen::Index>(row.size()) != rates.cols()) {
+      throw InputError(source, field, std::to_string(rates.cols()) + " rates like rates[0]");
+    }
+    for (Eigen::Index j = 0; j < rates.cols(); ++j) {
+      const auto& value = row[static_cast<std::size_t>(j)];
+      const std::string entry = field + "[" + std::to_string(j) + "]";
+      if (!value.is_number()) throw InputError(source, entry, "a number");
+      const double rate = value.get<double>();
+      if (!std::isfinite(rate) || rate < 0.0) {
+        throw InputError(source, entry, "a finite rate >= 0 (Hz)");
+      }
+      rates(k, j) = rate;
+    }
+  }
+  return RateSchedule(horizon, std::move(rates));
+}
+
+RateSchedule loadScheduleFile(const std::string& path) {
+  return parseScheduleJson(readFile(path, "schedule"), path);
+}
+
+RateSchedule loadScheduleFile(const std::string& path, const Scenario& scenario) {
+  RateSchedule schedule = loadScheduleFile(path);
+  const Feasibility feasibility = checkFeasibility(schedule, scenario);
+  if (!feasibility.feasible) {
+    throw InputError(path, "rates", "a schedule feasible for the scenario: " + feasibility.reason);
+  }
+  return schedule;
+}
+
+nlohmann::json scheduleToJson(const RateSchedule& schedule) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int k = 0; k < schedule.intervals(); ++k) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int j = 0; j < schedule.sensorCount(); ++j) row.push_back(schedule.rate(k, j));
+    rows.push_back(std::move(row));
+  }
+  return {{"horizon", schedule.horizon()}, {"intervals", schedule.intervals()},
+          {"rates", std::move(rows)}};
+}
+
+void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
+                       const nlohmann::json& extra) {
+  nlohmann::json doc = scheduleToJson(schedule);
+  for (const auto& [key, value] : extra.items()) doc[key] = value;
+  // Write beside the target and rename, so a reader never sees half a schedule.
+  const std::string temporary = path + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << doc.dump(2) << '\n';
+    if (!out) throw InputError(path, "", "a writable path for the schedule file");
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    std::remove(temporary.c_str());
+    throw InputError(path, "", "a writable path for the schedule file (rename failed)");
+  }
+}
+
+}  // namespace sensornet

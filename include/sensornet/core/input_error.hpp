@@ -14,9 +14,14 @@ namespace sensornet {
 class InputError : public std::runtime_error {
  public:
   InputError(const std::string& source, const std::string& field, const std::string& expected)
-      : std::runtime_error(compose(source, field, expected)), field_(field) {}
+      : std::runtime_error(compose(source, field, expected)), field_(field), expected_(expected) {}
 
   [[nodiscard]] const std::string& field() const noexcept { return field_; }
+  [[nodiscard]] const std::string& expected() const noexcept { return expected_; }
+  // The same error, attributed to a more precise source (for example "file.yaml:12").
+  [[nodiscard]] InputError relocated(const std::string& source) const {
+    return InputError(source, field_, expected_);
+  }
 
  private:
   static std::string compose(const std::string& source, const std::string& field,
@@ -27,6 +32,7 @@ class InputError : public std::runtime_error {
     return message + "expected " + expected;
   }
   std::string field_;
+  std::string expected_;
 };
 
 }  // namespace sensornet

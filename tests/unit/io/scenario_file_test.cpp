@@ -1,0 +1,238 @@
+#include "sensornet/io/scenario_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <unistd.h>
+
+#include <Eigen/Eigenvalues>
+
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet {
+namespace {
+
+// A valid two-state, two-sensor scenario; each bad-input test breaks one field of it.
+const char* kValid = R"(
+horizon: 2.0
+intervals: 4
+plant:
+  A: [[0, 1], [0, -1]]
+  Q: [[0, 0], [0, 1]]
+  P0: [[10, 0], [0, 10]]
+sensors:
+  - H: [[1, 0]]
+    R: [[1]]
+  - H: [[1, 0], [0, 1]]
+    R: [[2, 0.5], [0.5, 2]]
+cost:
+  W: [[1, 0], [0, 0]]
+constraints:
+  b: [3]
+)";
+
+std::string replaced(const std::string& from, const std::string& to) {
+  std::string text = kValid;
+  const auto at = text.find(from);
+  if (at == std::string::npos) throw std::logic_error("fixture has no '" + from + "'");
+  text.replace(at, from.size(), to);
+  return text;
+}
+
+// Parses `text` and returns the error message, failing the test if it parses.
+std::string errorOf(const std::string& text) {
+  try {
+    (void)parseScenarioYaml(text, "bad.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected an InputError for:\n" << text;
+  return {};
+}
+
+TEST(ScenarioFile, ParsesTheExplicitFormWithDefaults) {
+  const Scenario s = parseScenarioYaml(kValid, "ok.yaml");
+  EXPECT_EQ(s.stateDim(), 2);
+  EXPECT_EQ(s.sensorCount(), 2);
+  EXPECT_DOUBLE_EQ(s.horizon_s, 2.0);
+  EXPECT_EQ(s.intervals, 4);
+  EXPECT_TRUE(s.cost.WT.isIdentity());                      // default W_T = I
+  EXPECT_TRUE(s.constraints.C.isApprox(Eigen::MatrixXd::Ones(1, 2)));  // default C = 1'
+  EXPECT_TRUE(s.plant.m0.isZero());                         // default m0 = 0
+  EXPECT_DOUBLE_EQ(s.sensors[1].R(0, 1), 0.5);
+}
+
+TEST(ScenarioFile, ParsesTheRandomFormReproducibly) {
+  const std::string text = "horizon: 3\nintervals: 30\nrandom: {states: 4, sensors: 7, seed: 11}\n";
+  const Scenario a = parseScenarioYaml(text, "r.yaml");
+  const Scenario b = parseScenarioYaml(text, "r.yaml");
+  EXPECT_EQ(a.stateDim(), 4);
+  EXPECT_EQ(a.sensorCount(), 7);
+  EXPECT_TRUE(a.plant.A.isApprox(b.plant.A, 0.0));
+  EXPECT_DOUBLE_EQ(a.constraints.b(0), 5.0);
+  // The paper's protocol: orthonormal sensor rows, R eigenvalues in [1, 10], Q = I, P0 = 100 I.
+  for (const auto& sensor : a.sensors) {
+    EXPECT_NEAR((sensor.H * sensor.H.transpose() - Eigen::MatrixXd::Identity(1, 1)).norm(), 0,
+                1e-12);
+    EXPECT_GE(sensor.R(0, 0), 1.0);
+    EXPECT_LE(sensor.R(0, 0), 10.0);
+  }
+  EXPECT_TRUE(a.plant.P0.isApprox(100.0 * Eigen::MatrixXd::Identity(4, 4)));
+  // Balanced modes: two unstable, two stable eigenvalues.
+  const Eigen::VectorXd eig = Eigen::EigenSolver<Eigen::MatrixXd>(a.plant.A).eigenvalues().real();
+  EXPECT_EQ((eig.array() > 0).count(), 2);
+  EXPECT_EQ((eig.array() < 0).count(), 2);
+}
+
+TEST(ScenarioFile, ShippedScenariosParse) {
+  for (const char* name : {"default.yaml", "paper.yaml"}) {
+    const std::string path = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/" + name;
+    EXPECT_NO_THROW((void)loadScenarioFile(path)) << path;
+  }
+}
+
+struct BadScenarioCase {
+  const char* what;
+  std::string text;
+  const char* field;     // must appear in the message
+  const char* expected;  // must appear in the message
+};
+
+class BadScenario : public testing::TestWithParam<BadScenarioCase> {};
+
+TEST_P(BadScenario, IsRejectedWithAMessageNamingFileFieldAndExpectation) {
+  const BadScenarioCase& c = GetParam();
+  const std::string message = errorOf(c.text);
+  EXPECT_NE(message.find("bad.yaml"), std::string::npos) << message;
+  EXPECT_NE(message.find(c.field), std::string::npos) << c.what << ": " << message;
+  EXPECT_NE(message.find(c.expected), std::string::npos) << c.what << ": " << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryKindOfBadInput, BadScenario,
+    testing::Values(
+        BadScenarioCase{"A not square", replaced("A: [[0, 1], [0, -1]]", "A: [[0, 1]]"),
+                        "plant.A", "square"},
+        BadScenarioCase{"Q wrong size", replaced("Q: [[0, 0], [0, 1]]", "Q: [[1]]"), "plant.Q",
+                        "2 x 2 matrix"},
+        BadScenarioCase{"ragged rows", replaced("A: [[0, 1], [0, -1]]", "A: [[0, 1], [0]]"),
+                        "plant.A[1]", "2 entries"},
+        BadScenarioCase{"H columns", replaced("H: [[1, 0]]", "H: [[1, 0, 0]]"), "sensors[0].H",
+                        "1 x 2 matrix"},
+        BadScenarioCase{"R shape", replaced("R: [[1]]", "R: [[1, 0], [0, 1]]"), "sensors[0].R",
+                        "1 x 1 matrix"},
+        BadScenarioCase{"non-symmetric Q", replaced("Q: [[0, 0], [0, 1]]", "Q: [[0, 1], [0, 1]]"),
+                        "plant.Q", "symmetric"},
+        BadScenarioCase{"P0 not PD", replaced("P0: [[10, 0], [0, 10]]", "P0: [[10, 0], [0, 0]]"),
+                        "plant.P0", "positive definite"},
+        BadScenarioCase{"R not PD", replaced("R: [[2, 0.5], [0.5, 2]]", "R: [[1, 2], [2, 1]]"),
+                        "sensors[1].R", "positive definite"},
+        BadScenarioCase{"Q negative eigenvalue",
+                        replaced("Q: [[0, 0], [0, 1]]", "Q: [[0, 0], [0, -1]]"), "plant.Q",
+                        "positive semidefinite"},
+        BadScenarioCase{"W negative eigenvalue", replaced("W: [[1, 0], [0, 0]]", "W: [[1, 0], [0, -0.1]]"),
+                        "cost.W", "positive semidefinite"},
+        BadScenarioCase{"WT negative eigenvalue",
+                        replaced("W: [[1, 0], [0, 0]]", "WT: [[1, 2], [2, 1]]"), "cost.WT",
+                        "positive semidefinite"},
+        BadScenarioCase{"NaN", replaced("A: [[0, 1], [0, -1]]", "A: [[0, .nan], [0, -1]]"),
+                        "plant.A[0][1]", "finite"},
+        BadScenarioCase{"infinity", replaced("R: [[1]]", "R: [[.inf]]"), "sensors[0].R[0][0]",
+                        "finite"},
+        BadScenarioCase{"not a number", replaced("horizon: 2.0", "horizon: soon"), "horizon",
+                        "a number"},
+        BadScenarioCase{"missing plant", replaced("plant:", "plantt:"), "plantt",
+                        "known keys"},
+        BadScenarioCase{"missing horizon", replaced("horizon: 2.0", ""), "horizon", "missing"},
+        BadScenarioCase{"missing P0", replaced("P0: [[10, 0], [0, 10]]", ""), "plant.P0",
+                        "missing"},
+        BadScenarioCase{"missing b", replaced("b: [3]", "C: [[1, 1]]"), "constraints.b",
+                        "missing"},
+        BadScenarioCase{"column without positive entry",
+                        replaced("b: [3]", "C: [[1, 0], [1, 0]]\n  b: [3, 3]"), "constraints.C",
+                        "column 1"},
+        BadScenarioCase{"negative C", replaced("b: [3]", "C: [[1, -1]]\n  b: [3]"),
+                        "constraints.C", "nonnegative"},
+        BadScenarioCase{"b zero", replaced("b: [3]", "b: [0]"), "constraints.b[0]", "> 0"},
+        BadScenarioCase{"b negative", replaced("b: [3]", "b: [-2]"), "constraints.b[0]", "> 0"},
+        BadScenarioCase{"b length", replaced("b: [3]", "b: [3, 4]"), "constraints.b",
+                        "1 x 1 matrix"},
+        BadScenarioCase{"horizon zero", replaced("horizon: 2.0", "horizon: 0"), "horizon",
+                        "> 0"},
+        BadScenarioCase{"horizon negative", replaced("horizon: 2.0", "horizon: -1"), "horizon",
+                        "> 0"},
+        BadScenarioCase{"intervals zero", replaced("intervals: 4", "intervals: 0"), "intervals",
+                        "integer"},
+        BadScenarioCase{"intervals fractional", replaced("intervals: 4", "intervals: 2.5"),
+                        "intervals", "an integer"},
+        BadScenarioCase{"no sensors",
+                        std::string("horizon: 1\nintervals: 1\nplant: {A: [[0]], Q: [[1]], "
+                                    "P0: [[1]]}\nsensors: []\nconstraints: {b: [1]}\n"),
+                        "sensors", "non-empty"},
+        BadScenarioCase{"bad YAML", std::string("horizon: [1, 2\n"), "bad.yaml", "valid YAML"},
+        BadScenarioCase{"random form with zero states",
+                        std::string("horizon: 1\nintervals: 2\nrandom: {states: 0, sensors: 2, "
+                                    "seed: 1}\n"),
+                        "random.states", ">= 1"},
+        BadScenarioCase{"random and explicit", std::string(kValid) + "random: {states: 1}\n",
+                        "plant", "not both"}));
+
+TEST(ScenarioFile, ErrorsNameTheLine) {
+  const std::string message = errorOf(replaced("P0: [[10, 0], [0, 10]]", "P0: [[10, 0], [0, -3]]"));
+  // The plant block starts on line 4 of the fixture, P0 is on line 7; either line is helpful,
+  // but the message must carry one.
+  EXPECT_TRUE(std::regex_search(message, std::regex("bad\\.yaml:[0-9]+"))) << message;
+}
+
+TEST(ScenarioFile, MissingFileIsAnInputError) {
+  EXPECT_THROW((void)loadScenarioFile("/nonexistent/scenario.yaml"), InputError);
+}
+
+TEST(ScheduleFile, RoundTripsAndRejectsMalformedSchedules) {
+  const Scenario s = parseScenarioYaml(kValid, "ok.yaml");
+  const RateSchedule uniform = uniformSchedule(s);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("sched-" + std::to_string(::getpid()) + ".json"))
+          .string();
+  writeScheduleFile(path, uniform, {{"surrogate", "uniform"}});
+  const RateSchedule back = loadScheduleFile(path, s);
+  EXPECT_TRUE(back.rates().isApprox(uniform.rates(), 0.0));
+  std::remove(path.c_str());
+
+  auto bad = [](const std::string& text, const char* field) {
+    try {
+      (void)parseScheduleJson(text, "s.json");
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  bad("{\"horizon\": 2, \"intervals\": 2, \"rates\": [[1, 1]]}", "rates");
+  bad("{\"horizon\": 2, \"intervals\": 2, \"rates\": [[1, 1], [1]]}", "rates[1]");
+  bad("{\"horizon\": 2, \"intervals\": 1, \"rates\": [[1, -1]]}", "rates[0][1]");
+  bad("{\"horizon\": 2, \"intervals\": 1, \"rates\": [[1, \"x\"]]}", "rates[0][1]");
+  bad("{\"horizon\": -2, \"intervals\": 1, \"rates\": [[1]]}", "horizon");
+  bad("{\"intervals\": 1, \"rates\": [[1]]}", "horizon");
+  bad("{\"horizon\": 2, \"intervals\": 1, \"rates\": [[1]]", "valid JSON");
+
+  // Shape and feasibility against the scenario.
+  const std::string infeasible = path + ".bad";
+  {
+    std::ofstream out(infeasible);
+    out << R"({"horizon": 2, "intervals": 4, "rates": [[1,1],[1,1],[3,1],[1,1]]})";
+  }
+  try {
+    (void)loadScheduleFile(infeasible, s);
+    ADD_FAILURE() << "accepted an infeasible schedule";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("interval 2"), std::string::npos) << e.what();
+  }
+  std::remove(infeasible.c_str());
+}
+
+}  // namespace
+}  // namespace sensornet
