@@ -1,0 +1,72 @@
+#pragma once
+// Run isolation and the DDS domain of a process. A DomainConfig is a value chosen by the caller:
+// the domain id and the partition that keep one emulation run apart from every other run on the
+// host, and the Cyclone configuration to create the domain with. A Domain creates that domain
+// explicitly (dds_create_domain) with the configuration, so nothing depends on CYCLONEDDS_URI
+// and nothing ever runs with Cyclone's default, non-loopback configuration.
+//
+//   DomainConfig config = DomainConfig::forRun("run-42");  // loopback, domain id from the run id
+//   Domain domain(config);
+//   Participant participant(domain);                      // participant.hpp
+//
+// One Domain per domain id per process: Cyclone refuses to create a domain twice (DdsError with
+// "Precondition not met"); every participant of the process shares it. The domain must outlive
+// its participants.
+
+#include <dds/dds.h>
+
+#include <string>
+#include <string_view>
+
+#include "sensornet/dds/c_api.hpp"
+#include "sensornet/dds/entity.hpp"
+
+namespace sensornet::dds {
+
+// With the shipped configuration (MaxAutoParticipantIndex 120) Cyclone's default port mapping
+// 7400 + 250 d + 10 + 2 i stays below 65536 for every domain id d <= 230.
+inline constexpr dds_domainid_t kMaxDomainId = 230;
+
+struct DomainConfig {
+  dds_domainid_t domain_id = 0;
+  // Every writer and reader made through a Participant of this domain joins this partition
+  // (unless its own QoS names one). Empty: the default partition.
+  std::string partition;
+  // Given verbatim to dds_create_domain: XML text and/or file URIs, comma-separated.
+  std::string cyclone_config;
+
+  // The shipped loopback configuration on `domain_id`, with `partition`.
+  [[nodiscard]] static DomainConfig loopback(dds_domainid_t domain_id, std::string partition);
+  // Loopback, on domainIdForRun(run_id), in partition "sensornet/<run_id>". Throws InputError
+  // if run_id is not a run id (see validateRunId).
+  [[nodiscard]] static DomainConfig forRun(std::string_view run_id);
+};
+
+// Throws InputError(source, "run_id", ...) unless run_id is 1 to 64 characters from letters,
+// digits, '.', '_' and '-' (it becomes part of a partition name and of file names).
+void validateRunId(std::string_view run_id, const std::string& source);
+
+// A domain id in [1, kMaxDomainId] from a hash of the run id, so that independent runs on one
+// host most likely use different domains (different ports); the partition isolates them anyway.
+[[nodiscard]] dds_domainid_t domainIdForRun(std::string_view run_id);
+
+// Parses a domain id given as text (a command-line flag, an environment variable); throws
+// InputError(source, "domain id", "an integer in [0, 230]") otherwise.
+[[nodiscard]] dds_domainid_t parseDomainId(std::string_view text, const std::string& source);
+
+// The text of config/cyclonedds-loopback.xml, compiled into the library.
+[[nodiscard]] const std::string& loopbackConfigXml();
+
+class Domain : public Entity {
+ public:
+  // Creates the domain; throws InputError for a domain id above kMaxDomainId or a partition with
+  // wildcards, DdsError if Cyclone refuses (e.g. the domain exists already in this process).
+  explicit Domain(DomainConfig config, const CApi& api = realCApi());
+
+  [[nodiscard]] const DomainConfig& config() const noexcept { return config_; }
+
+ private:
+  DomainConfig config_;
+};
+
+}  // namespace sensornet::dds

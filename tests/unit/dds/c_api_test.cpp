@@ -1,0 +1,146 @@
+// Error paths through the C API seam: real Cyclone everywhere except the one call a test
+// replaces, so a timeout or a failure is produced on demand and the layer's answer observed.
+#include "sensornet/dds/c_api.hpp"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "dds_test_support.hpp"
+#include "sensornet/dds/dds_error.hpp"
+#include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/dds/wire.hpp"
+#include "sensornet/dds/writer.hpp"
+
+namespace sensornet::dds {
+namespace {
+
+using namespace std::chrono_literals;
+
+int& loansReturned() {
+  static int count = 0;
+  return count;
+}
+
+TEST(CApiSeam, WriteThatTimesOutIsATimeoutResult) {
+  CApi api = realCApi();
+  api.write = [](dds_entity_t, const void*) -> dds_return_t { return DDS_RETCODE_TIMEOUT; };
+  Domain domain(testing::isolatedDomain(), api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  Writer<sensornet_Measurement> writer(participant, topic);
+  sensornet_Measurement sample{};
+  EXPECT_EQ(writer.write(sample), WriteResult::TimedOut);
+}
+
+TEST(CApiSeam, WriteThatFailsThrowsDdsErrorNamingTheCallAndCode) {
+  CApi api = realCApi();
+  api.write = [](dds_entity_t, const void*) -> dds_return_t {
+    return DDS_RETCODE_OUT_OF_RESOURCES;
+  };
+  Domain domain(testing::isolatedDomain(), api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  Writer<sensornet_Measurement> writer(participant, topic);
+  sensornet_Measurement sample{};
+  try {
+    (void)writer.write(sample);
+    FAIL() << "no exception";
+  } catch (const DdsError& e) {
+    EXPECT_EQ(e.call(), "dds_write");
+    EXPECT_EQ(e.code(), DDS_RETCODE_OUT_OF_RESOURCES);
+    EXPECT_NE(std::string(e.what()).find("dds_write failed: " + returnCodeText(e.code())),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("writer.cpp:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.where().file_name()).find("writer.cpp"), std::string::npos);
+  }
+}
+
+TEST(CApiSeam, FailedCreateThrowsDdsErrorNamingTheCall) {
+  CApi api = realCApi();
+  api.create_writer = [](dds_entity_t, dds_entity_t, const dds_qos_t*,
+                         const dds_listener_t*) -> dds_entity_t { return DDS_RETCODE_ERROR; };
+  Domain domain(testing::isolatedDomain(), api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  try {
+    Writer<sensornet_Measurement> writer(participant, topic);
+    FAIL() << "no exception";
+  } catch (const DdsError& e) {
+    EXPECT_EQ(e.call(), "dds_create_writer");
+    EXPECT_EQ(e.code(), DDS_RETCODE_ERROR);
+  }
+}
+
+TEST(CApiSeam, RealCycloneRefusalAlsoThrowsDdsError) {
+  Domain domain(testing::isolatedDomain());
+  Participant participant(domain);
+  try {
+    Topic<sensornet_Measurement> topic(participant, "not a topic name");
+    FAIL() << "no exception";
+  } catch (const DdsError& e) {
+    EXPECT_EQ(e.call(), "dds_create_topic");
+    EXPECT_EQ(e.code(), DDS_RETCODE_BAD_PARAMETER);
+  }
+}
+
+TEST(CApiSeam, FailedTakeThrowsAndAFailedWaitForAcksIsFalse) {
+  CApi api = realCApi();
+  api.take = [](dds_entity_t, void**, dds_sample_info_t*, size_t, uint32_t) -> dds_return_t {
+    return DDS_RETCODE_ILLEGAL_OPERATION;
+  };
+  api.wait_for_acks = [](dds_entity_t, dds_duration_t) -> dds_return_t {
+    return DDS_RETCODE_TIMEOUT;
+  };
+  Domain domain(testing::isolatedDomain(), api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  Reader<sensornet_Measurement> reader(participant, topic);
+  Writer<sensornet_Measurement> writer(participant, topic);
+  EXPECT_THROW((void)reader.take(), DdsError);
+  EXPECT_FALSE(writer.waitForAcks(10ms));
+}
+
+TEST(CApiSeam, LoanIsReturnedEvenWhenTheVisitorThrows) {
+  CApi api = realCApi();
+  api.return_loan = [](dds_entity_t reader, void** samples, int32_t count) -> dds_return_t {
+    ++loansReturned();
+    return dds_return_loan(reader, samples, count);
+  };
+  loansReturned() = 0;
+  Domain domain(testing::isolatedDomain(), api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  Reader<sensornet_Measurement> reader(participant, topic);
+  Writer<sensornet_Measurement> writer(participant, topic);
+  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  const std::string run = "run";
+  for (std::uint32_t id = 0; id < 3; ++id) {
+    sensornet_Measurement m{};
+    m.sensor_id = id;
+    m.run_id = borrowString(run);
+    ASSERT_EQ(writer.write(m), WriteResult::Written);
+  }
+  const auto no_change = [](const sensornet_Measurement&, const SampleInfo&) {};
+  EXPECT_THROW(reader.takeEach(
+                   8,
+                   [](const sensornet_Measurement&, const SampleInfo&) {
+                     throw std::runtime_error("visitor failed");
+                   },
+                   no_change),
+               std::runtime_error);
+  EXPECT_EQ(loansReturned(), 1);
+
+  // An empty take lends nothing and returns nothing.
+  EXPECT_EQ(reader.takeEach(
+                8, [](const sensornet_Measurement&, const SampleInfo&) {}, no_change),
+            0u);
+  EXPECT_EQ(loansReturned(), 1);
+}
+
+}  // namespace
+}  // namespace sensornet::dds
