@@ -112,7 +112,7 @@ TEST(CoordinatorTimetable, BadInputGivesOneLineAndNonZeroExit) {
   expectOneLineError(
       runProcess({kCoordinator, "timetable", "--sigma2", "1", "--v0", "1", "--variances", "1"}),
       "--horizon");
-  expectOneLineError(runProcess({kCoordinator, "frobnicate"}), "frobnicate");
+  expectOneLineError(runProcess({kCoordinator, "frobnicate"}), "subcommand");
 }
 
 TEST(FusionCenterEvaluate, PrintsTheContractedJson) {

@@ -1,0 +1,76 @@
+#pragma once
+// The exact transition of the CD-KF between two arrivals. Between arrivals the covariance obeys
+// the Lyapunov equation (3), Ṗ = A P + P A' + Q, and the running cost of eq. (6) accumulates
+// ∫ <W, P(s)>_F ds. Both are linear in P, so one interval of length dt is summarized by four
+// quantities that depend on (A, Q, W, dt) only:
+//
+//   P(dt)          = Phi P Phi' + Qd
+//   ∫_0^dt <W,P>ds = <P, cost_gramian>_F + noise_cost
+//
+//   LtiTransition transition(A, Q, W);               // once per plant
+//   IntervalTransition step = transition.over(0.25); // exact, any dt >= 0
+//   double cost = P.cwiseProduct(step.cost_gramian).sum() + step.noise_cost;
+//   P = step.Phi * P * step.Phi.transpose() + step.Qd;
+//
+// Two exact methods. The modal one diagonalizes A = V Λ V^{-1} once, after which every
+// quantity is a Hadamard product in the eigenbasis with scalar integrals of e^{(λ_i+λ_j)s}:
+// n exponentials per call. When V is ill-conditioned (defective or nearly defective A, such as
+// the double integrator) it would lose accuracy, so the Van Loan (1978) block exponential of
+// one 3n x 3n matrix is used instead. Both are exact up to rounding; neither takes time steps.
+
+#include <Eigen/Core>
+#include <memory>
+
+namespace sensornet {
+
+struct IntervalTransition {
+  Eigen::MatrixXd Phi;           // e^{A dt}
+  Eigen::MatrixXd Qd;            // ∫_0^dt e^{As} Q e^{A's} ds (process-noise covariance over dt)
+  Eigen::MatrixXd cost_gramian;  // G = ∫_0^dt e^{A's} W e^{As} ds
+  double noise_cost = 0.0;       // ∫_0^dt <W, Qd(s)>_F ds
+  // so that for P(s) = Phi(s) P Phi(s)' + Qd(s):  ∫_0^dt <W, P(s)> ds = <P, G>_F + noise_cost
+};
+
+enum class TransitionMethod {
+  kAutomatic,  // modal when the eigenbasis is well conditioned, Van Loan otherwise
+  kModal,      // eigen-decomposition of A; throws InputError when A is (numerically) defective
+  kVanLoan,    // block matrix exponential; works for every A, slower
+};
+
+// Precomputes what it can from (A, Q, W); over() is cheap and safe to call from several threads
+// at once. Copies share the immutable precomputed data.
+class LtiTransition {
+ public:
+  // Above this 2-norm condition number of the (unit-column) eigenvector matrix V the automatic
+  // choice falls back to Van Loan. The modal path's relative error in Qd, G and noise_cost
+  // grows like 0.1 cond(V)^2 ulps (V^{-1} Q V^{-T} and back): measured 2e-12 at cond 200,
+  // 3e-10 at 2e3, 1e-8 at 2e4 on nearly defective 2 x 2 Jordan blocks. 100 keeps it < 1e-12.
+  static constexpr double kMaxEigenvectorCondition = 100.0;
+  // Past this the modal error (~eps cond^2) reaches order one: A counts as defective, and even
+  // a forced kModal is refused.
+  static constexpr double kDefectiveEigenvectorCondition = 1e8;
+
+  // A, Q, W are n x n; Q and W are used through their symmetric parts (P is symmetric, so
+  // that changes neither P(dt) nor the cost). Throws InputError on bad shapes or non-finite
+  // entries.
+  LtiTransition(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& W,
+                TransitionMethod method = TransitionMethod::kAutomatic);
+
+  // The exact transition over an interval of length dt >= 0 (throws InputError otherwise).
+  [[nodiscard]] IntervalTransition over(double dt) const;
+  // The same, written into `step` so that repeated calls reuse its storage.
+  void over(double dt, IntervalTransition& step) const;
+
+  [[nodiscard]] int stateDim() const;
+  // The method in use: kModal or kVanLoan, never kAutomatic.
+  [[nodiscard]] TransitionMethod method() const;
+  // cond_2(V) of the unit-column eigenvector matrix (about 1e15 or more for an exactly
+  // defective A); infinity when the eigen-decomposition failed or V is singular.
+  [[nodiscard]] double eigenvectorCondition() const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<const Impl> impl_;
+};
+
+}  // namespace sensornet
