@@ -88,27 +88,26 @@ void print(const char* name, const Row& row) {
   std::vector<double> iterations(row.iterations.begin(), row.iterations.end());
   std::printf("%-34s %8zu %12.2f %12.2f %12.2f %9.0f %9.0f   %d/%d/%d/%d\n", name,
               row.micros.size(), percentile(row.micros, 0.5), percentile(row.micros, 0.9),
-              percentile(row.micros, 1.0), percentile(iterations, 0.5),
-              percentile(iterations, 1.0), row.regimes[0], row.regimes[1], row.regimes[2],
-              row.regimes[3]);
+              percentile(row.micros, 1.0), percentile(iterations, 0.5), percentile(iterations, 1.0),
+              row.regimes[0], row.regimes[1], row.regimes[2], row.regimes[3]);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   const int problems = argc > 1 ? std::max(1, std::atoi(argv[1])) : 2000;
-  std::printf("%-34s %8s %12s %12s %12s %9s %9s   %s\n", "case", "problems", "median us",
-              "p90 us", "max us", "med iter", "max iter", "regime 0/1/2/3");
-  print("n=1 closed form", timeRow([](Rng& rng) { return spreadProblem(rng, 1); }, problems,
-                                   200, 1));
+  std::printf("%-34s %8s %12s %12s %12s %9s %9s   %s\n", "case", "problems", "median us", "p90 us",
+              "max us", "med iter", "max iter", "regime 0/1/2/3");
+  print("n=1 closed form",
+        timeRow([](Rng& rng) { return spreadProblem(rng, 1); }, problems, 200, 1));
   print("n=2 Fig.10 setting (regime 3)", timeRow(fig10Problem, problems, 100, 2));
-  print("n=2 spread parameters", timeRow([](Rng& rng) { return spreadProblem(rng, 2); },
-                                         problems, 100, 3));
+  print("n=2 spread parameters",
+        timeRow([](Rng& rng) { return spreadProblem(rng, 2); }, problems, 100, 3));
   for (int n = 3; n <= 8; ++n) {
     char name[64];
     std::snprintf(name, sizeof name, "n=%d DP + Newton refinement", n);
-    print(name, timeRow([n](Rng& rng) { return spreadProblem(rng, n); },
-                        std::max(1, problems / 40), 1, 10 + static_cast<std::uint64_t>(n)));
+    print(name, timeRow([n](Rng& rng) { return spreadProblem(rng, n); }, std::max(1, problems / 40),
+                        1, 10 + static_cast<std::uint64_t>(n)));
   }
   return 0;
 }

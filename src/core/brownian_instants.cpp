@@ -43,7 +43,7 @@ Real forwardSweep(double sigma2, double v0, const std::vector<double>& variances
   for (std::size_t k = 1; k <= n; ++k) {
     const Real& gap = gaps[k - 1];
     cost += posterior[k - 1] * gap + Real(0.5 * sigma2) * gap * gap;  // eq. (12), one piece
-    const Real prior = posterior[k - 1] + Real(sigma2) * gap;          // eq. (7)
+    const Real prior = posterior[k - 1] + Real(sigma2) * gap;         // eq. (7)
     const Real denominator = Real(variances[k - 1]) + prior;
     posterior[k] = Real(variances[k - 1]) * prior / denominator;  // eq. (11)
     const Real ratio = Real(variances[k - 1]) / denominator;
@@ -92,8 +92,8 @@ class GapCost {
   double costAndPartials(const Eigen::VectorXd& y, Eigen::VectorXd& partials) {
     const double value = cost(y);
     gapPartials(p_.sigma2, gaps_, posterior_, slope_, partials_);
-    partials = Eigen::Map<const Eigen::VectorXd>(partials_.data(),
-                                                 static_cast<Eigen::Index>(n_ + 1));
+    partials =
+        Eigen::Map<const Eigen::VectorXd>(partials_.data(), static_cast<Eigen::Index>(n_ + 1));
     return value;
   }
 
@@ -105,10 +105,10 @@ class GapCost {
       for (Eigen::Index k = 0; k < size; ++k) {
         dual_gaps_[static_cast<std::size_t>(k)] = Dual(y(k), k == j ? 1.0 : 0.0);
       }
-      (void)forwardSweep(p_.sigma2, p_.v0, p_.variances, dual_gaps_, dual_posterior_,
-                         dual_slope_);
+      (void)forwardSweep(p_.sigma2, p_.v0, p_.variances, dual_gaps_, dual_posterior_, dual_slope_);
       gapPartials(p_.sigma2, dual_gaps_, dual_posterior_, dual_slope_, dual_partials_);
-      for (Eigen::Index k = 0; k < size; ++k) h(k, j) = dual_partials_[static_cast<std::size_t>(k)].d;
+      for (Eigen::Index k = 0; k < size; ++k)
+        h(k, j) = dual_partials_[static_cast<std::size_t>(k)].d;
     }
     return 0.5 * (h + h.transpose());  // exact up to rounding; symmetrised on purpose
   }
@@ -211,7 +211,7 @@ double singleMeasureCost(double sigma2, double horizon_s, double v0, double v1) 
 double largestRealRootOfCubic(double a, double b, double c, double d) {
   const double p2 = b / a, p1 = c / a, p0 = d / a;
   const double shift = p2 / 3.0;
-  const double p = p1 - p2 * shift;                                  // y³ + p y + q, x = y - p2/3
+  const double p = p1 - p2 * shift;  // y³ + p y + q, x = y - p2/3
   const double q = 2.0 * shift * shift * shift - shift * p1 + p0;
   const double discriminant = 0.25 * q * q + p * p * p / 27.0;
   double y = 0.0;
@@ -236,10 +236,12 @@ double largestRealRootOfCubic(double a, double b, double c, double d) {
 // σ² t_{2,1,crit}: largest real root of eq. (36) with the coefficients of eqs. (37)-(40).
 double criticalGapVariance(double v0, double v1, double v2) {
   const double s01 = v0 + v1;
-  const double a = -s01 * s01 * (v0 + 2.0 * v1);                                          // (37)
-  const double b = s01 * (v0 * v0 * v0 - 3.0 * (s01 * (v0 + 2.0 * v1) * v2 + v0 * v1 * v1));  // (38)
-  const double c = v2 * b + v0 * v0 * (2.0 * v0 + 3.0 * v1) * (v0 * v1 + v0 * v2 + v1 * v2);  // (39)
-  const double d = v0 * v0 * (v1 + v2) * s01 * (v0 * v1 + 2.0 * v0 * v2 + 3.0 * v1 * v2);    // (40)
+  const double a = -s01 * s01 * (v0 + 2.0 * v1);  // (37)
+  const double b =
+      s01 * (v0 * v0 * v0 - 3.0 * (s01 * (v0 + 2.0 * v1) * v2 + v0 * v1 * v1));  // (38)
+  const double c =
+      v2 * b + v0 * v0 * (2.0 * v0 + 3.0 * v1) * (v0 * v1 + v0 * v2 + v1 * v2);            // (39)
+  const double d = v0 * v0 * (v1 + v2) * s01 * (v0 * v1 + 2.0 * v0 * v2 + 3.0 * v1 * v2);  // (40)
   return std::max(0.0, largestRealRootOfCubic(a, b, c, d));
 }
 
@@ -528,9 +530,9 @@ CurvatureStep negativeCurvatureStep(const Eigen::MatrixXd& hessian, const Eigen:
 
 // Armijo search along the projection arc x(α) = max(x + α d, 0), α = α0, α0/2, ..., skipping
 // the α that would make the pivot gap negative: the first point with sufficient decrease.
-bool searchArc(GapCost& objective, const SimplexChart& chart, const Eigen::VectorXd& x,
-               double cost, const Eigen::VectorXd& gradient, const Eigen::VectorXd& direction,
-               double alpha, Eigen::VectorXd& next_gaps, double& next_cost) {
+bool searchArc(GapCost& objective, const SimplexChart& chart, const Eigen::VectorXd& x, double cost,
+               const Eigen::VectorXd& gradient, const Eigen::VectorXd& direction, double alpha,
+               Eigen::VectorXd& next_gaps, double& next_cost) {
   for (int halving = 0; halving < 60; ++halving, alpha *= 0.5) {
     const Eigen::VectorXd trial = (x + alpha * direction).cwiseMax(0.0);
     if (trial.sum() > chart.horizon()) continue;
@@ -579,14 +581,13 @@ Refinement refineGaps(const BrownianProblem& p, Eigen::VectorXd y) {
     if (!moved) {
       // Stationary to rounding: a second-order check, treating as pressed against 0 only the
       // coordinates whose gradient clearly pushes them there.
-      const CurvatureStep curve =
-          negativeCurvatureStep(hessian, x, gradient, std::max(hold, 1e-9 * T),
-                                1e-6 * T / time_per_variance);
+      const CurvatureStep curve = negativeCurvatureStep(
+          hessian, x, gradient, std::max(hold, 1e-9 * T), 1e-6 * T / time_per_variance);
       if (curve.direction.size() == 0) break;
       moved = searchArc(objective, chart, x, cost, gradient, curve.direction, 0.5 * T, next,
                         next_cost) ||
-              (curve.both_signs && searchArc(objective, chart, x, cost, gradient,
-                                             -curve.direction, 0.5 * T, next, next_cost));
+              (curve.both_signs && searchArc(objective, chart, x, cost, gradient, -curve.direction,
+                                             0.5 * T, next, next_cost));
       if (!moved) break;
     }
     y = next;
@@ -829,7 +830,8 @@ BrownianSchedule refineInstants(const BrownianProblem& problem, const std::vecto
 BrownianSchedule optimalInstantsBySearch(const BrownianProblem& problem) {
   validateBrownianProblem(problem, "optimalInstantsBySearch");
   constexpr int kTimeSteps = 64, kVarianceNodes = 33, kBasins = 3;
-  std::vector<std::vector<double>> starts = gridStarts(problem, kTimeSteps, kVarianceNodes, kBasins);
+  std::vector<std::vector<double>> starts =
+      gridStarts(problem, kTimeSteps, kVarianceNodes, kBasins);
   starts.push_back(regularInstants(problem.horizon_s, static_cast<int>(problem.variances.size())));
   Refinement best;
   best.cost = std::numeric_limits<double>::infinity();
@@ -848,9 +850,14 @@ BrownianSchedule optimalInstants(const BrownianProblem& problem) {
   validateBrownianProblem(problem, "optimalInstants");
   BrownianSchedule schedule;
   switch (problem.variances.size()) {
-    case 1: schedule = solveOne(problem); break;
-    case 2: schedule = solveTwo(problem); break;
-    default: return optimalInstantsBySearch(problem);
+    case 1:
+      schedule = solveOne(problem);
+      break;
+    case 2:
+      schedule = solveTwo(problem);
+      break;
+    default:
+      return optimalInstantsBySearch(problem);
   }
   fillCosts(problem, schedule);
   return schedule;

@@ -26,10 +26,11 @@
 //   t_2 given t_1 by eq. (28) in closed form, t_1 given t_2 by a safeguarded Newton search for
 //   the zero of ∂J/∂t_1 on [0, t_2] (exact first and second derivatives), warm-started from the
 //   previous sweep; it works on the factor of ∂J/∂t_1 that carries its sign, since the other
-//   factor, P_1/(P_1 + v_1), makes t_1 = 0 look stationary when v0 = 0. The paper proves the minimiser and the coordinatewise local minimum are
-//   unique (Theorems 8, 9), so the descent can only converge to the global optimum. That the
-//   t_1 step finds the minimum of J(·, t_2) rests on the paper's conjecture that this function
-//   is quasi-convex (Section IV-F), which our tests confirm against dense grids.
+//   factor, P_1/(P_1 + v_1), makes t_1 = 0 look stationary when v0 = 0. The paper proves the
+//   minimiser and the coordinatewise local minimum are unique (Theorems 8, 9), so the descent can
+//   only converge to the global optimum. That the t_1 step finds the minimum of J(·, t_2) rests on
+//   the paper's conjecture that this function is quasi-convex (Section IV-F), which our tests
+//   confirm against dense grids.
 //
 // n >= 3 (left open by the paper): optimalInstantsBySearch, in two steps.
 //   1. Starts from a dynamic programme. After k measurements the state is (time left τ,
@@ -115,8 +116,8 @@ struct TwoMeasureCriticalDurations {
 };
 
 // Throws InputError unless σ² > 0, v0 >= 0, v1 > 0, v2 > 0.
-[[nodiscard]] TwoMeasureCriticalDurations criticalDurationsTwo(double sigma2, double v0,
-                                                               double v1, double v2);
+[[nodiscard]] TwoMeasureCriticalDurations criticalDurationsTwo(double sigma2, double v0, double v1,
+                                                               double v2);
 
 // t_{2,1,crit}: (the largest real root of the cubic eq. (36), coefficients eqs. (37)-(40)) / σ².
 // At T = T^(2)_{1,crit} the optimal timetable is (0, t_{2,1,crit}); in regime 3 it is the gap

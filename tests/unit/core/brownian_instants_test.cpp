@@ -44,8 +44,8 @@ std::vector<double> referencePosteriors(const BrownianProblem& p, const std::vec
   double variance = p.v0, previous = 0.0;
   for (std::size_t k = 0; k < t.size(); ++k) {
     const double prior = variance + p.sigma2 * (t[k] - previous);  // (7)
-    const double gain = prior / (prior + p.variances[k]);            // (6)
-    variance = prior - gain * prior;                                 // (5)
+    const double gain = prior / (prior + p.variances[k]);          // (6)
+    variance = prior - gain * prior;                               // (5)
     posterior.push_back(variance);
     previous = t[k];
   }
@@ -74,8 +74,7 @@ double singleCost(double sigma2, double T, double v0, double v1, double t1) {
 
 // Eq. (26), third form.
 double twoCost(const BrownianProblem& p, double t1, double t2) {
-  const double s = p.sigma2, T = p.horizon_s, v0 = p.v0, v1 = p.variances[0],
-               v2 = p.variances[1];
+  const double s = p.sigma2, T = p.horizon_s, v0 = p.v0, v1 = p.variances[0], v2 = p.variances[1];
   const double d2 = t2 - t1, a = v0 + s * t1;
   return 0.5 * s * t1 * t1 + v0 * t1 + 0.5 * s * d2 * d2 + a * v1 * d2 / (a + v1) +
          0.5 * s * (T - t2) * (T - t2) +
@@ -494,14 +493,14 @@ TEST(BrownianManyMeasures, OptimumIsStationaryAndNoRandomStartDoesBetter) {
     // The last instant given the others is the one-measure closed form (eq. 28 generalised).
     const std::vector<double> posterior = referencePosteriors(p, best.instants);
     const double previous = best.instants[static_cast<std::size_t>(n - 2)];
-    EXPECT_NEAR(best.instants.back() - previous,
-                optimalSingleInstant(p.sigma2, p.horizon_s - previous,
-                                     posterior[static_cast<std::size_t>(n - 2)], p.variances.back()),
-                1e-7 * p.horizon_s);
+    EXPECT_NEAR(
+        best.instants.back() - previous,
+        optimalSingleInstant(p.sigma2, p.horizon_s - previous,
+                             posterior[static_cast<std::size_t>(n - 2)], p.variances.back()),
+        1e-7 * p.horizon_s);
     // The empirical claim behind "global": local refinement from random starts never wins.
     for (int start = 0; start < 8; ++start) {
-      const BrownianSchedule local =
-          refineInstants(p, randomInstants(rng, n, p.horizon_s));
+      const BrownianSchedule local = refineInstants(p, randomInstants(rng, n, p.horizon_s));
       EXPECT_GE(local.cost, best.cost * (1.0 - 1e-12));
     }
   }
@@ -574,9 +573,18 @@ TEST(BrownianInput, BadProblemsThrowInputErrorNamingTheField) {
       {[](BrownianProblem& p) { p.v0 = -1e-9; }, "v0"},
       {[&](BrownianProblem& p) { p.v0 = nan; }, "v0"},
       {[](BrownianProblem& p) { p.variances = {}; }, "variances"},
-      {[](BrownianProblem& p) { p.variances = {1.0, 0.0}; }, "variances[1]"},
-      {[](BrownianProblem& p) { p.variances = {-1.0, 1.0}; }, "variances[0]"},
-      {[&](BrownianProblem& p) { p.variances = {1.0, 1.0, inf}; }, "variances[2]"},
+      {[](BrownianProblem& p) {
+         p.variances = {1.0, 0.0};
+       },
+       "variances[1]"},
+      {[](BrownianProblem& p) {
+         p.variances = {-1.0, 1.0};
+       },
+       "variances[0]"},
+      {[&](BrownianProblem& p) {
+         p.variances = {1.0, 1.0, inf};
+       },
+       "variances[2]"},
       {[&](BrownianProblem& p) { p.variances = {nan}; }, "variances[0]"},
   };
   for (const Case& c : cases) {
