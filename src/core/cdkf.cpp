@@ -80,9 +80,9 @@ void CdKalmanFilter::reset(double t, const Eigen::VectorXd& mean,
 
 void CdKalmanFilter::propagateTo(double t) {
   if (!(t >= time_) || !std::isfinite(t)) {
-    throw InputError(kSource, "propagateTo.t",
-                     "a finite time >= time() = " + std::to_string(time_) + ", got " +
-                         std::to_string(t));
+    throw InputError(
+        kSource, "propagateTo.t",
+        "a finite time >= time() = " + std::to_string(time_) + ", got " + std::to_string(t));
   }
   if (t == time_) return;
   transition_.over(t - time_, step_);
@@ -122,9 +122,7 @@ void CdKalmanFilter::update(int sensor, const Eigen::Ref<const Eigen::VectorXd>&
   applyUpdate(sensor, /*update_mean=*/true);
 }
 
-void CdKalmanFilter::updateCovariance(int sensor) {
-  applyUpdate(sensor, /*update_mean=*/false);
-}
+void CdKalmanFilter::updateCovariance(int sensor) { applyUpdate(sensor, /*update_mean=*/false); }
 
 double CdKalmanFilter::terminalCost() const {
   return terminal_weight_.cwiseProduct(covariance_).sum();
@@ -132,9 +130,9 @@ double CdKalmanFilter::terminalCost() const {
 
 const SensorModel& CdKalmanFilter::sensorModel(int sensor) const {
   if (sensor < 0 || sensor >= sensorCount()) {
-    throw InputError(kSource, "sensor",
-                     "an index in [0, " + std::to_string(sensorCount()) + "), got " +
-                         std::to_string(sensor));
+    throw InputError(
+        kSource, "sensor",
+        "an index in [0, " + std::to_string(sensorCount()) + "), got " + std::to_string(sensor));
   }
   return sensors_[static_cast<std::size_t>(sensor)];
 }

@@ -11,8 +11,8 @@
 #include <optional>
 #include <string>
 #include <type_traits>
-#include <vector>
 #include <unsupported/Eigen/MatrixFunctions>
+#include <vector>
 
 #include "sensornet/core/input_error.hpp"
 
@@ -40,9 +40,9 @@ struct ModalForm {
   std::vector<Eigen::Index> pairs;  // first index j of every conjugate pair
   Eigen::MatrixXd T;
   Eigen::MatrixXd T_inv;
-  Matrix Q_modal;  // Q̃
-  Matrix W_modal;  // W̃
-  Matrix WQ_modal; // W̃ ∘ Q̃ (elementwise)
+  Matrix Q_modal;                                              // Q̃
+  Matrix W_modal;                                              // W̃
+  Matrix WQ_modal;                                             // W̃ ∘ Q̃ (elementwise)
   double condition = std::numeric_limits<double>::infinity();  // cond_2(T) = cond_2(V)
   bool diagonalizes = false;  // A V = V Λ to rounding, V invertible
 };
@@ -180,8 +180,8 @@ void mixPairColumns(Eigen::MatrixXcd& M, const std::vector<Eigen::Index>& pairs,
 }
 
 // C X C' (s = 1, +) or C^{-T} X C^{-1} (s = 1/2, -), whose result is real.
-Eigen::MatrixXd realInnerFactor(const Eigen::MatrixXd& X, const std::vector<Eigen::Index>&,
-                                double, double) {
+Eigen::MatrixXd realInnerFactor(const Eigen::MatrixXd& X, const std::vector<Eigen::Index>&, double,
+                                double) {
   return X;
 }
 Eigen::MatrixXd realInnerFactor(Eigen::MatrixXcd X, const std::vector<Eigen::Index>& pairs,
@@ -251,6 +251,84 @@ void overModal(const ModalForm<Scalar>& form, double dt, IntervalTransition& ste
   }
 }
 
+// Nilpotent A (A^m = 0 exactly as computed; integrator chains such as the double integrator):
+// e^{As} = Σ_{k<m} A^k s^k / k! and every Taylor series below terminates, so
+//   Phi        = Σ_{k<m}    A^k dt^k / k!
+//   Qd         = Σ_{k<2m-1} L^k(Q) dt^{k+1} / (k+1)!,    L(X) = A X + X A'
+//   G          = Σ_{k<2m-1} L'^k(W) dt^{k+1} / (k+1)!,   L'(X) = A' X + X A
+//   noise_cost = Σ_{k<2m-1} <W, L^k(Q)> dt^{k+2} / (k+2)!
+// with L^k(Q) = Σ_j C(k, j) A^j Q A'^{k-j}, whose terms with j >= m or k - j >= m vanish.
+// Exact polynomials in dt with coefficients fixed by (A, Q, W).
+struct PolynomialForm {
+  std::vector<Eigen::MatrixXd> phi;  // coefficient of dt^k
+  std::vector<Eigen::MatrixXd> qd;   // coefficient of dt^{k+1}
+  std::vector<Eigen::MatrixXd> g;    // coefficient of dt^{k+1}
+  std::vector<double> noise;         // coefficient of dt^{k+2}
+};
+
+std::optional<PolynomialForm> makePolynomialForm(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q,
+                                                 const Eigen::MatrixXd& W) {
+  const Eigen::Index n = A.rows();
+  std::vector<Eigen::MatrixXd> powers = {Eigen::MatrixXd::Identity(n, n)};
+  bool nilpotent = false;
+  for (Eigen::Index p = 1; p <= n; ++p) {
+    Eigen::MatrixXd next = powers.back() * A;
+    if ((next.array() == 0.0).all()) {
+      nilpotent = true;
+      break;
+    }
+    powers.push_back(std::move(next));
+  }
+  if (!nilpotent) return std::nullopt;
+
+  const int m = static_cast<int>(powers.size());  // A^m = 0
+  PolynomialForm form;
+  double factorial = 1.0;  // k!
+  for (int k = 0; k < m; ++k) {
+    if (k > 0) factorial *= k;
+    form.phi.push_back(powers[static_cast<std::size_t>(k)] / factorial);
+  }
+  double factorial_next = 1.0;  // (k+1)!
+  for (int k = 0; k <= 2 * m - 2; ++k) {
+    if (k > 0) factorial_next *= k + 1;
+    Eigen::MatrixXd LQ = Eigen::MatrixXd::Zero(n, n);
+    Eigen::MatrixXd LW = Eigen::MatrixXd::Zero(n, n);
+    double binomial = 1.0;  // C(k, j), updated as j runs from 0
+    for (int j = 0; j <= k; ++j) {
+      if (j > 0) binomial = binomial * (k - j + 1) / j;
+      if (j >= m || k - j >= m) continue;
+      const Eigen::MatrixXd& left = powers[static_cast<std::size_t>(j)];
+      const Eigen::MatrixXd& right = powers[static_cast<std::size_t>(k - j)];
+      LQ += binomial * left * Q * right.transpose();
+      LW += binomial * left.transpose() * W * right;
+    }
+    form.qd.push_back(LQ / factorial_next);
+    form.g.push_back(LW / factorial_next);
+    form.noise.push_back(W.cwiseProduct(LQ).sum() / (factorial_next * (k + 2)));
+  }
+  return form;
+}
+
+// out = Σ_k c[k] x^k by Horner's rule, reusing out's storage.
+void evaluatePolynomial(const std::vector<Eigen::MatrixXd>& c, double x, Eigen::MatrixXd& out) {
+  out = c.back();
+  for (std::size_t k = c.size() - 1; k-- > 0;) {
+    out *= x;
+    out += c[k];
+  }
+}
+
+void overPolynomial(const PolynomialForm& form, double dt, IntervalTransition& step) {
+  evaluatePolynomial(form.phi, dt, step.Phi);
+  evaluatePolynomial(form.qd, dt, step.Qd);
+  step.Qd *= dt;
+  evaluatePolynomial(form.g, dt, step.cost_gramian);
+  step.cost_gramian *= dt;
+  double noise = form.noise.back();
+  for (std::size_t k = form.noise.size() - 1; k-- > 0;) noise = noise * dt + form.noise[k];
+  step.noise_cost = noise * dt * dt;
+}
+
 // Van Loan (1978), Theorem 1, on the block upper-triangular
 //       [ -A'  αW   0  ]                    [ F1  G1  H1 ]
 //   C = [  0    A   βQ ] dt,   e^C =        [ 0   F2  G2 ]
@@ -310,8 +388,9 @@ struct LtiTransition::Impl {
   Eigen::MatrixXd W;  // symmetric part
   TransitionMethod method = TransitionMethod::kVanLoan;
   double condition = std::numeric_limits<double>::infinity();
-  std::optional<ModalForm<double>> real_form;                 // all eigenvalues real
+  std::optional<ModalForm<double>> real_form;                   // all eigenvalues real
   std::optional<ModalForm<std::complex<double>>> complex_form;  // some complex pair
+  std::optional<PolynomialForm> polynomial_form;                // nilpotent A
 };
 
 LtiTransition::LtiTransition(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q,
@@ -327,16 +406,24 @@ LtiTransition::LtiTransition(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q,
   impl->Q = 0.5 * (Q + Q.transpose());
   impl->W = 0.5 * (W + W.transpose());
 
-  if (method != TransitionMethod::kVanLoan) {
+  const bool automatic = method == TransitionMethod::kAutomatic;
+  if (automatic || method == TransitionMethod::kPolynomial) {
+    impl->polynomial_form = makePolynomialForm(A, impl->Q, impl->W);
+    if (impl->polynomial_form) {
+      impl->method = TransitionMethod::kPolynomial;
+    } else if (!automatic) {
+      throw InputError(kSource, "A", "a nilpotent matrix (A^n = 0) for the polynomial method");
+    }
+  }
+  if (automatic || method == TransitionMethod::kModal) {
     const Eigen::EigenSolver<Eigen::MatrixXd> solver(A, /*computeEigenvectors=*/true);
     if (solver.info() == Eigen::Success) {
       const Eigen::VectorXcd& eigenvalues = solver.eigenvalues();
       const Eigen::MatrixXcd V = solver.eigenvectors();
       const auto accept = [&](const auto& form) {
         if (form.diagonalizes) impl->condition = form.condition;
-        const double limit = method == TransitionMethod::kModal ? kDefectiveEigenvectorCondition
-                                                                 : kMaxEigenvectorCondition;
-        return form.diagonalizes && form.condition < limit;
+        const double limit = automatic ? kMaxEigenvectorCondition : kDefectiveEigenvectorCondition;
+        return !impl->polynomial_form && form.diagonalizes && form.condition < limit;
       };
       if ((eigenvalues.imag().array() == 0.0).all()) {
         auto form = makeModalForm<double>(A, eigenvalues, V, impl->Q, impl->W);
@@ -350,7 +437,8 @@ LtiTransition::LtiTransition(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q,
     if (method == TransitionMethod::kModal && impl->method != TransitionMethod::kModal) {
       throw InputError(kSource, "A",
                        "a diagonalizable matrix for the modal method (eigenvector condition "
-                       "below 1e8), got condition " + std::to_string(impl->condition));
+                       "below 1e8), got condition " +
+                           std::to_string(impl->condition));
     }
   }
   impl_ = std::move(impl);
@@ -375,7 +463,9 @@ void LtiTransition::over(double dt, IntervalTransition& step) const {
     step.noise_cost = 0.0;
     return;
   }
-  if (d.real_form) {
+  if (d.polynomial_form) {
+    overPolynomial(*d.polynomial_form, dt, step);
+  } else if (d.real_form) {
     overModal(*d.real_form, dt, step);
   } else if (d.complex_form) {
     overModal(*d.complex_form, dt, step);

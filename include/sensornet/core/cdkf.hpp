@@ -87,10 +87,10 @@ class CdKalmanFilter {
   Eigen::MatrixXd PHt_;             // P H', later K R
   Eigen::MatrixXd innovation_cov_;  // H P H' + R
   Eigen::LLT<Eigen::MatrixXd> innovation_llt_;
-  Eigen::MatrixXd gain_t_;          // K' (p x n)
-  Eigen::MatrixXd IKH_;             // I - K H
-  Eigen::MatrixXd work_;            // n x n products
-  Eigen::VectorXd innovation_;      // z - H m
+  Eigen::MatrixXd gain_t_;      // K' (p x n)
+  Eigen::MatrixXd IKH_;         // I - K H
+  Eigen::MatrixXd work_;        // n x n products
+  Eigen::VectorXd innovation_;  // z - H m
   Eigen::VectorXd mean_work_;
 };
 

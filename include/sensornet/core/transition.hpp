@@ -12,11 +12,13 @@
 //   double cost = P.cwiseProduct(step.cost_gramian).sum() + step.noise_cost;
 //   P = step.Phi * P * step.Phi.transpose() + step.Qd;
 //
-// Two exact methods. The modal one diagonalizes A = V Λ V^{-1} once, after which every
-// quantity is a Hadamard product in the eigenbasis with scalar integrals of e^{(λ_i+λ_j)s}:
-// n exponentials per call. When V is ill-conditioned (defective or nearly defective A, such as
-// the double integrator) it would lose accuracy, so the Van Loan (1978) block exponential of
-// one 3n x 3n matrix is used instead. Both are exact up to rounding; neither takes time steps.
+// Three exact methods, none of which takes time steps. The modal one diagonalizes
+// A = V Λ V^{-1} once, after which every quantity is a Hadamard product in the eigenbasis with
+// scalar integrals of e^{(λ_i+λ_j)s}: n exponentials per call. It would lose accuracy when V is
+// ill-conditioned (defective or nearly defective A). Nilpotent A (A^m = 0: the double
+// integrator and other integrator chains, the common defective case) gives finite Taylor
+// series, so all four quantities are polynomials in dt with precomputed coefficients. Any other
+// defective A falls back to the Van Loan (1978) block exponential of one 3n x 3n matrix.
 
 #include <Eigen/Core>
 #include <memory>
@@ -32,9 +34,12 @@ struct IntervalTransition {
 };
 
 enum class TransitionMethod {
-  kAutomatic,  // modal when the eigenbasis is well conditioned, Van Loan otherwise
-  kModal,      // eigen-decomposition of A; throws InputError when A is (numerically) defective
-  kVanLoan,    // block matrix exponential; works for every A, slower
+  kAutomatic,   // polynomial for nilpotent A, else modal when the eigenbasis is well
+                // conditioned, else Van Loan
+  kModal,       // eigen-decomposition of A; throws InputError when A is (numerically) defective
+  kPolynomial,  // A^m = 0 exactly (integrator chains): finite polynomials in dt; throws
+                // InputError for any other A
+  kVanLoan,     // block matrix exponential; works for every A, slowest
 };
 
 // Precomputes what it can from (A, Q, W); over() is cheap and safe to call from several threads
@@ -62,7 +67,7 @@ class LtiTransition {
   void over(double dt, IntervalTransition& step) const;
 
   [[nodiscard]] int stateDim() const;
-  // The method in use: kModal or kVanLoan, never kAutomatic.
+  // The method in use: kModal, kPolynomial or kVanLoan, never kAutomatic.
   [[nodiscard]] TransitionMethod method() const;
   // cond_2(V) of the unit-column eigenvector matrix (about 1e15 or more for an exactly
   // defective A); infinity when the eigen-decomposition failed or V is singular.

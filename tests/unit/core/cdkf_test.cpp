@@ -62,7 +62,8 @@ Scenario makeScenario(MatrixXd A, MatrixXd Q, MatrixXd P0, std::vector<SensorMod
 std::vector<SensorModel> randomSensors(Eigen::Index n, const std::vector<Eigen::Index>& rows,
                                        Rng& rng) {
   std::vector<SensorModel> sensors;
-  for (const Eigen::Index p : rows) sensors.push_back({gaussianMatrix(p, n, rng), randomSpd(p, rng)});
+  for (const Eigen::Index p : rows)
+    sensors.push_back({gaussianMatrix(p, n, rng), randomSpd(p, rng)});
   return sensors;
 }
 
@@ -109,10 +110,9 @@ TEST(CdKalmanFilter, BrownianCostEqualsEquation12OfTheBrownianPaper) {
   for (const double v : variances) {
     sensors.push_back({MatrixXd::Ones(1, 1), MatrixXd::Constant(1, 1, v)});
   }
-  const Scenario scenario =
-      makeScenario(MatrixXd::Zero(1, 1), MatrixXd::Constant(1, 1, sigma2),
-                   MatrixXd::Constant(1, 1, v0), sensors, MatrixXd::Ones(1, 1),
-                   MatrixXd::Zero(1, 1), T);
+  const Scenario scenario = makeScenario(MatrixXd::Zero(1, 1), MatrixXd::Constant(1, 1, sigma2),
+                                         MatrixXd::Constant(1, 1, v0), sensors,
+                                         MatrixXd::Ones(1, 1), MatrixXd::Zero(1, 1), T);
   CdKalmanFilter filter(scenario);
   for (std::size_t k = 0; k < instants.size(); ++k) {
     filter.propagateTo(instants[k]);
@@ -183,12 +183,13 @@ TEST(CdKalmanFilter, UpdateMatchesTheTextbookFormula) {
 
     filter.reset(0.0, prior.mean, prior.covariance);
     filter.update(0, z);
-    EXPECT_LT(relativeError(filter.covariance(), expected.covariance), 1e-12) << trial;
-    EXPECT_LT(relativeError(filter.mean(), expected.mean), 1e-12) << trial;
+    // The textbook expression itself, in double, is good to a few 1e-13 here.
+    EXPECT_LT(relativeError(filter.covariance(), expected.covariance), 1e-11) << trial;
+    EXPECT_LT(relativeError(filter.mean(), expected.mean), 1e-11) << trial;
 
     filter.reset(0.0, prior.mean, prior.covariance);
     filter.updateCovariance(0);
-    EXPECT_LT(relativeError(filter.covariance(), expected.covariance), 1e-12) << trial;
+    EXPECT_LT(relativeError(filter.covariance(), expected.covariance), 1e-11) << trial;
     EXPECT_EQ(filter.mean(), prior.mean);
   }
 }
@@ -226,17 +227,16 @@ TEST(CdKalmanFilter, PropagationAndCostMatchFineStepIntegrationAcrossAnEpisode) 
   Rng rng(23);
   const Eigen::Index n = 3;
   const MatrixXd A = gaussianMatrix(n, n, rng) / 2;
-  const Scenario s = makeScenario(A, randomSpd(n, rng), 5.0 * randomSpd(n, rng),
-                                  randomSensors(n, {1, 2, 1}, rng), randomSpd(n, rng),
-                                  randomSpd(n, rng), 2.5);
+  const Scenario s =
+      makeScenario(A, randomSpd(n, rng), 5.0 * randomSpd(n, rng), randomSensors(n, {1, 2, 1}, rng),
+                   randomSpd(n, rng), randomSpd(n, rng), 2.5);
   const std::vector<std::pair<double, int>> arrivals = {
       {0.13, 0}, {0.5, 1}, {0.5, 2}, {1.2, 0}, {2.0, 2}};
   CdKalmanFilter filter(s);
   Episode reference{{s.plant.m0, s.plant.P0}, 0.0};
   double t = 0.0;
   for (const auto& [time, sensor] : arrivals) {
-    const VectorXd z = gaussianMatrix(s.sensors[static_cast<std::size_t>(sensor)].H.rows(), 1,
-                                      rng);
+    const VectorXd z = gaussianMatrix(s.sensors[static_cast<std::size_t>(sensor)].H.rows(), 1, rng);
     filter.propagateTo(time);
     filter.update(sensor, z);
     if (time > t) integrateFineSteps(reference, s, time - t);
@@ -310,9 +310,9 @@ TEST(CdKalmanFilter, LongRunKeepsTheCovarianceSymmetricPositiveDefinite) {
     }
   }
   EXPECT_GT(updates, 40000);
-  EXPECT_LT(worst_relative_gap, 1e-9);
+  EXPECT_LT(worst_relative_gap, 1e-12);
   EXPECT_TRUE(filter.mean().allFinite());
-  EXPECT_LT(relativeError(filter.mean(), m_ref.cast<double>()), 1e-8);
+  EXPECT_LT(relativeError(filter.mean(), m_ref.cast<double>()), 1e-12);
 }
 
 TEST(CdKalmanFilter, PropagateByWithAPrecomputedStepEqualsPropagateTo) {

@@ -63,12 +63,12 @@ Flow flowDerivative(const Flow& y, const MatrixXd& A, const MatrixXd& Q, const M
 }
 
 Flow plusScaled(const Flow& y, double h, const Flow& d) {
-  return {y.Phi + h * d.Phi, y.Qd + h * d.Qd, y.G + h * d.G, y.P + h * d.P,
-          y.noise + h * d.noise, y.cost + h * d.cost};
+  return {y.Phi + h * d.Phi, y.Qd + h * d.Qd,       y.G + h * d.G,
+          y.P + h * d.P,     y.noise + h * d.noise, y.cost + h * d.cost};
 }
 
-Flow integrateFineSteps(const MatrixXd& A, const MatrixXd& Q, const MatrixXd& W,
-                        const MatrixXd& P0, double dt) {
+Flow integrateFineSteps(const MatrixXd& A, const MatrixXd& Q, const MatrixXd& W, const MatrixXd& P0,
+                        double dt) {
   const Eigen::Index n = A.rows();
   const double stiffness = std::max(1.0, A.norm() * dt);
   const int steps = std::clamp(static_cast<int>(std::ceil(2000.0 * stiffness)), 2000, 40000);
@@ -92,8 +92,8 @@ Flow integrateFineSteps(const MatrixXd& A, const MatrixXd& Q, const MatrixXd& W,
 // Checks every output of over(dt), and the cost identity
 //   ∫_0^dt <W, P(s)> ds = <P0, G> + noise_cost,  P(dt) = Phi P0 Phi' + Qd,
 // against the fine-step integration, to a relative tolerance.
-void expectMatchesFineSteps(const LtiTransition& transition, const MatrixXd& A,
-                            const MatrixXd& Q, const MatrixXd& W, double dt, double tolerance,
+void expectMatchesFineSteps(const LtiTransition& transition, const MatrixXd& A, const MatrixXd& Q,
+                            const MatrixXd& W, double dt, double tolerance,
                             const std::string& label) {
   Rng rng = Rng::keyed(99, static_cast<std::uint64_t>(A.rows()));
   const MatrixXd P0 = randomSpd(A.rows(), rng);
@@ -145,25 +145,43 @@ TEST(LtiTransition, MatchesFineStepIntegrationOnDiagonalizablePlants) {
   }
 }
 
-TEST(LtiTransition, FallsBackToVanLoanAndMatchesFineStepsOnDefectivePlants) {
+TEST(LtiTransition, HandlesDefectivePlantsExactly) {
+  // Nilpotent plants take the polynomial path, other defective ones Van Loan; forcing Van Loan
+  // on the nilpotent ones checks that path against the fine steps too.
   Rng rng(8);
-  std::vector<Plant> plants;
-  plants.push_back({"double integrator", (MatrixXd(2, 2) << 0, 1, 0, 0).finished()});
-  plants.push_back({"Jordan block at -1", (MatrixXd(2, 2) << -1, 1, 0, -1).finished()});
-  plants.push_back(
-      {"nilpotent 3 x 3", (MatrixXd(3, 3) << 0, 1, 0, 0, 0, 1, 0, 0, 0).finished()});
-  plants.push_back({"unstable Jordan block plus stable mode",
-                    (MatrixXd(3, 3) << 0.5, 1, 0, 0, 0.5, 0, 0.2, 0, -1).finished()});
-  plants.push_back(
-      {"nearly defective (gap 1e-6)", (MatrixXd(2, 2) << -1, 1, 0, -1 - 1e-6).finished()});
-  for (const Plant& plant : plants) {
-    const Eigen::Index n = plant.A.rows();
+  struct Case {
+    std::string label;
+    MatrixXd A;
+    TransitionMethod expected;
+  };
+  MatrixXd constant_velocity = MatrixXd::Zero(4, 4);  // (x, y, vx, vy)
+  constant_velocity(0, 2) = 1.0;
+  constant_velocity(1, 3) = 1.0;
+  const std::vector<Case> cases = {
+      {"double integrator", (MatrixXd(2, 2) << 0, 1, 0, 0).finished(),
+       TransitionMethod::kPolynomial},
+      {"nilpotent 3 x 3", (MatrixXd(3, 3) << 0, 1, 0, 0, 0, 1, 0, 0, 0).finished(),
+       TransitionMethod::kPolynomial},
+      {"2-D constant velocity", constant_velocity, TransitionMethod::kPolynomial},
+      {"Jordan block at -1", (MatrixXd(2, 2) << -1, 1, 0, -1).finished(),
+       TransitionMethod::kVanLoan},
+      {"unstable Jordan block plus stable mode",
+       (MatrixXd(3, 3) << 0.5, 1, 0, 0, 0.5, 0, 0.2, 0, -1).finished(), TransitionMethod::kVanLoan},
+      {"nearly defective (gap 1e-6)", (MatrixXd(2, 2) << -1, 1, 0, -1 - 1e-6).finished(),
+       TransitionMethod::kVanLoan},
+  };
+  for (const Case& c : cases) {
+    const Eigen::Index n = c.A.rows();
     const MatrixXd Q = randomSpd(n, rng);
     const MatrixXd W = randomSpd(n, rng);
-    const LtiTransition transition(plant.A, Q, W);
-    EXPECT_EQ(transition.method(), TransitionMethod::kVanLoan) << plant.label;
+    const LtiTransition automatic(c.A, Q, W);
+    EXPECT_EQ(automatic.method(), c.expected) << c.label;
+    const LtiTransition van_loan(c.A, Q, W, TransitionMethod::kVanLoan);
     for (const double dt : {1e-3, 0.2, 1.0, 3.0}) {
-      expectMatchesFineSteps(transition, plant.A, Q, W, dt, 1e-10, plant.label);
+      expectMatchesFineSteps(automatic, c.A, Q, W, dt, 1e-10, c.label);
+      if (c.expected != TransitionMethod::kVanLoan) {
+        expectMatchesFineSteps(van_loan, c.A, Q, W, dt, 1e-10, c.label + " (Van Loan)");
+      }
     }
   }
 }
@@ -190,14 +208,20 @@ TEST(LtiTransition, BrownianMotionMatchesClosedForm) {
   Rng rng(9);
   const MatrixXd Q = randomSpd(3, rng);
   const MatrixXd W = randomPsdRankOne(3, rng);
-  const LtiTransition transition(MatrixXd::Zero(3, 3), Q, W);
-  EXPECT_EQ(transition.method(), TransitionMethod::kModal);
-  for (const double dt : {1e-9, 1e-3, 0.7, 5.0, 100.0}) {
-    const IntervalTransition step = transition.over(dt);
-    EXPECT_LT(relativeError(step.Phi, MatrixXd::Identity(3, 3)), 1e-15);
-    EXPECT_LT(relativeError(step.Qd, Q * dt), 1e-14);
-    EXPECT_LT(relativeError(step.cost_gramian, W * dt), 1e-14);
-    EXPECT_LT(relativeError(step.noise_cost, W.cwiseProduct(Q).sum() * dt * dt / 2), 1e-14);
+  for (const TransitionMethod method :
+       {TransitionMethod::kPolynomial, TransitionMethod::kModal, TransitionMethod::kVanLoan}) {
+    const LtiTransition transition(MatrixXd::Zero(3, 3), Q, W, method);
+    EXPECT_EQ(transition.method(), method);
+    if (method == TransitionMethod::kPolynomial) {
+      EXPECT_EQ(LtiTransition(MatrixXd::Zero(3, 3), Q, W).method(), method);  // automatic
+    }
+    for (const double dt : {1e-9, 1e-3, 0.7, 5.0, 100.0}) {
+      const IntervalTransition step = transition.over(dt);
+      EXPECT_LT(relativeError(step.Phi, MatrixXd::Identity(3, 3)), 1e-15);
+      EXPECT_LT(relativeError(step.Qd, Q * dt), 1e-14);
+      EXPECT_LT(relativeError(step.cost_gramian, W * dt), 1e-14);
+      EXPECT_LT(relativeError(step.noise_cost, W.cwiseProduct(Q).sum() * dt * dt / 2), 1e-14);
+    }
   }
 }
 
@@ -208,31 +232,44 @@ TEST(LtiTransition, DoubleIntegratorMatchesClosedForm) {
   const double q = 0.8;
   const MatrixXd A = (MatrixXd(2, 2) << 0, 1, 0, 0).finished();
   const MatrixXd Q = (MatrixXd(2, 2) << 0, 0, 0, q).finished();
-  const LtiTransition transition(A, Q, MatrixXd::Identity(2, 2));
-  EXPECT_EQ(transition.method(), TransitionMethod::kVanLoan);
-  for (const double dt : {1e-4, 0.05, 1.0, 4.0, 20.0}) {
-    const IntervalTransition step = transition.over(dt);
-    const double dt2 = dt * dt;
-    const double dt3 = dt2 * dt;
-    EXPECT_LT(relativeError(step.Phi, (MatrixXd(2, 2) << 1, dt, 0, 1).finished()), 1e-14);
-    EXPECT_LT(relativeError(step.Qd, q * (MatrixXd(2, 2) << dt3 / 3, dt2 / 2, dt2 / 2, dt)
-                                             .finished()),
-              1e-13)
-        << "dt = " << dt;
-    EXPECT_LT(relativeError(step.cost_gramian,
-                            (MatrixXd(2, 2) << dt, dt2 / 2, dt2 / 2, dt + dt3 / 3).finished()),
-              1e-13)
-        << "dt = " << dt;
-    EXPECT_LT(relativeError(step.noise_cost, q * (dt2 * dt2 / 12 + dt2 / 2)), 1e-13)
-        << "dt = " << dt;
+  for (const TransitionMethod method : {TransitionMethod::kAutomatic, TransitionMethod::kVanLoan}) {
+    const LtiTransition transition(A, Q, MatrixXd::Identity(2, 2), method);
+    EXPECT_EQ(transition.method(), method == TransitionMethod::kAutomatic
+                                       ? TransitionMethod::kPolynomial
+                                       : TransitionMethod::kVanLoan);
+    for (const double dt : {1e-4, 0.05, 1.0, 4.0, 20.0}) {
+      const IntervalTransition step = transition.over(dt);
+      const double dt2 = dt * dt;
+      const double dt3 = dt2 * dt;
+      EXPECT_LT(relativeError(step.Phi, (MatrixXd(2, 2) << 1, dt, 0, 1).finished()), 1e-14);
+      EXPECT_LT(
+          relativeError(step.Qd, q * (MatrixXd(2, 2) << dt3 / 3, dt2 / 2, dt2 / 2, dt).finished()),
+          1e-13)
+          << "dt = " << dt;
+      EXPECT_LT(relativeError(step.cost_gramian,
+                              (MatrixXd(2, 2) << dt, dt2 / 2, dt2 / 2, dt + dt3 / 3).finished()),
+                1e-13)
+          << "dt = " << dt;
+      EXPECT_LT(relativeError(step.noise_cost, q * (dt2 * dt2 / 12 + dt2 / 2)), 1e-13)
+          << "dt = " << dt;
+    }
   }
 }
 
 // ψ1(μ, t) = ∫_0^t e^{μs} ds and ψ2(μ, t) = ∫_0^t ψ1(μ, s) ds in long double, for the closed
-// forms below; accurate to ~1e-19 / |μt| relative, enough for |μt| >= 1e-6.
+// forms below. ψ2 = t² Σ_k (μt)^k / (k+2)! by its Taylor series below |μt| = 0.01 (20 terms
+// leave < 1e-40), where the closed form would cancel; both are good to ~1e-18 relative.
 long double psi1(long double mu, long double t) { return std::expm1(mu * t) / mu; }
 long double psi2(long double mu, long double t) {
-  return (std::expm1(mu * t) - mu * t) / (mu * mu);
+  const long double z = mu * t;
+  if (std::abs(z) >= 0.01L) return (std::expm1(z) - z) / (mu * mu);
+  long double sum = 0.0L;
+  long double term = 0.5L;  // z^k / (k+2)! at k = 0
+  for (int k = 0; k < 20; ++k) {
+    sum += term;
+    term *= z / (k + 3);
+  }
+  return t * t * sum;
 }
 std::complex<long double> psi1(std::complex<long double> mu, long double t) {
   return (std::exp(mu * t) - 1.0L) / mu;
@@ -260,8 +297,7 @@ TEST(LtiTransition, ScalarPlantMatchesClosedFormAcrossTheSeriesSwitch) {
       EXPECT_LT(relativeError(step.cost_gramian(0, 0), static_cast<double>(w * psi1(mu, dt))),
                 1e-14)
           << where;
-      EXPECT_LT(relativeError(step.noise_cost, static_cast<double>(w * q * psi2(mu, dt))),
-                1e-13)
+      EXPECT_LT(relativeError(step.noise_cost, static_cast<double>(w * q * psi2(mu, dt))), 1e-14)
           << where;
     }
   }
@@ -294,8 +330,8 @@ TEST(LtiTransition, RotatingPlantMatchesClosedFormAcrossTheSeriesSwitch) {
     const double im = static_cast<double>(psi1(mu, dt).imag());
     const MatrixXd Qd = mq * real * MatrixXd::Identity(2, 2) +
                         dq * (MatrixXd(2, 2) << re, -im, -im, -re).finished();
-    const MatrixXd G = mw * real * MatrixXd::Identity(2, 2) +
-                       dw * (MatrixXd(2, 2) << re, im, im, -re).finished();
+    const MatrixXd G =
+        mw * real * MatrixXd::Identity(2, 2) + dw * (MatrixXd(2, 2) << re, im, im, -re).finished();
     const double noise = static_cast<double>((w1 + w2) * mq * psi2(2.0L * a, dt) +
                                              (w1 - w2) * dq * psi2(mu, dt).real());
     const std::string where = "dt = " + std::to_string(dt);
@@ -346,8 +382,7 @@ TEST(LtiTransition, OutputsAreExactlySymmetricAndReuseTheirStorage) {
 
 TEST(LtiTransition, ZeroIntervalIsTheIdentity) {
   Rng rng(12);
-  const LtiTransition transition(gaussianMatrix(3, 3, rng), randomSpd(3, rng),
-                                 randomSpd(3, rng));
+  const LtiTransition transition(gaussianMatrix(3, 3, rng), randomSpd(3, rng), randomSpd(3, rng));
   const IntervalTransition step = transition.over(0.0);
   EXPECT_EQ(step.Phi, MatrixXd::Identity(3, 3));
   EXPECT_EQ(step.Qd, MatrixXd::Zero(3, 3));
@@ -355,7 +390,7 @@ TEST(LtiTransition, ZeroIntervalIsTheIdentity) {
   EXPECT_EQ(step.noise_cost, 0.0);
 }
 
-TEST(LtiTransition, RejectsBadIntervalsShapesAndForcedModalOnDefectiveA) {
+TEST(LtiTransition, RejectsBadIntervalsShapesAndForcedMethodsThatDoNotApply) {
   const MatrixXd I2 = MatrixXd::Identity(2, 2);
   const LtiTransition transition(-I2, I2, I2);
   EXPECT_THROW((void)transition.over(-1e-3), InputError);
@@ -366,6 +401,7 @@ TEST(LtiTransition, RejectsBadIntervalsShapesAndForcedModalOnDefectiveA) {
   EXPECT_THROW(LtiTransition(-I2, I2, MatrixXd::Identity(3, 3)), InputError);
   const MatrixXd double_integrator = (MatrixXd(2, 2) << 0, 1, 0, 0).finished();
   EXPECT_THROW(LtiTransition(double_integrator, I2, I2, TransitionMethod::kModal), InputError);
+  EXPECT_THROW(LtiTransition(-I2, I2, I2, TransitionMethod::kPolynomial), InputError);
   EXPECT_GT(LtiTransition(double_integrator, I2, I2).eigenvectorCondition(),
             LtiTransition::kDefectiveEigenvectorCondition);
 }
