@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "sensornet/io/command_line.hpp"
+#include "plan_command.hpp"
 #include "timetable_command.hpp"
 
 int main(int argc, char** argv) {
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
     app.name("coordinator");
     app.require_subcommand(1);
     const std::vector<sensornet::Subcommand> subcommands = {
+        sensornet::coordinator::addPlanCommand(app),
         sensornet::coordinator::addTimetableCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);

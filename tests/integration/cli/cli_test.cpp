@@ -175,5 +175,56 @@ TEST(FusionCenterEvaluate, BadInputGivesOneLineAndNonZeroExit) {
   expectOneLineError(runProcess({kFusionCenter, "evaluate"}), "--scenario");
 }
 
+// `coordinator plan` writes a schedule that `fusion_center evaluate` accepts, and its JSON agrees
+// with an independent evaluation of that file: the bracket `evaluate` computes for the written
+// schedule is the one `plan` printed, and the planned surrogate beats the uniform schedule's.
+TEST(CoordinatorPlan, WritesAScheduleWhoseBracketEvaluateConfirms) {
+  ScratchDir dir;
+  const ProcessResult uniform = runProcess({kFusionCenter, "evaluate", "--scenario",
+                                            kDefaultScenario, "--runs", "2", "--json"});
+  ASSERT_EQ(uniform.exit_code, 0) << uniform.err;
+  const auto uniform_bracket = nlohmann::json::parse(uniform.out)["bracket"];
+  for (const std::string surrogate : {"info", "cov"}) {
+    const std::string out = dir.write(surrogate + ".json", "");
+    const ProcessResult r = runProcess({kCoordinator, "plan", "--scenario", kDefaultScenario,
+                                        "--surrogate", surrogate, "--out", out, "--json"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto doc = nlohmann::json::parse(r.out);
+    EXPECT_EQ(doc.at("surrogate"), surrogate);
+    EXPECT_EQ(doc.at("status"), "optimal");
+    EXPECT_GT(doc.at("iterations").get<int>(), 0);
+    EXPECT_GE(doc.at("solve_seconds").get<double>(), 0.0);
+    const double objective = doc.at("objective").get<double>();
+    EXPECT_DOUBLE_EQ(objective, doc.at("bracket").at(surrogate).get<double>());
+    EXPECT_LT(objective, uniform_bracket.at(surrogate).get<double>());
+
+    const ProcessResult check = runProcess({kFusionCenter, "evaluate", "--scenario",
+                                            kDefaultScenario, "--schedule", out, "--runs", "2",
+                                            "--json"});
+    ASSERT_EQ(check.exit_code, 0) << check.err;
+    const auto bracket = nlohmann::json::parse(check.out)["bracket"];
+    for (const char* side : {"info", "cov"}) {
+      EXPECT_NEAR(bracket.at(side).get<double>(), doc["bracket"][side].get<double>(),
+                  1e-9 * bracket.at(side).get<double>())
+          << side;
+    }
+  }
+}
+
+TEST(CoordinatorPlan, BadInputGivesOneLineAndNonZeroExit) {
+  ScratchDir dir;
+  const std::string out = dir.write("p.json", "");
+  expectOneLineError(runProcess({kCoordinator, "plan", "--scenario", kDefaultScenario,
+                                 "--surrogate", "best", "--out", out}),
+                     "--surrogate");
+  expectOneLineError(runProcess({kCoordinator, "plan", "--scenario", kDefaultScenario,
+                                 "--exclude", "6", "--out", out}),
+                     "--exclude");
+  expectOneLineError(runProcess({kCoordinator, "plan", "--scenario", "/no/such.yaml", "--out",
+                                 out}),
+                     "/no/such.yaml");
+  expectOneLineError(runProcess({kCoordinator, "plan", "--scenario", kDefaultScenario}), "--out");
+}
+
 }  // namespace
 }  // namespace sensornet

@@ -1,0 +1,217 @@
+// The first paper's Fig. 1 sweeps for the planner: T = 3, N = 30, budget 1'λ <= 5, W = 0,
+// W_T = I, P0 = 100 I, Q = I, random instances of the paper's family (generateRandomScenario).
+//   sensor sweep: n = 5, M = 30, 40, ..., 100;   state sweep: M = 30, n = 2, 4, ..., 20.
+// For each point and each surrogate (info, cov): the median over the instances of the solve's
+// wall time, iterations, one cost-and-gradient evaluation ("assembly") at the solution, the
+// surrogate objective, and the Monte Carlo cost of the returned schedule (no plant, fixed seed),
+// costs normalized by tr(P0) as in the paper. Then the Cov/Info ratios of the medians.
+//
+//   planner_bench [--sweep sensors|states|both] [--instances 10] [--mc-runs 200]
+//                 [--method pqn|ipopt] [--tolerance 1e-6] [--substeps 2] [--n N] [--markdown]
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sensornet/core/monte_carlo.hpp"
+#include "sensornet/core/planner.hpp"
+#include "sensornet/core/scenario.hpp"
+#include "sensornet/core/surrogate_transcription.hpp"
+
+namespace {
+
+using sensornet::PlanSurrogate;
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const std::size_t mid = values.size() / 2;
+  return values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+}
+
+double secondsOf(const std::function<void()>& work) {
+  const auto start = std::chrono::steady_clock::now();
+  work();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Options {
+  std::string sweep = "both";
+  int instances = 10;
+  int mc_runs = 200;
+  sensornet::PlanMethod method = sensornet::PlanMethod::ProjectedGradient;
+  bool markdown = false;
+  double tolerance = sensornet::PlanRequest{}.tolerance;
+  int substeps = sensornet::PlanRequest{}.substeps;
+  int only_n = 0;  // run just this state dimension of the state sweep (0: all)
+};
+
+struct Column {  // one surrogate at one sweep point, over the instances
+  std::vector<double> seconds, iterations, assembly_ms, objective, mc_cost;
+  int not_optimal = 0;
+};
+
+struct Point {
+  int n = 0, m = 0;
+  Column info, cov;
+  std::vector<double> uniform_mc;
+};
+
+// Median time of one cost-and-gradient evaluation of the planner's transcription at `rates`.
+double assemblyMilliseconds(sensornet::SurrogateForm form, const sensornet::Scenario& scenario,
+                            const Eigen::MatrixXd& rates, int substeps) {
+  sensornet::TranscriptionOptions transcription_options;
+  transcription_options.substeps = substeps;
+  sensornet::SurrogateTranscription transcription(form, scenario, transcription_options);
+  std::vector<double> times;
+  for (int r = 0; r < 15; ++r) {
+    times.push_back(1e3 * secondsOf([&] { (void)transcription.costAndGradient(rates); }));
+  }
+  return median(times);
+}
+
+double monteCarloCost(const sensornet::Scenario& scenario, const sensornet::RateSchedule& schedule,
+                      int runs, std::uint64_t seed) {
+  sensornet::MonteCarloOptions options;
+  options.runs = runs;
+  options.seed = seed;
+  options.threads = 1;
+  options.simulate_plant = false;
+  return sensornet::evaluateSchedule(scenario, schedule, options).mean;
+}
+
+void solveInto(Column& column, PlanSurrogate surrogate, const sensornet::Scenario& scenario,
+               const Options& options, double normalizer, std::uint64_t seed) {
+  sensornet::PlanRequest request;
+  request.surrogate = surrogate;
+  request.method = options.method;
+  request.max_iterations = 3000;
+  request.tolerance = options.tolerance;
+  request.substeps = options.substeps;
+  const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
+  if (plan.status != "optimal" && plan.status != "acceptable") ++column.not_optimal;
+  column.seconds.push_back(plan.solve_seconds);
+  column.iterations.push_back(plan.iterations);
+  const auto form = surrogate == PlanSurrogate::Covariance ? sensornet::SurrogateForm::Covariance
+                                                           : sensornet::SurrogateForm::Information;
+  column.assembly_ms.push_back(assemblyMilliseconds(form, scenario, plan.schedule.rates(), options.substeps));
+  column.objective.push_back(plan.objective / normalizer);
+  column.mc_cost.push_back(monteCarloCost(scenario, plan.schedule, options.mc_runs, seed) /
+                           normalizer);
+}
+
+Point runPoint(int n, int m, const Options& options) {
+  Point point{n, m, {}, {}, {}};
+  for (int i = 0; i < options.instances; ++i) {
+    sensornet::RandomPlantSpec spec;
+    spec.state_dim = n;
+    spec.sensor_count = m;
+    spec.seed = 1000u * static_cast<std::uint64_t>(n) + 10u * static_cast<std::uint64_t>(m) +
+                static_cast<std::uint64_t>(i);
+    const sensornet::Scenario scenario = sensornet::generateRandomScenario(spec);
+    const double normalizer = scenario.plant.P0.trace();
+    const std::uint64_t mc_seed = spec.seed + 7;
+    solveInto(point.info, PlanSurrogate::Information, scenario, options, normalizer, mc_seed);
+    solveInto(point.cov, PlanSurrogate::Covariance, scenario, options, normalizer, mc_seed);
+    point.uniform_mc.push_back(
+        monteCarloCost(scenario, sensornet::uniformSchedule(scenario), options.mc_runs, mc_seed) /
+        normalizer);
+  }
+  return point;
+}
+
+void printHeader(bool markdown) {
+  if (markdown) {
+    std::printf(
+        "| n | M | info s | info it | info eval ms | info J/trP0 | info MC/trP0 | cov s | cov it "
+        "| cov eval ms | cov J/trP0 | cov MC/trP0 | uniform MC/trP0 | time cov/info | it "
+        "cov/info | eval cov/info |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  } else {
+    std::printf("%3s %4s | %8s %6s %8s %8s %8s | %8s %6s %8s %8s %8s | %8s | %6s %6s %6s\n", "n",
+                "M", "info s", "it", "eval ms", "J/trP0", "MC", "cov s", "it", "eval ms",
+                "J/trP0", "MC", "unif MC", "t c/i", "it c/i", "ev c/i");
+  }
+}
+
+void printPoint(const Point& p, bool markdown) {
+  const double ti = median(p.info.seconds), tc = median(p.cov.seconds);
+  const double ii = median(p.info.iterations), ic = median(p.cov.iterations);
+  const double ei = median(p.info.assembly_ms), ec = median(p.cov.assembly_ms);
+  const char* format =
+      markdown ? "| %d | %d | %.3f | %.0f | %.3f | %.4f | %.4f | %.3f | %.0f | %.3f | %.4f | %.4f "
+                 "| %.4f | %.1fx | %.1fx | %.1fx |\n"
+               : "%3d %4d | %8.3f %6.0f %8.3f %8.4f %8.4f | %8.3f %6.0f %8.3f %8.4f %8.4f | "
+                 "%8.4f | %5.1fx %5.1fx %5.1fx\n";
+  std::printf(format, p.n, p.m, ti, ii, ei, median(p.info.objective), median(p.info.mc_cost), tc,
+              ic, ec, median(p.cov.objective), median(p.cov.mc_cost), median(p.uniform_mc),
+              tc / ti, ic / ii, ec / ei);
+  if (p.info.not_optimal + p.cov.not_optimal > 0) {
+    std::printf("%s  (not optimal within 3000 iterations: info %d, cov %d of %zu)\n",
+                markdown ? "" : "   ", p.info.not_optimal, p.cov.not_optimal,
+                p.info.seconds.size());
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "planner_bench: %s needs a value\n", arg.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (arg == "--sweep") {
+      options.sweep = value();
+    } else if (arg == "--instances") {
+      options.instances = std::max(1, std::atoi(value().c_str()));
+    } else if (arg == "--mc-runs") {
+      options.mc_runs = std::max(2, std::atoi(value().c_str()));
+    } else if (arg == "--method") {
+      options.method = value() == "ipopt" ? sensornet::PlanMethod::Ipopt
+                                          : sensornet::PlanMethod::ProjectedGradient;
+    } else if (arg == "--tolerance") {
+      options.tolerance = std::atof(value().c_str());
+    } else if (arg == "--substeps") {
+      options.substeps = std::max(1, std::atoi(value().c_str()));
+    } else if (arg == "--n") {
+      options.only_n = std::atoi(value().c_str());
+    } else if (arg == "--markdown") {
+      options.markdown = true;
+    } else {
+      std::fprintf(stderr,
+                   "usage: planner_bench [--sweep sensors|states|both] [--instances K] "
+                   "[--mc-runs R] [--method pqn|ipopt] [--tolerance T] [--substeps S] [--n N] [--markdown]\n");
+      return arg == "--help" ? 0 : 2;
+    }
+  }
+  if (options.sweep != "sensors" && options.sweep != "states" && options.sweep != "both") {
+    std::fprintf(stderr, "planner_bench: --sweep expects sensors, states or both\n");
+    return 2;
+  }
+  std::printf("planner_bench: %d instances per point, Monte Carlo %d episodes, medians\n",
+              options.instances, options.mc_runs);
+  if (options.sweep != "states") {
+    std::printf("\nsensor sweep (n = 5)\n");
+    printHeader(options.markdown);
+    for (int m = 30; m <= 100; m += 10) printPoint(runPoint(5, m, options), options.markdown);
+  }
+  if (options.sweep != "sensors") {
+    std::printf("\nstate sweep (M = 30)\n");
+    printHeader(options.markdown);
+    for (int n = 2; n <= 20; n += 2) {
+      if (options.only_n == 0 || options.only_n == n) printPoint(runPoint(n, 30, options), options.markdown);
+    }
+  }
+  return 0;
+}

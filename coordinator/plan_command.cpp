@@ -1,0 +1,148 @@
+#include "plan_command.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/planner.hpp"
+#include "sensornet/io/scenario_file.hpp"
+
+namespace sensornet::coordinator {
+namespace {
+
+struct PlanOptions {
+  std::string scenario_path;
+  PlanSurrogate surrogate = PlanSurrogate::Information;
+  std::string out_path;
+  std::string warm_start_path;
+  std::vector<int> excluded;
+  PlanMethod method = PlanMethod::ProjectedGradient;
+  double tolerance = PlanRequest{}.tolerance;
+  int max_iterations = 500;
+  double max_seconds = 120.0;
+  bool json = false;
+};
+
+int runPlan(const PlanOptions& options) {
+  const Scenario scenario = loadScenarioFile(options.scenario_path);
+  PlanRequest request;
+  request.surrogate = options.surrogate;
+  request.method = options.method;
+  request.tolerance = options.tolerance;
+  request.max_iterations = options.max_iterations;
+  request.max_seconds = options.max_seconds;
+  for (const int sensor : options.excluded) {
+    if (sensor < 0 || sensor >= scenario.sensorCount()) {
+      throw InputError("command line", "--exclude",
+                       "sensor indices in [0, " + std::to_string(scenario.sensorCount()) +
+                           "), got " + std::to_string(sensor));
+    }
+  }
+  request.excluded_sensors = options.excluded;
+  if (!options.warm_start_path.empty()) {
+    request.warm_start = loadScheduleFile(options.warm_start_path, scenario);
+  }
+  // Progress on long solves: one line every 2 s of wall time.
+  double next_report = 2.0;
+  request.progress = [&next_report](const PlanProgress& p) {
+    if (p.elapsed_seconds >= next_report) {
+      next_report = p.elapsed_seconds + 2.0;
+      spdlog::info("plan: iteration {}, surrogate cost {:.8g}, {:.1f} s", p.iteration,
+                   p.objective, p.elapsed_seconds);
+    }
+    return true;
+  };
+
+  const PlanResult plan = planSchedule(scenario, request);
+  const std::string surrogate{describe(options.surrogate)};
+  writeScheduleFile(options.out_path, plan.schedule,
+                    {{"surrogate", surrogate},
+                     {"objective", plan.objective},
+                     {"bracket", {{"info", plan.bracket.info}, {"cov", plan.bracket.cov}}},
+                     {"status", plan.status}});
+  const bool solved = plan.status == "optimal" || plan.status == "acceptable" ||
+                      plan.status == "not_optimized";
+  if (!solved) spdlog::warn("plan: solver status '{}'; the best schedule found was written", plan.status);
+
+  if (options.json) {
+    nlohmann::json doc = {{"surrogate", surrogate},
+                          {"objective", plan.objective},
+                          {"bracket", {{"info", plan.bracket.info}, {"cov", plan.bracket.cov}}},
+                          {"iterations", plan.iterations},
+                          {"solve_seconds", plan.solve_seconds},
+                          {"status", plan.status},
+                          {"out", options.out_path}};
+    doc["kkt_residual"] = std::isfinite(plan.kkt_residual) ? nlohmann::json(plan.kkt_residual)
+                                                            : nlohmann::json(nullptr);
+    printJson(doc);
+    return kExitOk;
+  }
+  std::printf("scenario   %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
+              options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
+              scenario.horizon_s, scenario.intervals);
+  std::printf("surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s\n",
+              surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
+              plan.solve_seconds);
+  std::printf("bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n", plan.bracket.info,
+              plan.bracket.cov);
+  std::printf("written    %s\n", options.out_path.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+Subcommand addPlanCommand(CLI::App& app) {
+  auto options = std::make_shared<PlanOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "plan",
+      "Compute the rate schedule (piecewise constant on the scenario's N intervals) that "
+      "minimizes a surrogate of the expected CD-KF cost under the resource constraints "
+      "C λ <= b, λ >= 0, write it as a schedule file, and report its bracket "
+      "J(P_info) <= E[J] <= J(P_cov). Example:\n  coordinator plan --scenario "
+      "scenarios/default.yaml --surrogate info --out plan.json --json");
+  cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
+  const std::map<std::string, PlanSurrogate> surrogates = {
+      {"info", PlanSurrogate::Information},
+      {"cov", PlanSurrogate::Covariance},
+      {"uniform", PlanSurrogate::Uniform}};
+  cmd->add_option("--surrogate", options->surrogate,
+                  "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
+                  "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
+                  "no optimization")
+      ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
+      ->capture_default_str();
+  cmd->add_option("--out", options->out_path, "schedule file to write (JSON, written atomically)")
+      ->required();
+  cmd->add_option("--warm-start", options->warm_start_path,
+                  "schedule file to start the optimizer from (default: the uniform schedule)");
+  cmd->add_option("--exclude", options->excluded,
+                  "sensor indices (0-based) taken out of service: rate 0 throughout")
+      ->delimiter(',');
+  const std::map<std::string, PlanMethod> methods = {{"pqn", PlanMethod::ProjectedGradient},
+                                                     {"ipopt", PlanMethod::Ipopt}};
+  cmd->add_option("--method", options->method,
+                  "optimizer: pqn (projected quasi-Newton, default) or ipopt (interior point, "
+                  "L-BFGS Hessian)")
+      ->transform(CLI::CheckedTransformer(methods, CLI::ignore_case));
+  cmd->add_option("--tolerance", options->tolerance,
+                  "stop when the scale-free projected-gradient residual is below this")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-iterations", options->max_iterations, "iteration limit")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-seconds", options->max_seconds, "wall-time limit of the solve")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--json", options->json,
+                "print {\"surrogate\", \"objective\", \"bracket\", \"iterations\", "
+                "\"solve_seconds\", \"status\"} as one JSON line");
+  return {cmd, [options] { return runPlan(*options); }};
+}
+
+}  // namespace sensornet::coordinator

@@ -1,0 +1,113 @@
+#pragma once
+// The planner: the rate schedule λ(t), piecewise constant on the scenario's N intervals, that
+// minimizes a surrogate cost (eq. 12 of the first paper) under C λ_k <= b, λ_k >= 0 (eq. 8), for
+// the information-form surrogate (eq. 11, the paper's Info-NLP) or the covariance-form surrogate
+// (eq. 15, Cov-NLP), or the uniform baseline. It also plans the rest of a running episode, from
+// the fused covariance at some time, with sensors taken out of service, warm-started from the
+// schedule in force (the live re-planning of the coordinator).
+//
+//   PlanRequest request;
+//   request.surrogate = PlanSurrogate::Information;
+//   const PlanResult plan = planSchedule(scenario, request);
+//   // plan.schedule: N x M rates; plan.bracket.info <= E[J] <= plan.bracket.cov
+//
+//   // Re-plan at t = 1.2 s from the fused covariance, without sensor 3:
+//   request.start_time = 1.2;
+//   request.start_covariance = fused_covariance;
+//   request.excluded_sensors = {3};
+//   request.warm_start = plan.schedule;
+//   const PlanResult replanned = planSchedule(scenario, request);
+//
+// Method (bench/README.md has the measurements behind the choices): single shooting over the
+// rates only; the surrogate is integrated by a fixed number of RK4 steps per interval with the
+// exact discrete adjoint gradient (surrogate_transcription.hpp). The default optimizer is a
+// projected quasi-Newton method (L-BFGS on the binding face, spectral projected gradient as the
+// fallback) whose iterates are all feasible; IPOPT with a limited-memory Hessian is the
+// alternative (PlanMethod::Ipopt). The returned schedule is projected onto the admissible set
+// (rate_polytope.hpp), so it is feasible to rounding, and then scored with the ACCURATE
+// rollouts of surrogate.hpp (relative tolerance 1e-10); `objective` and `bracket` are those
+// numbers, not the planner's internal RK4 cost (`discretized_objective`, which differs by
+// O(h^4)).
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sensornet/core/rate_schedule.hpp"
+#include "sensornet/core/scenario.hpp"
+#include "sensornet/core/surrogate.hpp"
+
+namespace sensornet {
+
+enum class PlanSurrogate { Information, Covariance, Uniform };
+
+// The optimizer: a spectral projected gradient method of our own (the default, see
+// bench/README.md for why), or IPOPT with a limited-memory Hessian.
+enum class PlanMethod { ProjectedGradient, Ipopt };
+
+struct PlanProgress {
+  int iteration = 0;
+  double objective = 0.0;       // the discretized surrogate cost at the current iterate
+  double elapsed_seconds = 0.0;
+};
+
+struct PlanRequest {
+  PlanSurrogate surrogate = PlanSurrogate::Information;
+  // Plan over [start_time, T] from P(start_time) = start_covariance (P0 when absent; required
+  // when start_time > 0). The interval k0 containing start_time is re-planned as a whole, and the
+  // cost counts only its part after start_time (a start time within 1e-12 T of the next
+  // boundary starts the next interval). Intervals before k0 keep warm_start's rates (or 0).
+  double start_time = 0.0;
+  std::optional<Eigen::MatrixXd> start_covariance;
+  std::vector<int> excluded_sensors;  // forced to rate 0 in the planned intervals
+  std::optional<RateSchedule> warm_start;  // initial guess (projected onto the admissible set)
+  // Stop when kkt_residual (below) <= tolerance; for IPOPT, its scaled KKT tolerance.
+  double tolerance = 1e-6;
+  int max_iterations = 500;
+  double max_seconds = 120.0;  // wall time of the solve
+  int substeps = 2;  // RK4 steps per interval of the transcription (bench/README.md: 2 suffice)
+  PlanMethod method = PlanMethod::ProjectedGradient;
+  // Optional; called after every solver iteration from the calling thread. Returning false
+  // stops the solve (status "stopped"). An exception it throws propagates.
+  std::function<bool(const PlanProgress&)> progress;
+};
+
+struct PlanResult {
+  // Full N x M: intervals before start_time keep warm_start's rates (or 0).
+  RateSchedule schedule;
+  // The planned surrogate's accurate cost of `schedule` over [start_time, T] (for Uniform, the
+  // information-form cost, the lower end of the bracket).
+  double objective = 0.0;
+  CostBracket bracket;                  // info and cov of `schedule` over [start_time, T]
+  double discretized_objective = 0.0;   // the same cost under the planner's RK4 transcription
+  int iterations = 0;
+  int evaluations = 0;  // cost-and-gradient evaluations of the transcription
+  double solve_seconds = 0.0;
+  // "optimal", "acceptable" (IPOPT's looser tolerance met), "max_iterations", "time_limit",
+  // "stalled" (no step decreases the cost any more),
+  // "stopped" (progress returned false), "not_optimized" (Uniform, or nothing to plan), or
+  // "failed: <IPOPT status>" (the best point found is still returned, projected and scored).
+  std::string status;
+  // First-order optimality at the returned point, scale-free: with rates measured in units of
+  // the largest λ̄_j and the cost in units of the cost itself, the largest change of a planned
+  // rate under a unit projected-gradient step, max |x - Π(x - ∇f(x))| (0 exactly at a KKT point
+  // of the discretized problem). NaN for "not_optimized".
+  double kkt_residual = 0.0;
+};
+
+// Throws InputError for a request that does not fit the scenario (excluded index out of range,
+// warm start of the wrong shape or horizon, start time or covariance out of range, non-positive
+// tolerance, max_iterations or max_seconds). The scenario is assumed validated.
+[[nodiscard]] PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request);
+
+// The first-order measure of PlanResult::kkt_residual for any schedule, computed with the
+// discretized gradient of `form` (exposed for tests and diagnostics).
+[[nodiscard]] double kktResidual(const Scenario& scenario, const RateSchedule& schedule,
+                                 SurrogateForm form, const PlanRequest& request);
+
+[[nodiscard]] std::string_view describe(PlanSurrogate surrogate);  // "info", "cov", "uniform"
+
+}  // namespace sensornet

@@ -1,0 +1,369 @@
+// The planner's default optimizer: a projected quasi-Newton method over the admissible rates.
+//
+// Each iteration finds the constraints that bind at x (Bertsekas' ε-active set: rates within ε
+// of zero whose reduced gradient pushes them down, and tight constraint rows whose multiplier
+// estimate is positive), takes an L-BFGS direction in the tangent space of that face, and
+// searches along the projection arc P(x + t d), so that many rates can reach zero in one step.
+// When that fails to descend, it takes a spectral projected gradient step (Birgin, Martínez &
+// Raydan, SIAM J. Optim. 10, 2000), which always does. Both steps use the scale-free problem
+// (rates in units of the largest λ̄, cost in units of |J(start)|), every iterate is feasible, and
+// the stopping test is PlanResult::kkt_residual <= tolerance.
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "planning_problem.hpp"
+
+namespace sensornet::planning {
+namespace {
+
+using Eigen::MatrixXd;
+
+constexpr int kMemory = 40;  // L-BFGS pairs
+constexpr double kSufficientDecrease = 1e-4;  // Armijo
+constexpr int kMaxBacktracks = 40;
+constexpr double kMinScaledStep = 1e-10;
+constexpr double kMaxScaledStep = 1e10;
+constexpr double kMaxActiveWidth = 1e-3;    // ε never exceeds this many rate units
+
+// The constraints binding at x and the orthogonal projection onto the directions that keep
+// them binding: per planned interval, the rates held at zero, and the tight rows of C with a
+// positive multiplier estimate (least squares on the free rates, g_F + C_AF' μ ≈ 0).
+class BindingFace {
+ public:
+  BindingFace(const PlanningProblem& problem, const MatrixXd& x, const MatrixXd& gradient,
+              double epsilon)
+      : problem_(problem), zero_push_(MatrixXd::Zero(x.rows(), x.cols())) {
+    for (int k = problem.firstInterval(); k < problem.intervals(); ++k) {
+      intervals_.push_back(bind(k, x, gradient, epsilon));
+    }
+  }
+
+  // The component of v that keeps every binding constraint binding.
+  [[nodiscard]] MatrixXd tangent(const MatrixXd& v) const {
+    MatrixXd result = MatrixXd::Zero(v.rows(), v.cols());
+    for (const Interval& interval : intervals_) {
+      Eigen::VectorXd t = gather(v, interval);
+      if (interval.basis.cols() > 0) t -= interval.basis * (interval.basis.transpose() * t);
+      for (std::size_t f = 0; f < interval.free.size(); ++f) {
+        result(interval.k, interval.free[f]) = t(static_cast<Eigen::Index>(f));
+      }
+    }
+    return result;
+  }
+
+  // Faces with the same free rates and binding rows have the same tangent space.
+  [[nodiscard]] bool sameTangentSpace(const BindingFace& other) const {
+    if (intervals_.size() != other.intervals_.size()) return false;
+    for (std::size_t i = 0; i < intervals_.size(); ++i) {
+      if (intervals_[i].free != other.intervals_[i].free ||
+          intervals_[i].rows != other.intervals_[i].rows) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // The reduced gradient g + C_A' μ on the rates held at zero (0 elsewhere): the direction
+  // that pushes them onto the bound.
+  [[nodiscard]] const MatrixXd& zeroPush() const { return zero_push_; }
+
+ private:
+  struct Interval {
+    int k = 0;
+    std::vector<int> free;
+    std::vector<int> rows;
+    MatrixXd normals;  // |free| x |rows|: C_AF'
+    MatrixXd basis;    // orthonormal basis of the range of normals
+    Eigen::ColPivHouseholderQR<MatrixXd> qr;
+  };
+
+  static Eigen::VectorXd gather(const MatrixXd& v, const Interval& interval) {
+    Eigen::VectorXd out(static_cast<Eigen::Index>(interval.free.size()));
+    for (std::size_t f = 0; f < interval.free.size(); ++f) {
+      out(static_cast<Eigen::Index>(f)) = v(interval.k, interval.free[f]);
+    }
+    return out;
+  }
+
+  // Tight rows touching a free rate, their normals and the multiplier estimate; rows with
+  // μ_i <= 0 are released (one pass).
+  Eigen::VectorXd bindRows(Interval& interval, const Eigen::VectorXd& lambda,
+                           const MatrixXd& gradient, double epsilon) const {
+    const MatrixXd& C = problem_.C();
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<int> rows;
+      for (int i = 0; i < C.rows(); ++i) {
+        if (pass == 1 &&
+            std::find(interval.rows.begin(), interval.rows.end(), i) == interval.rows.end()) {
+          continue;
+        }
+        const double slack = problem_.b()(i) - C.row(i).dot(lambda);
+        bool touches_free = false;
+        for (const int j : interval.free) touches_free = touches_free || C(i, j) > 0.0;
+        if (touches_free && slack <= epsilon * C.row(i).maxCoeff()) rows.push_back(i);
+      }
+      interval.rows = rows;
+      interval.basis.resize(static_cast<Eigen::Index>(interval.free.size()), 0);
+      if (rows.empty()) return Eigen::VectorXd();
+      interval.normals.resize(static_cast<Eigen::Index>(interval.free.size()),
+                              static_cast<Eigen::Index>(rows.size()));
+      for (std::size_t f = 0; f < interval.free.size(); ++f) {
+        for (std::size_t r = 0; r < rows.size(); ++r) {
+          interval.normals(static_cast<Eigen::Index>(f), static_cast<Eigen::Index>(r)) =
+              C(rows[r], interval.free[f]);
+        }
+      }
+      interval.qr.compute(interval.normals);
+      const Eigen::VectorXd mu = -interval.qr.solve(gather(gradient, interval));
+      if (pass == 1) {
+        const MatrixXd q = interval.qr.householderQ();
+        interval.basis = q.leftCols(interval.qr.rank());
+        return mu;
+      }
+      std::vector<int> kept;
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        if (mu(static_cast<Eigen::Index>(r)) > 0.0) kept.push_back(rows[r]);
+      }
+      interval.rows = kept;
+      if (kept.empty()) {
+        interval.basis.resize(static_cast<Eigen::Index>(interval.free.size()), 0);
+        return Eigen::VectorXd();
+      }
+    }
+    return Eigen::VectorXd();
+  }
+
+  Interval bind(int k, const MatrixXd& x, const MatrixXd& gradient, double epsilon) {
+    const Eigen::VectorXd lambda = x.row(k).transpose();
+    Interval interval;
+    interval.k = k;
+    std::vector<int> near_zero;
+    for (const int j : problem_.inService()) {
+      (lambda(j) > epsilon ? interval.free : near_zero).push_back(j);
+    }
+    // Multipliers from the clearly free rates decide which near-zero rates bind.
+    const Eigen::VectorXd mu = bindRows(interval, lambda, gradient, epsilon);
+    std::vector<int> held;
+    for (const int j : near_zero) {
+      double reduced = gradient(k, j);
+      for (std::size_t r = 0; r < interval.rows.size(); ++r) {
+        reduced += mu(static_cast<Eigen::Index>(r)) * problem_.C()(interval.rows[r], j);
+      }
+      if (reduced > 0.0) {
+        held.push_back(j);
+        zero_push_(k, j) = reduced;
+      } else {
+        interval.free.push_back(j);
+      }
+    }
+    std::sort(interval.free.begin(), interval.free.end());
+    (void)bindRows(interval, lambda, gradient, epsilon);
+    return interval;
+  }
+
+  const PlanningProblem& problem_;
+  MatrixXd zero_push_;
+  std::vector<Interval> intervals_;
+};
+
+// The L-BFGS inverse-Hessian approximation from the last kMemory steps (two-loop recursion),
+// applied in the tangent space of the current face: the pairs are projected onto it first, so
+// that gradient changes of rates held at zero (large, and irrelevant to the step) do not spoil
+// the curvature estimates. Projected pairs are kept while the face stays the same.
+class LimitedMemoryInverse {
+ public:
+  explicit LimitedMemoryInverse(const PlanningProblem& problem) : problem_(problem) {}
+
+  void add(MatrixXd s, MatrixXd y) {
+    pairs_.push_back({std::move(s), std::move(y), MatrixXd(), MatrixXd(), 0.0, false});
+    if (static_cast<int>(pairs_.size()) > kMemory) pairs_.pop_front();
+  }
+
+  // H v on the face, or nothing when no pair has positive curvature there.
+  [[nodiscard]] std::optional<MatrixXd> apply(const BindingFace& face, const MatrixXd& v) {
+    const bool same_face = face_ && face_->sameTangentSpace(face);
+    face_.emplace(face);
+    std::vector<const Pair*> usable;
+    for (Pair& pair : pairs_) {
+      if (!pair.projected || !same_face) project(face, pair);
+      if (pair.rho > 0.0) usable.push_back(&pair);
+    }
+    if (usable.empty()) return std::nullopt;
+    MatrixXd q = v;
+    std::vector<double> a(usable.size());
+    for (std::size_t i = usable.size(); i-- > 0;) {
+      a[i] = usable[i]->rho * problem_.inner(usable[i]->face_s, q);
+      q -= a[i] * usable[i]->face_y;
+    }
+    const Pair& newest = *usable.back();
+    q *= 1.0 / (newest.rho * problem_.inner(newest.face_y, newest.face_y));
+    for (std::size_t i = 0; i < usable.size(); ++i) {
+      const double beta = usable[i]->rho * problem_.inner(usable[i]->face_y, q);
+      q += (a[i] - beta) * usable[i]->face_s;
+    }
+    return q;
+  }
+
+ private:
+  struct Pair {
+    MatrixXd s, y;            // as taken
+    MatrixXd face_s, face_y;  // projected onto the face
+    double rho;               // 1 / <face_s, face_y>, or 0 when not positive
+    bool projected;
+  };
+
+  void project(const BindingFace& face, Pair& pair) const {
+    pair.face_s = face.tangent(pair.s);
+    pair.face_y = face.tangent(pair.y);
+    const double sy = problem_.inner(pair.face_s, pair.face_y);
+    const double scale = std::sqrt(problem_.inner(pair.face_s, pair.face_s) *
+                                   problem_.inner(pair.face_y, pair.face_y));
+    pair.rho = sy > 1e-12 * scale ? 1.0 / sy : 0.0;
+    pair.projected = true;
+  }
+
+  const PlanningProblem& problem_;
+  std::deque<Pair> pairs_;
+  std::optional<BindingFace> face_;
+};
+
+// The gradient restricted to the variables: planned rows, sensors in service.
+MatrixXd masked(const PlanningProblem& problem, const MatrixXd& gradient) {
+  MatrixXd result = MatrixXd::Zero(gradient.rows(), gradient.cols());
+  for (int k = problem.firstInterval(); k < problem.intervals(); ++k) {
+    for (const int j : problem.inService()) result(k, j) = gradient(k, j);
+  }
+  return result;
+}
+
+struct Iterate {
+  MatrixXd x;
+  double cost = 0.0;
+  MatrixXd gradient;  // masked
+};
+
+class ProjectedQuasiNewton {
+ public:
+  ProjectedQuasiNewton(PlanningProblem& problem, const PlanRequest& request,
+                       Clock::time_point start)
+      : problem_(problem), request_(request), start_(start), memory_(problem) {}
+
+  PlanningOutcome run() {
+    current_ = evaluate(problem_.rates());
+    if (!std::isfinite(current_.cost)) return {0, "failed: no finite cost at the start point"};
+    const double unit = problem_.rateUnit();
+    sigma_ = unit * unit / costUnit(current_.cost);
+    const double first = problem_.largestChange(
+        current_.x, problem_.projected(current_.x - sigma_ * current_.gradient));
+    if (first > 0.0) alpha_ = std::clamp(1.0 / first, kMinScaledStep, kMaxScaledStep);
+    for (int iteration = 0;; ++iteration) {
+      problem_.setRates(current_.x);
+      const double residual =
+          projectedGradientResidual(problem_, current_.x, {current_.cost, current_.gradient});
+      if (residual <= request_.tolerance) return {iteration, "optimal"};
+      if (iteration >= request_.max_iterations) return {iteration, "max_iterations"};
+      const double elapsed = secondsSince(start_);
+      if (elapsed > request_.max_seconds) return {iteration, "time_limit"};
+      if (request_.progress && !request_.progress({iteration, current_.cost, elapsed})) {
+        return {iteration, "stopped"};
+      }
+      std::optional<Iterate> next = quasiNewtonStep(std::min(kMaxActiveWidth, residual) * unit);
+      if (!next) next = projectedGradientStep();
+      if (!next) return {iteration, "stalled"};
+      const MatrixXd s = next->x - current_.x;
+      const MatrixXd y = next->gradient - current_.gradient;
+      const double sy = problem_.inner(s, y);
+      alpha_ = sy > 0.0 ? std::clamp(problem_.inner(s, s) / (sigma_ * sy), kMinScaledStep,
+                                     kMaxScaledStep)
+                        : kMaxScaledStep;
+      memory_.add(s, y);
+      current_ = std::move(*next);
+    }
+  }
+
+  [[nodiscard]] int evaluations() const { return evaluations_; }
+
+ private:
+  Iterate evaluate(const MatrixXd& x) {
+    ++evaluations_;
+    CostGradient cg = problem_.transcription().costAndGradient(x);
+    return {x, cg.cost, masked(problem_, cg.gradient)};
+  }
+
+  // L-BFGS in the tangent space of the binding face, rates held at zero pushed onto it,
+  // searched along the projection arc. Nothing when the arc does not descend.
+  std::optional<Iterate> quasiNewtonStep(double epsilon) {
+    const BindingFace face(problem_, current_.x, current_.gradient, epsilon);
+    const MatrixXd v = face.tangent(current_.gradient);
+    const std::optional<MatrixXd> hv = memory_.apply(face, v);
+    MatrixXd direction = hv ? MatrixXd(-face.tangent(*hv)) : MatrixXd(-(alpha_ * sigma_) * v);
+    direction -= (alpha_ * sigma_) * face.zeroPush();
+    return arcSearch(direction);
+  }
+
+  // A spectral projected gradient step, searched along the segment to the projected point.
+  std::optional<Iterate> projectedGradientStep() {
+    const MatrixXd direction =
+        problem_.projected(current_.x - (alpha_ * sigma_) * current_.gradient) - current_.x;
+    const double slope = problem_.inner(current_.gradient, direction);
+    if (!(slope < 0.0)) return std::nullopt;
+    double t = 1.0;
+    for (int i = 0; i < kMaxBacktracks; ++i) {
+      Iterate trial = evaluate(current_.x + t * direction);
+      if (trial.cost <= current_.cost + kSufficientDecrease * t * slope) return trial;
+      t = interpolatedStep(t, slope, trial.cost);
+    }
+    return std::nullopt;
+  }
+
+  std::optional<Iterate> arcSearch(const MatrixXd& direction) {
+    double t = 1.0;
+    for (int i = 0; i < kMaxBacktracks; ++i) {
+      const MatrixXd x = problem_.projected(current_.x + t * direction);
+      const double slope = problem_.inner(current_.gradient, x - current_.x);
+      if (!(slope < 0.0)) return std::nullopt;
+      Iterate trial = evaluate(x);
+      if (trial.cost <= current_.cost + kSufficientDecrease * slope) return trial;
+      // slope already carries the step; interpolate as if along a segment of length t.
+      t = interpolatedStep(t, slope / t, trial.cost);
+    }
+    return std::nullopt;
+  }
+
+  // The minimizer of the quadratic through f(0), f'(0) = slope and f(t), kept in
+  // [0.1 t, 0.5 t] (bisection when the cost is not finite).
+  [[nodiscard]] double interpolatedStep(double t, double slope, double cost) const {
+    if (!std::isfinite(cost)) return 0.5 * t;
+    const double curvature = cost - current_.cost - t * slope;
+    const double next = curvature > 0.0 ? -0.5 * t * t * slope / curvature : 0.5 * t;
+    return std::clamp(next, 0.1 * t, 0.5 * t);
+  }
+
+  PlanningProblem& problem_;
+  const PlanRequest& request_;
+  Clock::time_point start_;
+  LimitedMemoryInverse memory_;
+  Iterate current_;
+  double sigma_ = 1.0;  // scaled step -> rate step: rateUnit² / |J(start)|
+  double alpha_ = 1.0;  // spectral (Barzilai-Borwein) step in scaled units
+  int evaluations_ = 0;
+};
+
+}  // namespace
+
+PlanningOutcome solveWithProjectedQuasiNewton(PlanningProblem& problem,
+                                              const PlanRequest& request,
+                                              Clock::time_point start) {
+  ProjectedQuasiNewton solver(problem, request, start);
+  PlanningOutcome outcome = solver.run();
+  outcome.evaluations = solver.evaluations();
+  return outcome;
+}
+
+}  // namespace sensornet::planning

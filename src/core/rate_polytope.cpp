@@ -1,0 +1,128 @@
+#include "sensornet/core/rate_polytope.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet {
+namespace {
+
+// The μ >= 0 with Σ_j c_j max(0, z_j - c_j μ) <= b and equality when μ > 0: the optimal
+// multiplier of one constraint row c'λ <= b when the others are held fixed. The left side is
+// continuous, piecewise linear and nonincreasing in μ, with breakpoints z_j / c_j.
+double rowMultiplier(const Eigen::Ref<const Eigen::VectorXd>& c, const Eigen::VectorXd& z,
+                     double b, std::vector<std::pair<double, double>>& breakpoints) {
+  breakpoints.clear();
+  double load = 0.0;
+  for (Eigen::Index j = 0; j < z.size(); ++j) {
+    if (c(j) > 0.0 && z(j) > 0.0) {
+      load += c(j) * z(j);
+      breakpoints.emplace_back(z(j) / c(j), c(j));
+    }
+  }
+  if (load <= b) return 0.0;
+  // Walk the breakpoints from the largest down: on (t_next, t) the active set is fixed and
+  // load(μ) = Σ_active c_j z_j - μ Σ_active c_j², linear.
+  std::sort(breakpoints.begin(), breakpoints.end(),
+            [](const auto& l, const auto& r) { return l.first > r.first; });
+  double intercept = 0.0;  // Σ_active c_j z_j
+  double slope = 0.0;      // Σ_active c_j²
+  for (std::size_t i = 0; i < breakpoints.size(); ++i) {
+    const auto [t, cj] = breakpoints[i];
+    intercept += cj * cj * t;
+    slope += cj * cj;
+    const double next = i + 1 < breakpoints.size() ? breakpoints[i + 1].first : 0.0;
+    // The root lies in [next, t] when load(next) >= b.
+    if (intercept - next * slope >= b) return (intercept - b) / slope;
+  }
+  return 0.0;  // not reached: load(0) > b was checked above
+}
+
+}  // namespace
+
+RatePolytope::RatePolytope(ResourceConstraints constraints, const std::vector<int>& excluded)
+    : constraints_(std::move(constraints)),
+      excluded_(static_cast<std::size_t>(constraints_.C.cols()), false) {
+  for (const int j : excluded) {
+    if (j < 0 || j >= sensorCount()) {
+      throw InputError("rate polytope", "excluded_sensors",
+                       "sensor indices in [0, " + std::to_string(sensorCount() - 1) + "], got " +
+                           std::to_string(j));
+    }
+    excluded_[static_cast<std::size_t>(j)] = true;
+  }
+}
+
+Eigen::VectorXd RatePolytope::maxRates() const {
+  const auto& C = constraints_.C;
+  Eigen::VectorXd bound(C.cols());
+  for (Eigen::Index j = 0; j < C.cols(); ++j) {
+    double r = std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i < C.rows(); ++i) {
+      if (C(i, j) > 0.0) r = std::min(r, constraints_.b(i) / C(i, j));
+    }
+    bound(j) = isExcluded(static_cast<int>(j)) ? 0.0 : r;
+  }
+  return bound;
+}
+
+Eigen::VectorXd RatePolytope::uniformRates() const {
+  Eigen::VectorXd in_service(sensorCount());
+  for (int j = 0; j < sensorCount(); ++j) in_service(j) = isExcluded(j) ? 0.0 : 1.0;
+  const Eigen::VectorXd load = constraints_.C * in_service;
+  double rate = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < load.size(); ++i) {
+    if (load(i) > 0.0) rate = std::min(rate, constraints_.b(i) / load(i));
+  }
+  if (!std::isfinite(rate)) rate = 0.0;  // every sensor excluded
+  return rate * in_service;
+}
+
+bool RatePolytope::contains(const Eigen::Ref<const Eigen::VectorXd>& rates, double tol) const {
+  if (rates.size() != sensorCount() || !rates.allFinite()) return false;
+  for (int j = 0; j < sensorCount(); ++j) {
+    if (rates(j) < -tol || (isExcluded(j) && rates(j) > tol)) return false;
+  }
+  return ((constraints_.C * rates - constraints_.b).array() <= tol).all();
+}
+
+Eigen::VectorXd RatePolytope::project(const Eigen::Ref<const Eigen::VectorXd>& rates) const {
+  const auto& C = constraints_.C;
+  const auto& b = constraints_.b;
+  Eigen::VectorXd y = rates;
+  for (int j = 0; j < sensorCount(); ++j) {
+    if (isExcluded(j)) y(j) = 0.0;
+  }
+  Eigen::VectorXd mu = Eigen::VectorXd::Zero(C.rows());
+  Eigen::VectorXd shifted = y;  // y - C' μ
+  Eigen::VectorXd z(y.size());
+  std::vector<std::pair<double, double>> breakpoints;
+  const int max_sweeps = C.rows() == 1 ? 1 : 10000;
+  Eigen::VectorXd lambda = y.cwiseMax(0.0);
+  for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+    for (Eigen::Index i = 0; i < C.rows(); ++i) {
+      z = shifted + mu(i) * C.row(i).transpose();
+      mu(i) = rowMultiplier(C.row(i).transpose(), z, b(i), breakpoints);
+      shifted = z - mu(i) * C.row(i).transpose();
+    }
+    lambda = shifted.cwiseMax(0.0);
+    // Optimal when primal feasible and complementary: a row with μ_i > 0 is tight.
+    const Eigen::ArrayXd slack = (C * lambda - b).array() / b.array();
+    const bool complementary = ((mu.array() <= 0.0) || (slack.abs() <= 1e-13)).all();
+    if (slack.maxCoeff() <= 1e-13 && complementary) break;
+  }
+  // Make the result admissible exactly, whatever the sweeps reached: C >= 0, so scaling down
+  // never leaves the polytope.
+  const Eigen::VectorXd load = C * lambda;
+  double scale = 1.0;
+  for (Eigen::Index i = 0; i < load.size(); ++i) {
+    if (load(i) > b(i)) scale = std::min(scale, b(i) / load(i));
+  }
+  return scale * lambda;
+}
+
+}  // namespace sensornet
