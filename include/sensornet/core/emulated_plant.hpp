@@ -1,0 +1,76 @@
+#pragma once
+// The emulated plant of a run: one ground truth x(t) of dx = A x dt + dw (E[dw dw'] = Q dt,
+// x(0) ~ N(m0, P0)) per episode that every process computes for itself and gets bit for bit
+// the same, from the run seed and the episode number alone (DESIGN.md, "Numerical ground
+// rules"). Sensors sample it at their arrival instants; the fusion center at T for the NEES.
+//
+//   const EmulatedPlant plant(scenario, seed);
+//   const std::int64_t tick = plant.tickAt(1.234);             // arrival instants fall on ticks
+//   Eigen::VectorXd x = plant.stateAt(episode, tick);
+//   Eigen::VectorXd z = plant.measure(x, sensor, episode, seq);  // H_j x + v_j, v_j ~ N(0, R_j)
+//
+// Construction (Lévy's bridge, exact for a linear SDE): the horizon is cut into 2^L ticks.
+// x(0) and x(T) are drawn first (x(T) = Φ(T) x(0) + N(0, Qd(T))); then, level by level, the
+// midpoint c of every dyadic block [a, b] of half-length h is drawn from its exact law given
+// the two ends: with Φ = Φ(h), Qh = Qd(h),
+//   x(c) | x(a), x(b) ~ N(Φ x(a) + K (x(b) - Φ Φ x(a)),  Qh - K Φ Qh),
+//   K = Qh Φ' (Φ Qh Φ' + Qh)^+,
+// whose matrices depend only on the level. The normal deviates of each block come from a
+// stream keyed by (seed, episode, level, block), so any tick costs L small matrix-vector
+// products and never depends on which other ticks were asked for. The joint law of the states
+// at any set of ticks is exactly that of the SDE.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "sensornet/core/scenario.hpp"
+
+namespace sensornet {
+
+inline constexpr std::uint64_t kPlantTruthStream = 0x706c2d7472757468ULL;   // "pl-truth"
+inline constexpr std::uint64_t kSensorNoiseStream = 0x736e2d6e6f697365ULL;  // "sn-noise"
+
+class EmulatedPlant {
+ public:
+  // 2^20 ticks: 2.9 µs for T = 3 s. Throws InputError for tick_levels outside [1, 40].
+  static constexpr int kDefaultTickLevels = 20;
+
+  EmulatedPlant(const Scenario& scenario, std::uint64_t seed,
+                int tick_levels = kDefaultTickLevels);
+
+  [[nodiscard]] std::int64_t tickCount() const { return std::int64_t{1} << levels_; }
+  [[nodiscard]] double tickSeconds() const { return horizon_s_ / static_cast<double>(tickCount()); }
+  // The tick nearest to t, clamped to [0, tickCount()].
+  [[nodiscard]] std::int64_t tickAt(double t) const;
+  [[nodiscard]] double timeOf(std::int64_t tick) const {
+    return static_cast<double>(tick) * tickSeconds();
+  }
+
+  // x at `tick` (0 <= tick <= tickCount()) of `episode`.
+  [[nodiscard]] Eigen::VectorXd stateAt(std::uint32_t episode, std::int64_t tick) const;
+
+  // z = H_j x + v_j with v_j ~ N(0, R_j) keyed by (seed, episode, sensor, seq).
+  [[nodiscard]] Eigen::VectorXd measure(const Eigen::VectorXd& x, int sensor,
+                                        std::uint32_t episode, std::uint64_t seq) const;
+
+ private:
+  struct Level {  // the bridge of a block of half-length h = T / 2^level
+    Eigen::MatrixXd from_left;   // Φ - K Φ Φ: multiplies x(a)
+    Eigen::MatrixXd from_right;  // K: multiplies x(b)
+    Eigen::MatrixXd noise;       // a square root of Qh - K Φ Qh
+  };
+
+  std::uint64_t seed_;
+  int levels_;
+  double horizon_s_;
+  Eigen::VectorXd m0_;
+  Eigen::MatrixXd p0_root_;     // P0 = L L'
+  Eigen::MatrixXd phi_horizon_;  // Φ(T)
+  Eigen::MatrixXd qd_root_;      // a square root of Qd(T)
+  std::vector<Level> bridge_;    // bridge_[d - 1] for depth d = 1..L
+  std::vector<Eigen::MatrixXd> sensor_h_;
+  std::vector<Eigen::MatrixXd> sensor_noise_root_;  // R_j = L L'
+};
+
+}  // namespace sensornet

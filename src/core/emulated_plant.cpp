@@ -1,0 +1,127 @@
+#include "sensornet/core/emulated_plant.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/random.hpp"
+#include "sensornet/core/transition.hpp"
+
+namespace sensornet {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+constexpr const char* kSource = "emulated plant";
+
+// A square root S S' = X of a symmetric positive semi-definite X (eigenvalues that rounding
+// made slightly negative count as zero).
+MatrixXd semidefiniteRoot(const MatrixXd& X) {
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> solver(0.5 * (X + X.transpose()));
+  const VectorXd roots = solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return solver.eigenvectors() * roots.asDiagonal();
+}
+
+VectorXd normals(Rng& rng, Eigen::Index count) {
+  VectorXd xi(count);
+  for (Eigen::Index i = 0; i < count; ++i) xi(i) = rng.normal();
+  return xi;
+}
+
+}  // namespace
+
+EmulatedPlant::EmulatedPlant(const Scenario& scenario, std::uint64_t seed, int tick_levels)
+    : seed_(seed), levels_(tick_levels), horizon_s_(scenario.horizon_s) {
+  if (tick_levels < 1 || tick_levels > 40) {
+    throw InputError(kSource, "tick_levels", "an integer in [1, 40], got " +
+                                                 std::to_string(tick_levels));
+  }
+  const Plant& plant = scenario.plant;
+  const Eigen::Index n = plant.A.rows();
+  m0_ = plant.m0.size() == n ? plant.m0 : VectorXd::Zero(n);
+  const Eigen::LLT<MatrixXd> p0(plant.P0);
+  p0_root_ = p0.info() == Eigen::Success ? MatrixXd(p0.matrixL()) : semidefiniteRoot(plant.P0);
+
+  const LtiTransition transition(plant.A, plant.Q, MatrixXd::Zero(n, n));
+  const IntervalTransition whole = transition.over(horizon_s_);
+  phi_horizon_ = whole.Phi;
+  qd_root_ = semidefiniteRoot(whole.Qd);
+
+  for (int depth = 1; depth <= levels_; ++depth) {
+    const double half = horizon_s_ / std::ldexp(1.0, depth);
+    const IntervalTransition step = transition.over(half);
+    const MatrixXd& Phi = step.Phi;
+    const MatrixXd& Qh = step.Qd;
+    const MatrixXd S = Phi * Qh * Phi.transpose() + Qh;  // Cov(x(b) | x(a))
+    const MatrixXd K = Qh * Phi.transpose() * S.completeOrthogonalDecomposition().pseudoInverse();
+    Level level;
+    level.from_left = Phi - K * Phi * Phi;
+    level.from_right = K;
+    level.noise = semidefiniteRoot(Qh - K * Phi * Qh);
+    bridge_.push_back(std::move(level));
+  }
+
+  for (const SensorModel& sensor : scenario.sensors) {
+    sensor_h_.push_back(sensor.H);
+    const Eigen::LLT<MatrixXd> r(sensor.R);
+    sensor_noise_root_.push_back(r.info() == Eigen::Success ? MatrixXd(r.matrixL())
+                                                            : semidefiniteRoot(sensor.R));
+  }
+}
+
+std::int64_t EmulatedPlant::tickAt(double t) const {
+  if (!(t > 0.0)) return 0;
+  const double ticks = std::round(t / tickSeconds());
+  return std::min(static_cast<std::int64_t>(std::min(ticks, 9.0e18)), tickCount());
+}
+
+Eigen::VectorXd EmulatedPlant::stateAt(std::uint32_t episode, std::int64_t tick) const {
+  if (tick < 0 || tick > tickCount()) {
+    throw InputError(kSource, "tick",
+                     "an integer in [0, " + std::to_string(tickCount()) + "], got " +
+                         std::to_string(tick));
+  }
+  const Eigen::Index n = m0_.size();
+  Rng start = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 0);
+  VectorXd left = m0_ + p0_root_ * normals(start, n);
+  if (tick == 0) return left;
+  Rng end = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 1);
+  VectorXd right = phi_horizon_ * left + qd_root_ * normals(end, n);
+  std::int64_t a = 0;
+  std::int64_t b = tickCount();
+  for (int depth = 1; tick != a && tick != b; ++depth) {
+    const std::int64_t c = a + (b - a) / 2;
+    const std::int64_t block = a >> (levels_ - depth + 1);  // index of [a, b] at depth - 1
+    const Level& level = bridge_[static_cast<std::size_t>(depth - 1)];
+    Rng rng = Rng::keyed(seed_, kPlantTruthStream, episode, depth, block);
+    VectorXd middle =
+        level.from_left * left + level.from_right * right + level.noise * normals(rng, n);
+    if (tick < c) {
+      b = c;
+      right = std::move(middle);
+    } else {
+      a = c;
+      left = std::move(middle);
+    }
+  }
+  return tick == a ? left : right;
+}
+
+Eigen::VectorXd EmulatedPlant::measure(const Eigen::VectorXd& x, int sensor, std::uint32_t episode,
+                                       std::uint64_t seq) const {
+  if (sensor < 0 || sensor >= static_cast<int>(sensor_h_.size())) {
+    throw InputError(kSource, "sensor",
+                     "an index in [0, " + std::to_string(sensor_h_.size()) + "), got " +
+                         std::to_string(sensor));
+  }
+  const auto j = static_cast<std::size_t>(sensor);
+  Rng rng = Rng::keyed(seed_, kSensorNoiseStream, episode, sensor, seq);
+  return sensor_h_[j] * x + sensor_noise_root_[j] * normals(rng, sensor_h_[j].rows());
+}
+
+}  // namespace sensornet

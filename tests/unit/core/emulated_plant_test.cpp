@@ -1,0 +1,122 @@
+// The emulated plant against closed forms: for the scalar Ornstein-Uhlenbeck plant
+// dx = -a x dt + dw, E[dw²] = q dt, x(0) ~ N(m0, p0), the exact moments are
+//   E x(t) = e^{-at} m0,   Var x(t) = e^{-2at} p0 + q (1 - e^{-2at}) / (2a),
+//   Cov(x(s), x(t)) = e^{-a(t-s)} Var x(s)   (s <= t).
+// Sample moments over 4000 episodes are compared with them at 4.5 standard errors (a false
+// alarm rate below 1e-5 per comparison); the seeds are fixed, so the test is deterministic.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+constexpr double kA = 0.8, kQ = 1.5, kP0 = 2.0, kM0 = 1.0, kT = 3.0;
+
+Scenario scalarPlant() {
+  Scenario s;
+  s.horizon_s = kT;
+  s.intervals = 3;
+  s.plant.A = MatrixXd::Constant(1, 1, -kA);
+  s.plant.Q = MatrixXd::Constant(1, 1, kQ);
+  s.plant.P0 = MatrixXd::Constant(1, 1, kP0);
+  s.plant.m0 = VectorXd::Constant(1, kM0);
+  s.sensors.push_back({MatrixXd::Constant(1, 1, 2.0), MatrixXd::Constant(1, 1, 0.5)});
+  s.cost.W = MatrixXd::Zero(1, 1);
+  s.cost.WT = MatrixXd::Identity(1, 1);
+  s.constraints.C = MatrixXd::Ones(1, 1);
+  s.constraints.b = VectorXd::Ones(1);
+  return s;
+}
+
+double exactVariance(double t) {
+  return std::exp(-2 * kA * t) * kP0 + kQ * (1 - std::exp(-2 * kA * t)) / (2 * kA);
+}
+
+TEST(EmulatedPlant, MomentsAtAnyTicksMatchTheOrnsteinUhlenbeckClosedForm) {
+  const EmulatedPlant plant(scalarPlant(), 11, /*tick_levels=*/12);
+  // Ticks that are not dyadic midpoints of one another, and the two ends.
+  const std::vector<std::int64_t> ticks = {0, 37, 1234, 2049, 4095, plant.tickCount()};
+  const int episodes = 4000;
+  std::vector<std::vector<double>> samples(ticks.size());
+  for (std::uint32_t e = 0; e < episodes; ++e) {
+    for (std::size_t i = 0; i < ticks.size(); ++i) {
+      samples[i].push_back(plant.stateAt(e, ticks[i])(0));
+    }
+  }
+  const auto mean = [&](std::size_t i) {
+    double sum = 0;
+    for (double x : samples[i]) sum += x;
+    return sum / episodes;
+  };
+  const auto covariance = [&](std::size_t i, std::size_t j) {
+    const double mi = mean(i), mj = mean(j);
+    double sum = 0;
+    for (int k = 0; k < episodes; ++k) sum += (samples[i][k] - mi) * (samples[j][k] - mj);
+    return sum / (episodes - 1);
+  };
+  for (std::size_t i = 0; i < ticks.size(); ++i) {
+    const double t = plant.timeOf(ticks[i]);
+    const double var = exactVariance(t);
+    EXPECT_NEAR(mean(i), std::exp(-kA * t) * kM0, 4.5 * std::sqrt(var / episodes)) << "t " << t;
+    EXPECT_NEAR(covariance(i, i), var, 4.5 * var * std::sqrt(2.0 / episodes)) << "t " << t;
+    for (std::size_t j = i + 1; j < ticks.size(); ++j) {
+      const double s = t, u = plant.timeOf(ticks[j]);
+      const double exact = std::exp(-kA * (u - s)) * var;
+      // Standard error of a sample covariance: sqrt((σ_ss σ_uu + σ_su²) / N).
+      const double se = std::sqrt((var * exactVariance(u) + exact * exact) / episodes);
+      EXPECT_NEAR(covariance(i, j), exact, 4.5 * se) << "ticks " << ticks[i] << ", " << ticks[j];
+    }
+  }
+}
+
+TEST(EmulatedPlant, EveryProcessGetsTheSameTruthWhateverItAsksFirst) {
+  const Scenario s = scalarPlant();
+  const EmulatedPlant one(s, 5), other(s, 5);
+  const double x_late = other.stateAt(3, 700001)(0);  // asked in another order
+  const double x_early = one.stateAt(3, 12345)(0);
+  EXPECT_EQ(one.stateAt(3, 700001)(0), x_late);
+  EXPECT_EQ(other.stateAt(3, 12345)(0), x_early);
+  EXPECT_NE(one.stateAt(4, 12345)(0), x_early);            // another episode
+  EXPECT_NE(EmulatedPlant(s, 6).stateAt(3, 12345)(0), x_early);  // another run seed
+  EXPECT_EQ(one.tickAt(one.timeOf(777)), 777);
+  EXPECT_EQ(one.tickAt(-1.0), 0);
+  EXPECT_EQ(one.tickAt(10 * kT), one.tickCount());
+}
+
+TEST(EmulatedPlant, MeasurementNoiseHasTheSensorsCovariance) {
+  const EmulatedPlant plant(scalarPlant(), 2);
+  const VectorXd x = VectorXd::Constant(1, 0.25);
+  const int count = 20000;
+  double sum = 0, sum2 = 0;
+  for (int k = 0; k < count; ++k) {
+    const double v = plant.measure(x, 0, 1, static_cast<std::uint64_t>(k))(0) - 2.0 * 0.25;
+    sum += v;
+    sum2 += v * v;
+  }
+  const double mean = sum / count, var = sum2 / count - mean * mean;
+  EXPECT_NEAR(mean, 0.0, 4.5 * std::sqrt(0.5 / count));
+  EXPECT_NEAR(var, 0.5, 4.5 * 0.5 * std::sqrt(2.0 / count));
+  EXPECT_EQ(plant.measure(x, 0, 1, 7)(0), plant.measure(x, 0, 1, 7)(0));
+}
+
+TEST(EmulatedPlant, RejectsBadTicksSensorsAndLevels) {
+  const Scenario s = scalarPlant();
+  const EmulatedPlant plant(s, 1, 4);
+  EXPECT_THROW((void)plant.stateAt(0, -1), InputError);
+  EXPECT_THROW((void)plant.stateAt(0, 17), InputError);
+  EXPECT_THROW((void)plant.measure(VectorXd::Zero(1), 1, 0, 0), InputError);
+  EXPECT_THROW(EmulatedPlant(s, 1, 0), InputError);
+  EXPECT_THROW(EmulatedPlant(s, 1, 41), InputError);
+}
+
+}  // namespace
+}  // namespace sensornet
