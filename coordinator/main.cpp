@@ -4,6 +4,7 @@
 
 #include "sensornet/io/command_line.hpp"
 #include "plan_command.hpp"
+#include "serve_command.hpp"
 #include "timetable_command.hpp"
 
 int main(int argc, char** argv) {
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     const std::vector<sensornet::Subcommand> subcommands = {
         sensornet::coordinator::addPlanCommand(app),
+        sensornet::coordinator::addServeCommand(app),
         sensornet::coordinator::addTimetableCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);

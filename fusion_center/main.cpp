@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "evaluate_command.hpp"
+#include "serve_command.hpp"
 #include "sensornet/io/command_line.hpp"
 
 int main(int argc, char** argv) {
@@ -13,7 +14,8 @@ int main(int argc, char** argv) {
     app.name("fusion_center");
     app.require_subcommand(1);
     const std::vector<sensornet::Subcommand> subcommands = {
-        sensornet::fusion_center::addEvaluateCommand(app)};
+        sensornet::fusion_center::addEvaluateCommand(app),
+        sensornet::fusion_center::addServeCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

@@ -76,7 +76,7 @@ EmulatedPlant::EmulatedPlant(const Scenario& scenario, std::uint64_t seed, int t
 
 std::int64_t EmulatedPlant::tickAt(double t) const {
   if (!(t > 0.0)) return 0;
-  const double ticks = std::round(t / tickSeconds());
+  const double ticks = std::floor(t / tickSeconds());
   return std::min(static_cast<std::int64_t>(std::min(ticks, 9.0e18)), tickCount());
 }
 

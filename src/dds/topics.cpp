@@ -43,4 +43,6 @@ Qos commandQos() { return Qos().reliable(kMaxBlockingTime).volatileDurability().
 
 Qos commandReplyQos() { return lastKnownState(1); }
 
+Qos fusionStateQos() { return Qos().reliable(kMaxBlockingTime).volatileDurability().keepLast(1); }
+
 }  // namespace sensornet::dds

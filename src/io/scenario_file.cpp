@@ -346,21 +346,25 @@ nlohmann::json scheduleToJson(const RateSchedule& schedule) {
           {"rates", std::move(rows)}};
 }
 
-void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
-                       const nlohmann::json& extra) {
-  nlohmann::json doc = scheduleToJson(schedule);
-  for (const auto& [key, value] : extra.items()) doc[key] = value;
-  // Write beside the target and rename, so a reader never sees half a schedule.
+void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what) {
+  // Write beside the target and rename, so a reader never sees half a file.
   const std::string temporary = path + ".tmp";
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out << doc.dump(2) << '\n';
-    if (!out) throw InputError(path, "", "a writable path for the schedule file");
+    if (!out) throw InputError(path, "", "a writable path for the " + what);
   }
   if (std::rename(temporary.c_str(), path.c_str()) != 0) {
     std::remove(temporary.c_str());
-    throw InputError(path, "", "a writable path for the schedule file (rename failed)");
+    throw InputError(path, "", "a writable path for the " + what + " (rename failed)");
   }
+}
+
+void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
+                       const nlohmann::json& extra) {
+  nlohmann::json doc = scheduleToJson(schedule);
+  for (const auto& [key, value] : extra.items()) doc[key] = value;
+  writeJsonFile(path, doc, "schedule file");
 }
 
 }  // namespace sensornet

@@ -41,7 +41,8 @@ class EmulatedPlant {
 
   [[nodiscard]] std::int64_t tickCount() const { return std::int64_t{1} << levels_; }
   [[nodiscard]] double tickSeconds() const { return horizon_s_ / static_cast<double>(tickCount()); }
-  // The tick nearest to t, clamped to [0, tickCount()].
+  // The last tick at or before t, clamped to [0, tickCount()] (so an arrival drawn before a
+  // schedule switch that falls on a tick stays before it).
   [[nodiscard]] std::int64_t tickAt(double t) const;
   [[nodiscard]] double timeOf(std::int64_t tick) const {
     return static_cast<double>(tick) * tickSeconds();

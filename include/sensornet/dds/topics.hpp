@@ -28,6 +28,8 @@
 // |                |                  | coordinator to match before it writes                    |
 // | CommandReply   | run, command id  | reliable, transient-local, last 1: the answer reaches    |
 // |                |                  | the sender even if its reader matched after the write    |
+// | FusionState    | run              | reliable, volatile, last 1: only the newest estimate     |
+// |                |                  | matters; a re-plan uses whatever is latest               |
 //
 // Reliable writers block up to max_blocking_time (100 ms, Cyclone's default) and then time out.
 
@@ -55,6 +57,7 @@ inline constexpr std::chrono::milliseconds kMaxBlockingTime{100};
 [[nodiscard]] Qos reportQos();
 [[nodiscard]] Qos commandQos();
 [[nodiscard]] Qos commandReplyQos();
+[[nodiscard]] Qos fusionStateQos();
 
 template <>
 struct TopicType<sensornet_Scenario> {
@@ -112,6 +115,13 @@ struct TopicType<sensornet_CommandReply> {
   static constexpr const char* kName = "sensornet/CommandReply";
   static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_CommandReply_desc; }
   static Qos qos() { return commandReplyQos(); }
+};
+
+template <>
+struct TopicType<sensornet_FusionState> {
+  static constexpr const char* kName = "sensornet/FusionState";
+  static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_FusionState_desc; }
+  static Qos qos() { return fusionStateQos(); }
 };
 
 }  // namespace sensornet::dds

@@ -25,6 +25,9 @@ namespace sensornet {
 [[nodiscard]] RateSchedule loadScheduleFile(const std::string& path);
 [[nodiscard]] RateSchedule loadScheduleFile(const std::string& path, const Scenario& scenario);
 [[nodiscard]] nlohmann::json scheduleToJson(const RateSchedule& schedule);
+// Writes `doc` (indented) to path atomically: a temporary file beside it, then a rename.
+// Throws InputError naming the path when it cannot be written. `what` names the file's role.
+void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what);
 // Writes scheduleToJson(schedule) merged with `extra` keys.
 void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
                        const nlohmann::json& extra = nlohmann::json::object());

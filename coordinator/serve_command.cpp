@@ -1,0 +1,544 @@
+#include "serve_command.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/planner.hpp"
+#include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/dds/waitset.hpp"
+#include "sensornet/dds/wire.hpp"
+#include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/stop_signal.hpp"
+#include "sensornet/io/scenario_file.hpp"
+
+namespace sensornet::coordinator {
+namespace {
+
+using namespace std::chrono_literals;
+using emulator::wallNowNs;
+
+struct ServeOptions {
+  emulator::RunOptions run;
+  std::string scenario_path;
+  PlanSurrogate surrogate = PlanSurrogate::Information;
+  std::string schedule_path;
+  int episodes = 20;
+  double time_scale = 1.0;
+  std::uint64_t seed = 1;
+  double ready_timeout_s = 30.0;
+  double start_lead_s = 0.2;     // wall seconds between announcing an episode and its start
+  double switch_margin_s = 0.3;  // wall seconds between a re-plan and its effective time
+  double report_timeout_s = 10.0;  // wall seconds past an episode's end to wait for its report
+  bool json = false;
+};
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "a readable scenario file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
+
+class Coordinator {
+ public:
+  Coordinator(const ServeOptions& options, emulator::RunScenario run,
+              emulator::ScheduleVersion initial)
+      : options_(options),
+        run_(std::move(run)),
+        plant_(run_.scenario, run_.seed),
+        constraints_(run_.scenario.constraints),
+        surrogate_(initial.surrogate == "file" ? PlanSurrogate::Information : options.surrogate),
+        domain_(options.run.domainConfig()),
+        participant_(domain_),
+        scenario_topic_(participant_),
+        schedule_topic_(participant_),
+        control_topic_(participant_),
+        command_topic_(participant_),
+        reply_topic_(participant_),
+        status_topic_(participant_),
+        report_topic_(participant_),
+        state_topic_(participant_),
+        scenario_writer_(participant_, scenario_topic_),
+        schedule_writer_(participant_, schedule_topic_),
+        control_writer_(participant_, control_topic_),
+        reply_writer_(participant_, reply_topic_),
+        command_reader_(participant_, command_topic_),
+        status_reader_(participant_, status_topic_),
+        report_reader_(participant_, report_topic_),
+        state_reader_(participant_, state_topic_),
+        waitset_(participant_),
+        command_ready_(command_reader_),
+        status_ready_(status_reader_),
+        report_ready_(report_reader_) {
+    waitset_.attach(command_ready_, 1);
+    waitset_.attach(status_ready_, 2);
+    waitset_.attach(report_ready_, 3);
+    book_.add(std::move(initial));
+  }
+
+  int run() {
+    mustWrite(emulator::publishScenario(scenario_writer_, options_.run.run_id, run_), "scenario");
+    mustWrite(emulator::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest,
+                                        book_.latest()),
+              "schedule");
+    spdlog::info("run {}: scenario {} and schedule v1 ({}) published; waiting for {} sensors "
+                 "and the fusion center",
+                 options_.run.run_id, run_.digest, book_.latest().surrogate,
+                 run_.scenario.sensorCount());
+    if (!waitUntilReady()) return kExitFailure;
+
+    for (std::uint32_t e = 0; e < static_cast<std::uint32_t>(options_.episodes) && !stopping_;
+         ++e) {
+      if (!runEpisode(e)) {
+        shutDown();
+        return kExitFailure;
+      }
+    }
+    shutDown();
+    if (emulator::stopRequested()) return kExitFailure;
+    if (options_.json) {
+      printJson({{"run_id", options_.run.run_id},
+                 {"episodes", episodes_done_},
+                 {"schedule_versions", book_.latest().version}});
+    }
+    return kExitOk;
+  }
+
+ private:
+  static void mustWrite(dds::WriteResult result, const char* what) {
+    if (result == dds::WriteResult::TimedOut) {
+      throw std::runtime_error(std::string("publishing the ") + what + " timed out");
+    }
+  }
+
+  bool waitUntilReady() {
+    const std::int64_t deadline = wallNowNs() + toNs(options_.ready_timeout_s);
+    for (;;) {
+      pump(20ms);
+      const bool sensors_ready = static_cast<int>(ready_sensors_.size()) ==
+                                 run_.scenario.sensorCount();
+      const bool fusion_ready = report_reader_.matchedWriters() > 0 &&
+                                state_reader_.matchedWriters() > 0;
+      if (sensors_ready && fusion_ready) {
+        spdlog::info("all {} sensors and the fusion center are ready", ready_sensors_.size());
+        std::this_thread::sleep_for(100ms);  // let the last discovery settle
+        return true;
+      }
+      if (emulator::stopRequested()) return false;
+      if (wallNowNs() > deadline) {
+        spdlog::error("not ready after {} s: {} of {} sensors ready, fusion center {}",
+                      options_.ready_timeout_s, ready_sensors_.size(),
+                      run_.scenario.sensorCount(), fusion_ready ? "present" : "missing");
+        return false;
+      }
+    }
+  }
+
+  bool runEpisode(std::uint32_t episode) {
+    current_episode_ = episode;
+    episode_start_ns_ = wallNowNs() + toNs(options_.start_lead_s);
+    const emulator::ScheduleVersion* v = book_.inForce(episode, 0.0);
+    sensornet_EpisodeControl c{};
+    c.run_id = dds::borrowString(options_.run.run_id);
+    c.episode = episode;
+    c.command = sensornet_EPISODE_START;
+    c.start_wall_time_ns = episode_start_ns_;
+    c.time_scale = options_.time_scale;
+    c.seed = run_.seed;
+    c.schedule_version = v->version;
+    mustWrite(control_writer_.write(c), "episode control");
+    running_ = true;
+    const double wall_length = run_.scenario.horizon_s / options_.time_scale;
+    const std::int64_t deadline =
+        episode_start_ns_ + toNs(wall_length + options_.report_timeout_s);
+    while (!reported_.count(episode)) {
+      pump(10ms);
+      if (emulator::stopRequested()) return false;
+      if (wallNowNs() > deadline) {
+        spdlog::error("no report of episode {} within {} s of its end", episode,
+                      options_.report_timeout_s);
+        return false;
+      }
+    }
+    running_ = false;
+    ++episodes_done_;
+    return true;
+  }
+
+  void shutDown() {
+    sensornet_EpisodeControl c{};
+    c.run_id = dds::borrowString(options_.run.run_id);
+    c.episode = current_episode_;
+    c.command = sensornet_RUN_SHUTDOWN;
+    c.start_wall_time_ns = wallNowNs();
+    c.time_scale = options_.time_scale;
+    c.seed = run_.seed;
+    c.schedule_version = book_.latest().version;
+    if (control_writer_.write(c) == dds::WriteResult::TimedOut) {
+      spdlog::warn("the shutdown announcement timed out");
+    }
+    (void)control_writer_.waitForAcks(3s);
+    (void)reply_writer_.waitForAcks(1s);
+    spdlog::info("run {} shut down after {} episodes", options_.run.run_id, episodes_done_);
+  }
+
+  // Waits up to `timeout` for something to read, then reads everything.
+  void pump(std::chrono::nanoseconds timeout) {
+    (void)waitset_.wait(timeout);
+    readStatuses();
+    readReports();
+    readFusionStates();
+    readCommands();
+  }
+
+  void readStatuses() {
+    for (auto& received : status_reader_.take(64).samples) {
+      const sensornet_SensorStatus& s = *received.sample;
+      const int id = static_cast<int>(s.sensor_id);
+      if (id < 0 || id >= run_.scenario.sensorCount()) continue;
+      if (s.state == sensornet_SENSOR_READY || s.state == sensornet_SENSOR_EXCLUDED ||
+          s.state == sensornet_SENSOR_RUNNING) {
+        if (s.schedule_version >= 1) ready_sensors_.insert(id);
+      }
+      if (s.state == sensornet_SENSOR_FAILED) {
+        spdlog::warn("sensor {} failed: {}", id, dds::viewString(s.detail));
+      }
+    }
+  }
+
+  void readReports() {
+    for (auto& received : report_reader_.take(16).samples) {
+      const sensornet_Report& r = *received.sample;
+      if (!reported_.insert(r.episode).second) continue;
+      spdlog::info("episode {}/{}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} in "
+                   "[{:.6g}, {:.6g}] (95%)",
+                   r.episode + 1, options_.episodes, r.realized_cost, r.bracket_lower,
+                   r.bracket_upper, r.summary.realized_mean, r.summary.realized_ci95_low,
+                   r.summary.realized_ci95_high);
+    }
+  }
+
+  void readFusionStates() {
+    for (auto& received : state_reader_.take(8).samples) {
+      const sensornet_FusionState& s = *received.sample;
+      const auto values = dds::viewSequence(s.covariance);
+      const auto n = static_cast<std::size_t>(run_.scenario.stateDim());
+      if (s.state_dim != n || values.size() != n * n) continue;
+      Eigen::MatrixXd P = Eigen::Map<const Eigen::MatrixXd>(values.data(),
+                                                            static_cast<Eigen::Index>(n),
+                                                            static_cast<Eigen::Index>(n));
+      fused_ = FusedEstimate{s.episode, s.emulated_time_s, 0.5 * (P + P.transpose())};
+    }
+  }
+
+  void readCommands() {
+    for (auto& received : command_reader_.take(8).samples) {
+      const sensornet_Command& c = *received.sample;
+      if (dds::viewString(c.run_id) != options_.run.run_id) continue;
+      std::uint32_t version = 0;
+      std::string reason;
+      bool accepted = false;
+      try {
+        std::tie(version, reason) = execute(c);
+        accepted = true;
+      } catch (const InputError& error) {
+        reason = error.what();
+      } catch (const std::exception& error) {
+        reason = std::string("failed: ") + error.what();
+      }
+      spdlog::info("command {} from '{}': {} ({})", c.command_id, dds::viewString(c.issuer),
+                   accepted ? "accepted" : "refused", reason);
+      sensornet_CommandReply reply{};
+      reply.run_id = dds::borrowString(options_.run.run_id);
+      reply.command_id = c.command_id;
+      reply.accepted = accepted;
+      reply.schedule_version = version;
+      reply.reason = dds::borrowString(reason);
+      if (reply_writer_.write(reply) == dds::WriteResult::TimedOut) {
+        spdlog::warn("the reply to command {} timed out", c.command_id);
+      }
+    }
+  }
+
+  // Returns (new version or 0, one-line summary); throws InputError to refuse.
+  std::pair<std::uint32_t, std::string> execute(const sensornet_Command& c) {
+    const std::string source = "command " + std::to_string(c.command_id);
+    switch (c.kind) {
+      case sensornet_COMMAND_STATUS:
+        return {0, "running episode " + std::to_string(current_episode_) + ", schedule v" +
+                       std::to_string(book_.latest().version)};
+      case sensornet_COMMAND_SHUTDOWN:
+        stopping_ = true;
+        return {0, "the run ends after the current episode"};
+      case sensornet_COMMAND_REPLAN: {
+        const std::string s(dds::viewString(c.surrogate));
+        if (s == "info") {
+          surrogate_ = PlanSurrogate::Information;
+        } else if (s == "cov") {
+          surrogate_ = PlanSurrogate::Covariance;
+        } else if (s == "uniform") {
+          surrogate_ = PlanSurrogate::Uniform;
+        } else {
+          throw InputError(source, "surrogate", "info, cov or uniform, got '" + s + "'");
+        }
+        return replan(c.command_id, std::nullopt);
+      }
+      case sensornet_COMMAND_EXCLUDE_SENSORS: {
+        std::set<int> excluded = excluded_;
+        for (const std::uint32_t id : dds::viewSequence(c.sensor_ids)) {
+          if (id >= static_cast<std::uint32_t>(run_.scenario.sensorCount())) {
+            throw InputError(source, "sensor_ids",
+                             "ids below M = " + std::to_string(run_.scenario.sensorCount()));
+          }
+          excluded.insert(static_cast<int>(id));
+        }
+        if (static_cast<int>(excluded.size()) == run_.scenario.sensorCount()) {
+          throw InputError(source, "sensor_ids", "at least one sensor left in service");
+        }
+        excluded_ = std::move(excluded);
+        return replan(c.command_id, std::nullopt);
+      }
+      case sensornet_COMMAND_SET_BUDGET: {
+        const auto b = dds::viewSequence(c.budget);
+        if (b.size() != static_cast<std::size_t>(constraints_.b.size())) {
+          throw InputError(source, "budget",
+                           std::to_string(constraints_.b.size()) + " values (one per row of C)");
+        }
+        for (const double value : b) {
+          if (!(value > 0.0) || !std::isfinite(value)) {
+            throw InputError(source, "budget", "finite values > 0");
+          }
+        }
+        constraints_.b = Eigen::Map<const Eigen::VectorXd>(b.data(), constraints_.b.size());
+        return replan(c.command_id, std::nullopt);
+      }
+      case sensornet_COMMAND_SCHEDULE_FILE: {
+        RateSchedule schedule =
+            parseScheduleJson(std::string(dds::viewString(c.schedule_json)), source);
+        Scenario check = run_.scenario;
+        check.constraints = constraints_;
+        const Feasibility feasibility = checkFeasibility(schedule, check, 1e-9);
+        if (!feasibility.feasible) throw InputError(source, "rates", feasibility.reason);
+        return replan(c.command_id, std::move(schedule));
+      }
+    }
+    throw InputError(source, "kind", "a known command kind");
+  }
+
+  // Plans (or adopts `given`) and publishes the next version, effective as soon as every
+  // process can switch: switch_margin_s of wall time from now in the running episode, else at
+  // the start of the next one.
+  std::pair<std::uint32_t, std::string> replan(std::uint64_t command_id,
+                                               std::optional<RateSchedule> given) {
+    const double T = run_.scenario.horizon_s;
+    std::uint32_t episode = running_ ? current_episode_ : current_episode_ + 1;
+    if (!running_ && episodes_done_ == 0) episode = 0;
+    double at = 0.0;
+    if (running_) {
+      const double now = 1e-9 * static_cast<double>(wallNowNs() - episode_start_ns_) *
+                         options_.time_scale;
+      at = plant_.timeOf(plant_.tickAt(std::max(0.0, now) +
+                                       options_.switch_margin_s * options_.time_scale));
+      if (at >= T) {
+        episode = current_episode_ + 1;
+        at = 0.0;
+      }
+    }
+    Scenario planned_for = run_.scenario;
+    planned_for.constraints = constraints_;
+    emulator::ScheduleVersion v;
+    v.version = book_.latest().version + 1;
+    v.effective_episode = episode;
+    v.command_id = command_id;
+    std::string how;
+    if (given) {
+      v.schedule = std::move(*given);
+      v.surrogate = "file";
+      how = "schedule file";
+    } else {
+      PlanRequest request;
+      request.surrogate = surrogate_;
+      request.excluded_sensors.assign(excluded_.begin(), excluded_.end());
+      request.warm_start = book_.latest().schedule;
+      request.max_seconds = 30.0;
+      const bool mid_episode = at > 0.0 && fused_ && fused_->episode == episode;
+      if (mid_episode) {
+        request.start_time = at;
+        request.start_covariance = fused_->covariance;
+      }
+      const PlanResult plan = planSchedule(planned_for, request);
+      v.schedule = plan.schedule;
+      v.surrogate = std::string(describe(surrogate_));
+      how = v.surrogate + " plan (" + plan.status + ", " + std::to_string(plan.iterations) +
+            " iterations" +
+            (mid_episode ? ", from the fused covariance at " + std::to_string(fused_->time_s) +
+                               " s"
+                         : "") +
+            ")";
+      if (!mid_episode && at > 0.0) {
+        // No fused estimate of this episode yet: the new schedule starts with the next one.
+        episode = current_episode_ + 1;
+        at = 0.0;
+        v.effective_episode = episode;
+      }
+    }
+    // Planning took time: if the switch is now too close, move it to the next episode.
+    if (running_ && at > 0.0) {
+      const double now = 1e-9 * static_cast<double>(wallNowNs() - episode_start_ns_) *
+                         options_.time_scale;
+      if (at < now + 0.5 * options_.switch_margin_s * options_.time_scale) {
+        v.effective_episode = current_episode_ + 1;
+        at = 0.0;
+      }
+    }
+    v.effective_time_s = at;
+    v.bracket = computeBracket(planned_for, v.schedule);
+    mustWrite(emulator::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest, v),
+              "schedule");
+    const std::string summary = "version " + std::to_string(v.version) + " from episode " +
+                                std::to_string(v.effective_episode) + " at " +
+                                std::to_string(v.effective_time_s) + " s: " + how;
+    const std::uint32_t number = v.version;
+    book_.add(std::move(v));
+    return {number, summary};
+  }
+
+  struct FusedEstimate {
+    std::uint32_t episode = 0;
+    double time_s = 0.0;
+    Eigen::MatrixXd covariance;
+  };
+
+  ServeOptions options_;
+  emulator::RunScenario run_;
+  EmulatedPlant plant_;  // only for its tick grid: effective times fall on ticks
+  ResourceConstraints constraints_;
+  PlanSurrogate surrogate_;
+  std::set<int> excluded_;
+  emulator::ScheduleBook book_;
+
+  dds::Domain domain_;
+  dds::Participant participant_;
+  dds::Topic<sensornet_Scenario> scenario_topic_;
+  dds::Topic<sensornet_Schedule> schedule_topic_;
+  dds::Topic<sensornet_EpisodeControl> control_topic_;
+  dds::Topic<sensornet_Command> command_topic_;
+  dds::Topic<sensornet_CommandReply> reply_topic_;
+  dds::Topic<sensornet_SensorStatus> status_topic_;
+  dds::Topic<sensornet_Report> report_topic_;
+  dds::Topic<sensornet_FusionState> state_topic_;
+  dds::Writer<sensornet_Scenario> scenario_writer_;
+  dds::Writer<sensornet_Schedule> schedule_writer_;
+  dds::Writer<sensornet_EpisodeControl> control_writer_;
+  dds::Writer<sensornet_CommandReply> reply_writer_;
+  dds::Reader<sensornet_Command> command_reader_;
+  dds::Reader<sensornet_SensorStatus> status_reader_;
+  dds::Reader<sensornet_Report> report_reader_;
+  dds::Reader<sensornet_FusionState> state_reader_;
+  dds::WaitSet waitset_;
+  dds::ReadCondition command_ready_;
+  dds::ReadCondition status_ready_;
+  dds::ReadCondition report_ready_;
+
+  std::set<int> ready_sensors_;
+  std::set<std::uint32_t> reported_;
+  std::optional<FusedEstimate> fused_;
+  std::uint32_t current_episode_ = 0;
+  std::int64_t episode_start_ns_ = 0;
+  bool running_ = false;
+  bool stopping_ = false;
+  int episodes_done_ = 0;
+};
+
+int runServe(const ServeOptions& options) {
+  emulator::RunScenario run;
+  run.yaml = readText(options.scenario_path);
+  run.scenario = loadScenarioFile(options.scenario_path);
+  run.digest = emulator::digestOf(run.yaml);
+  run.seed = options.seed;
+  (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning
+
+  emulator::ScheduleVersion initial;
+  initial.version = 1;
+  if (!options.schedule_path.empty()) {
+    initial.schedule = loadScheduleFile(options.schedule_path, run.scenario);
+    initial.surrogate = "file";
+  } else {
+    PlanRequest request;
+    request.surrogate = options.surrogate;
+    const PlanResult plan = planSchedule(run.scenario, request);
+    spdlog::info("initial {} schedule: {} after {} iterations in {:.3f} s", describe(options.surrogate),
+                 plan.status, plan.iterations, plan.solve_seconds);
+    initial.schedule = plan.schedule;
+    initial.surrogate = std::string(describe(options.surrogate));
+  }
+  initial.bracket = computeBracket(run.scenario, initial.schedule);
+  spdlog::info("bracket of schedule v1: [{:.6g}, {:.6g}]", initial.bracket.info,
+               initial.bracket.cov);
+  emulator::installStopSignals();
+  Coordinator coordinator(options, std::move(run), std::move(initial));
+  return coordinator.run();
+}
+
+}  // namespace
+
+Subcommand addServeCommand(CLI::App& app) {
+  auto options = std::make_shared<ServeOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "serve",
+      "Coordinate one emulation run over DDS: publish the scenario and the planned schedule, "
+      "wait for every sensor and the fusion center, run the episodes on the emulated clock, "
+      "re-plan live on command (sensornet replan), then shut the run down. Example:\n"
+      "  coordinator serve --scenario scenarios/default.yaml --run-id demo --episodes 20");
+  emulator::addRunOptions(*cmd, options->run);
+  cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
+  const std::map<std::string, PlanSurrogate> surrogates = {
+      {"info", PlanSurrogate::Information},
+      {"cov", PlanSurrogate::Covariance},
+      {"uniform", PlanSurrogate::Uniform}};
+  cmd->add_option("--surrogate", options->surrogate,
+                  "how to plan the initial schedule: info, cov or uniform")
+      ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
+      ->capture_default_str();
+  cmd->add_option("--schedule", options->schedule_path,
+                  "use this schedule file (JSON) instead of planning");
+  cmd->add_option("--episodes", options->episodes, "episodes to run")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10'000'000));
+  cmd->add_option("--time-scale", options->time_scale,
+                  "emulated seconds per wall second (1 = real time, 10 = ten times faster)")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e4));
+  cmd->add_option("--seed", options->seed,
+                  "run seed: keys the plant truth, the arrivals and the sensor noise")
+      ->capture_default_str();
+  cmd->add_option("--ready-timeout", options->ready_timeout_s,
+                  "seconds to wait for every sensor and the fusion center")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--switch-margin", options->switch_margin_s,
+                  "wall seconds between a live re-plan and the time it takes effect")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--json", options->json, "print a one-line JSON summary at the end");
+  return {cmd, [options] { return runServe(*options); }};
+}
+
+}  // namespace sensornet::coordinator

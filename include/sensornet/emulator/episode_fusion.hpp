@@ -1,0 +1,124 @@
+#pragma once
+// The fusion center's work on one episode: the exact CD-KF over the measurements of all
+// sensors in timestamp order, the realized cost J(P) of eq. (6), the bracket of the schedule
+// actually in force, the NEES against the emulated truth, and the counts per sensor.
+//
+//   EpisodeFusion fusion(scenario, plant, book, episode, bracketOf);
+//   fusion.add(measurement);           // any order; returns a reason when it rejects one
+//   fusion.fuseUpTo(watermark_s);      // online: fuse what can no longer be overtaken
+//   fusion.finishSensor(j, sent);      // sensor j's end-of-episode marker
+//   EpisodeResult r = fusion.finish(); // fuse the rest, propagate to T, bracket
+//
+// Timestamp order: measurements are fused in order of (emulated time, sensor, seq) whatever
+// order they arrive in. One that arrives after the filter has passed its time ("late") is kept
+// and the whole episode is re-fused in order at finish(), so the result never depends on the
+// arrival order.
+//
+// The bracket in force: with one schedule version over the episode, [J(P_info), J(P_cov)] of
+// that version from P0 (Corollary 1 of the first paper). When versions switched during the
+// episode, at s = the last switch: the realized ∫<W, P> over [0, s] plus the two surrogates of
+// the version in force after s, started from the fused P(s). Conditioned on what happened up to
+// s, the schedule from s on is fixed, so Corollary 1 brackets E[J | F_s] and, averaged over
+// episodes, E[J].
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sensornet/core/cdkf.hpp"
+#include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/core/scenario.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/emulator/schedule_book.hpp"
+
+namespace sensornet::emulator {
+
+struct FusedMeasurement {
+  int sensor = 0;
+  std::uint64_t seq = 0;
+  double time_s = 0.0;
+  std::uint32_t version = 0;  // the schedule version the sensor drew it under
+  Eigen::VectorXd z;
+  std::int64_t publish_wall_ns = 0;
+  std::int64_t receive_wall_ns = 0;
+};
+
+struct SensorTally {
+  std::uint64_t received = 0;
+  double expected = 0.0;           // ∫ λ_j dt under the versions in force
+  std::uint64_t lost = 0;          // announced (or seq-implied) minus received
+  std::uint64_t late = 0;          // arrived after the filter had passed their time
+  std::uint64_t wrong_version = 0;  // drawn under another version than the one in force
+  bool finished = false;           // its end-of-episode marker arrived
+};
+
+struct EpisodeResult {
+  std::uint32_t episode = 0;
+  double realized_cost = 0.0;
+  CostBracket bracket;
+  std::vector<std::uint32_t> versions;  // in force during the episode, in time order
+  double switch_time_s = 0.0;           // the last switch (0 when none)
+  double nees = 0.0;                    // e(T)' P(T)^{-1} e(T) against the emulated truth
+  std::vector<SensorTally> sensors;
+  std::vector<double> latencies_s;      // publish to fusion, one per measurement
+  std::uint64_t rejected = 0;
+  bool complete = false;                // every sensor's end marker arrived
+};
+
+class EpisodeFusion {
+ public:
+  using BracketOf = std::function<CostBracket(const ScheduleVersion&)>;
+
+  // The book must hold the version in force at time 0 of `episode`; the references must
+  // outlive this object. Versions added to the book later are picked up by scheduleChanged().
+  EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plant, const ScheduleBook& book,
+                std::uint32_t episode, BracketOf bracket_of);
+
+  [[nodiscard]] std::uint32_t episode() const { return episode_; }
+  // Call after the book got a version: the stretches of the episode are recomputed. If the
+  // filter has already passed the new switch point, finish() re-fuses the episode in order.
+  void scheduleChanged();
+  // Accepts a measurement (nullopt) or rejects it with a one-line reason (and counts it).
+  std::optional<std::string> add(FusedMeasurement m);
+  // The end-of-episode marker of `sensor`: it sent `count` measurements (seq 0..count-1).
+  void finishSensor(int sensor, std::uint64_t count);
+  [[nodiscard]] bool allSensorsFinished() const;
+
+  // Fuses, in timestamp order, every buffered measurement with time <= t (t <= T).
+  void fuseUpTo(double t);
+  [[nodiscard]] double fusedTime() const { return filter_.time(); }
+  [[nodiscard]] const Eigen::MatrixXd& covariance() const { return filter_.covariance(); }
+
+  // Fuses the rest (all of it again, in order, if any measurement was late), propagates to T.
+  [[nodiscard]] EpisodeResult finish();
+
+ private:
+  using Key = std::tuple<double, int, std::uint64_t>;  // (time, sensor, seq)
+  void fuse(const FusedMeasurement& m);
+  void propagateTo(double t);  // stops at the last switch point to record P(s)
+
+  const Scenario& scenario_;
+  const EmulatedPlant& plant_;
+  const ScheduleBook& book_;
+  std::uint32_t episode_;
+  BracketOf bracket_of_;
+  std::vector<ScheduleSegment> segments_;
+  double switch_time_s_ = 0.0;
+  std::optional<std::pair<double, Eigen::MatrixXd>> at_switch_;  // running cost, P(s)
+  CdKalmanFilter filter_;
+  std::vector<FusedMeasurement> all_;
+  std::set<std::pair<Key, std::size_t>> pending_;  // indices into all_, in timestamp order
+  std::set<std::pair<int, std::uint64_t>> seen_;   // (sensor, seq)
+  std::vector<SensorTally> tallies_;
+  std::vector<std::uint64_t> announced_;
+  std::vector<std::uint64_t> highest_seq_plus_one_;
+  std::uint64_t rejected_ = 0;
+  bool replay_ = false;
+};
+
+}  // namespace sensornet::emulator

@@ -1,0 +1,52 @@
+#pragma once
+// The emulator's messages between the core types and their DDS form (idl/sensornet.idl):
+// publishing scenario, schedule versions and fusion states, and reading them back with every
+// field checked. A malformed sample throws InputError naming the topic and field; the
+// receiving process counts and logs it and goes on (it never crashes on a bad sample).
+//
+//   publishSchedule(writer, run_id, digest, version);                // coordinator
+//   ScheduleVersion v = scheduleFromWire(sample, scenario, digest);  // everyone else
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "sensornet/core/scenario.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/schedule_book.hpp"
+
+namespace sensornet::emulator {
+
+// CLOCK_REALTIME in nanoseconds since the epoch (the wall clock every process shares).
+[[nodiscard]] std::int64_t wallNowNs();
+
+// A 16-hex-digit digest of a text (FNV-1a 64), to check that processes agree on the scenario.
+[[nodiscard]] std::string digestOf(std::string_view text);
+
+// What a process learns from the Scenario topic.
+struct RunScenario {
+  Scenario scenario;
+  std::string digest;
+  std::string yaml;
+  std::uint64_t seed = 0;
+};
+
+[[nodiscard]] dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
+                                               const std::string& run_id,
+                                               const RunScenario& scenario);
+// Parses the YAML, checks the digest and the announced dimensions; throws InputError.
+[[nodiscard]] RunScenario scenarioFromWire(const sensornet_Scenario& sample);
+
+[[nodiscard]] dds::WriteResult publishSchedule(dds::Writer<sensornet_Schedule>& writer,
+                                               const std::string& run_id,
+                                               const std::string& scenario_digest,
+                                               const ScheduleVersion& version);
+// Checks version >= 1, the scenario digest, N, M, T, the effective time and finite
+// non-negative rates; throws InputError. Feasibility is the coordinator's business: a live
+// budget change may move b away from the scenario file's.
+[[nodiscard]] ScheduleVersion scheduleFromWire(const sensornet_Schedule& sample,
+                                               const Scenario& scenario,
+                                               const std::string& scenario_digest);
+
+}  // namespace sensornet::emulator

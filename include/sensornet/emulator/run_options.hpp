@@ -1,0 +1,42 @@
+#pragma once
+// How every emulator process (coordinator serve, sensor_agent, fusion_center serve, the
+// launcher) names the run it belongs to and reaches its DDS domain. The same three flags
+// everywhere:
+//   --run-id ID           the run: partition "sensornet/ID", domain id hashed from ID
+//   --domain-id D         override the domain id (0..230)
+//   --cyclone-config X    Cyclone configuration (XML text or file:// URI) instead of the
+//                         shipped loopback-only one; also from SENSORNET_CYCLONE_CONFIG.
+//
+//   RunOptions run;
+//   addRunOptions(*cmd, run);                  // while building the CLI
+//   dds::Domain domain(run.domainConfig());    // after parsing
+//
+// Without --cyclone-config (and without the environment variable) every process uses the
+// loopback-only configuration compiled into sensornet_dds: bound to lo, unicast discovery to
+// 127.0.0.1, no multicast. Running across hosts takes an explicit configuration (docker/).
+
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+
+#include "sensornet/dds/domain.hpp"
+
+namespace sensornet::emulator {
+
+// The environment variable read when --cyclone-config is not given.
+inline constexpr const char* kCycloneConfigVariable = "SENSORNET_CYCLONE_CONFIG";
+
+struct RunOptions {
+  std::string run_id;
+  std::optional<int> domain_id;
+  std::string cyclone_config;  // empty: SENSORNET_CYCLONE_CONFIG, else the loopback config
+
+  // Throws InputError for a bad run id or domain id. A cyclone_config that names an existing
+  // file path (not a URI, not XML) is turned into a file:// URI.
+  [[nodiscard]] dds::DomainConfig domainConfig() const;
+};
+
+// Adds --run-id (required unless `run_id_required` is false), --domain-id and --cyclone-config.
+void addRunOptions(CLI::App& app, RunOptions& options, bool run_id_required = true);
+
+}  // namespace sensornet::emulator

@@ -1,0 +1,25 @@
+#pragma once
+// One sensor_agent process: emulates a block of sensors of one run. It learns the scenario
+// and the schedule versions over DDS, and for every episode the coordinator starts it
+// publishes each hosted sensor's measurements z = H_j x(t) + v_j at the Poisson arrival
+// instants of the schedule in force (sensor_timeline.hpp), on the emulated clock, then an
+// end-of-episode marker per sensor (a Measurement with no values and seq = the number sent),
+// which tells the fusion center that everything before it has arrived (one writer, reliable,
+// in order).
+
+#include <vector>
+
+#include "sensornet/emulator/run_options.hpp"
+
+namespace sensornet::sensor_agent {
+
+struct AgentOptions {
+  emulator::RunOptions run;
+  std::vector<int> sensors;
+  double status_period_s = 1.0;  // SensorStatus republished at least this often
+};
+
+// Runs until RUN_SHUTDOWN (returns kExitOk) or SIGINT/SIGTERM (kExitFailure).
+int runSensorAgent(const AgentOptions& options);
+
+}  // namespace sensornet::sensor_agent

@@ -1,0 +1,171 @@
+#include "sensornet/emulator/episode_fusion.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace sensornet::emulator {
+
+EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plant,
+                             const ScheduleBook& book, std::uint32_t episode,
+                             BracketOf bracket_of)
+    : scenario_(scenario),
+      plant_(plant),
+      book_(book),
+      episode_(episode),
+      bracket_of_(std::move(bracket_of)),
+      filter_(scenario),
+      tallies_(static_cast<std::size_t>(scenario.sensorCount())),
+      announced_(tallies_.size(), 0),
+      highest_seq_plus_one_(tallies_.size(), 0) {
+  scheduleChanged();
+}
+
+void EpisodeFusion::scheduleChanged() {
+  segments_ = book_.segments(episode_, scenario_.horizon_s);
+  const double previous = switch_time_s_;
+  switch_time_s_ = segments_.size() > 1 ? segments_.back().from_s : 0.0;
+  if (switch_time_s_ != previous) {
+    at_switch_.reset();
+    // The filter must stop at the new switch point to record P(s); if it has passed it,
+    // finish() fuses the episode again from the start.
+    if (switch_time_s_ > 0.0 && filter_.time() > switch_time_s_) replay_ = true;
+  }
+}
+
+std::optional<std::string> EpisodeFusion::add(FusedMeasurement m) {
+  const auto reject = [this](std::string reason) -> std::optional<std::string> {
+    ++rejected_;
+    return reason;
+  };
+  if (m.sensor < 0 || m.sensor >= scenario_.sensorCount()) {
+    return reject("sensor id " + std::to_string(m.sensor) + " is not a sensor of the scenario");
+  }
+  const auto j = static_cast<std::size_t>(m.sensor);
+  if (m.z.size() != scenario_.sensors[j].H.rows() || !m.z.allFinite()) {
+    return reject("sensor " + std::to_string(m.sensor) + ": z must hold " +
+                  std::to_string(scenario_.sensors[j].H.rows()) + " finite values");
+  }
+  if (!(m.time_s >= 0.0 && m.time_s <= scenario_.horizon_s)) {
+    return reject("sensor " + std::to_string(m.sensor) + ": time outside [0, T]");
+  }
+  if (!seen_.insert({m.sensor, m.seq}).second) {
+    return reject("sensor " + std::to_string(m.sensor) + ": duplicate seq " +
+                  std::to_string(m.seq));
+  }
+  SensorTally& tally = tallies_[j];
+  ++tally.received;
+  highest_seq_plus_one_[j] = std::max(highest_seq_plus_one_[j], m.seq + 1);
+  const std::size_t index = all_.size();
+  const Key key{m.time_s, m.sensor, m.seq};
+  if (m.time_s < filter_.time()) {
+    ++tally.late;
+    replay_ = true;  // fused again, in order, by finish()
+  } else {
+    pending_.insert({key, index});
+  }
+  all_.push_back(std::move(m));
+  return std::nullopt;
+}
+
+void EpisodeFusion::finishSensor(int sensor, std::uint64_t count) {
+  if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
+  const auto j = static_cast<std::size_t>(sensor);
+  tallies_[j].finished = true;
+  announced_[j] = count;
+}
+
+bool EpisodeFusion::allSensorsFinished() const {
+  return std::all_of(tallies_.begin(), tallies_.end(),
+                     [](const SensorTally& t) { return t.finished; });
+}
+
+void EpisodeFusion::propagateTo(double t) {
+  if (switch_time_s_ > 0.0 && !at_switch_ && filter_.time() <= switch_time_s_ &&
+      switch_time_s_ <= t) {
+    filter_.propagateTo(switch_time_s_);
+    at_switch_.emplace(filter_.runningCost(), filter_.covariance());
+  }
+  filter_.propagateTo(t);
+}
+
+void EpisodeFusion::fuse(const FusedMeasurement& m) {
+  propagateTo(m.time_s);
+  filter_.update(m.sensor, m.z);
+}
+
+void EpisodeFusion::fuseUpTo(double t) {
+  t = std::min(t, scenario_.horizon_s);
+  while (!pending_.empty() && std::get<0>(pending_.begin()->first) <= t) {
+    fuse(all_[pending_.begin()->second]);
+    pending_.erase(pending_.begin());
+  }
+  if (t > filter_.time()) propagateTo(t);
+}
+
+EpisodeResult EpisodeFusion::finish() {
+  scheduleChanged();
+  if (replay_) {
+    filter_.reset();
+    at_switch_.reset();
+    std::vector<std::size_t> order(all_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [this](std::size_t a, std::size_t b) {
+      return Key{all_[a].time_s, all_[a].sensor, all_[a].seq} <
+             Key{all_[b].time_s, all_[b].sensor, all_[b].seq};
+    });
+    for (const std::size_t i : order) fuse(all_[i]);
+    pending_.clear();
+  }
+  fuseUpTo(scenario_.horizon_s);
+
+  EpisodeResult result;
+  result.episode = episode_;
+  result.realized_cost = filter_.cost();
+  for (const ScheduleSegment& segment : segments_) result.versions.push_back(segment.version->version);
+  result.switch_time_s = switch_time_s_;
+  if (at_switch_) {
+    RolloutOptions options;
+    options.start_time = switch_time_s_;
+    options.start_covariance = at_switch_->second;
+    const CostBracket rest = computeBracket(scenario_, segments_.back().version->schedule, options);
+    result.bracket = {at_switch_->first + rest.info, at_switch_->first + rest.cov};
+  } else if (!segments_.empty()) {
+    result.bracket = bracket_of_(*segments_.front().version);
+  }
+  const Eigen::VectorXd error = plant_.stateAt(episode_, plant_.tickCount()) - filter_.mean();
+  result.nees = error.dot(filter_.covariance().llt().solve(error));
+  result.complete = allSensorsFinished();
+  std::vector<SensorTally> tallies = tallies_;
+  for (const ScheduleSegment& segment : segments_) {
+    const Eigen::VectorXd expected =
+        segment.version->schedule.expectedCounts(segment.from_s, segment.to_s);
+    for (std::size_t j = 0; j < tallies.size(); ++j) {
+      tallies[j].expected += expected(static_cast<Eigen::Index>(j));
+    }
+  }
+  for (const FusedMeasurement& m : all_) {
+    for (const ScheduleSegment& segment : segments_) {
+      if (m.time_s >= segment.from_s &&
+          (m.time_s < segment.to_s || segment.to_s >= scenario_.horizon_s)) {
+        if (segment.version->version != m.version) {
+          ++tallies[static_cast<std::size_t>(m.sensor)].wrong_version;
+        }
+        break;
+      }
+    }
+  }
+  for (std::size_t j = 0; j < tallies.size(); ++j) {
+    SensorTally tally = tallies[j];
+    const std::uint64_t sent = tally.finished ? announced_[j] : highest_seq_plus_one_[j];
+    tally.lost = sent > tally.received ? sent - tally.received : 0;
+    result.sensors.push_back(tally);
+  }
+  for (const FusedMeasurement& m : all_) {
+    result.latencies_s.push_back(1e-9 * static_cast<double>(m.receive_wall_ns - m.publish_wall_ns));
+  }
+  result.rejected = rejected_;
+  return result;
+}
+
+}  // namespace sensornet::emulator

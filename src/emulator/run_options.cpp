@@ -1,0 +1,55 @@
+#include "sensornet/emulator/run_options.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+constexpr const char* kSource = "command line";
+
+// XML text and URIs go to Cyclone verbatim; a plain path to an existing file becomes a URI.
+std::string asCycloneConfig(const std::string& text) {
+  if (text.empty() || text.front() == '<' || text.find("://") != std::string::npos) return text;
+  std::error_code error;
+  const std::filesystem::path path = std::filesystem::absolute(text, error);
+  if (error || !std::filesystem::is_regular_file(path, error)) {
+    throw InputError(kSource, "--cyclone-config",
+                     "Cyclone XML text, a file:// URI or an existing file, got '" + text + "'");
+  }
+  return "file://" + path.string();
+}
+
+}  // namespace
+
+dds::DomainConfig RunOptions::domainConfig() const {
+  dds::validateRunId(run_id, kSource);
+  dds::DomainConfig config = dds::DomainConfig::forRun(run_id);
+  if (domain_id) {
+    config.domain_id = dds::parseDomainId(std::to_string(*domain_id), "--domain-id");
+  }
+  std::string chosen = cyclone_config;
+  if (chosen.empty()) {
+    if (const char* from_environment = std::getenv(kCycloneConfigVariable)) {
+      chosen = from_environment;
+    }
+  }
+  if (!chosen.empty()) config.cyclone_config = asCycloneConfig(chosen);
+  return config;
+}
+
+void addRunOptions(CLI::App& app, RunOptions& options, bool run_id_required) {
+  auto* run = app.add_option("--run-id", options.run_id,
+                             "the emulation run (letters, digits, '.', '_', '-'): its DDS "
+                             "partition is sensornet/ID and its domain id a hash of ID");
+  if (run_id_required) run->required();
+  app.add_option("--domain-id", options.domain_id,
+                 "DDS domain id (0..230) instead of the one hashed from the run id");
+  app.add_option("--cyclone-config", options.cyclone_config,
+                 "Cyclone DDS configuration (XML text, file:// URI or file path) instead of the "
+                 "shipped loopback-only one; default: $SENSORNET_CYCLONE_CONFIG if set");
+}
+
+}  // namespace sensornet::emulator
