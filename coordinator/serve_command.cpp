@@ -343,81 +343,88 @@ class Coordinator {
   }
 
   // Plans (or adopts `given`) and publishes the next version, effective as soon as every
-  // process can switch: switch_margin_s of wall time from now in the running episode, else at
-  // the start of the next one.
+  // process can switch: switch_margin_s of wall time from now in the running episode (planned
+  // over the rest of the horizon from the fused covariance), else at the start of the next
+  // episode. A mid-episode change publishes a second version for the episodes after it,
+  // planned over the whole horizon from P0 with the same settings.
   std::pair<std::uint32_t, std::string> replan(std::uint64_t command_id,
                                                std::optional<RateSchedule> given) {
-    const double T = run_.scenario.horizon_s;
-    std::uint32_t episode = running_ ? current_episode_ : current_episode_ + 1;
-    if (!running_ && episodes_done_ == 0) episode = 0;
-    double at = 0.0;
-    if (running_) {
-      const double now = 1e-9 * static_cast<double>(wallNowNs() - episode_start_ns_) *
-                         options_.time_scale;
-      at = plant_.timeOf(plant_.tickAt(std::max(0.0, now) +
-                                       options_.switch_margin_s * options_.time_scale));
-      if (at >= T) {
-        episode = current_episode_ + 1;
-        at = 0.0;
-      }
-    }
     Scenario planned_for = run_.scenario;
     planned_for.constraints = constraints_;
+    const std::uint32_t next_episode = running_ || episodes_done_ > 0 ? current_episode_ + 1 : 0;
+
+    if (given) {
+      emulator::ScheduleVersion v = makeVersion(planned_for, std::move(*given), "file",
+                                                command_id, next_episode, 0.0);
+      return {publish(std::move(v)), "schedule file"};
+    }
+    // Mid-episode: the rest of this episode, from the latest fused covariance.
+    std::string summary;
+    std::uint32_t first_version = 0;
+    if (running_ && fused_ && fused_->episode == current_episode_) {
+      const double margin = options_.switch_margin_s * options_.time_scale;
+      const double at = plant_.timeOf(plant_.tickAt(emulatedNow() + margin));
+      if (at < run_.scenario.horizon_s) {
+        PlanRequest request = planRequest();
+        request.start_time = at;
+        request.start_covariance = fused_->covariance;
+        const PlanResult plan = planSchedule(planned_for, request);
+        // Planning took time: publish only if every process still has time to switch.
+        if (at >= emulatedNow() + 0.5 * margin) {
+          first_version = publish(makeVersion(planned_for, plan.schedule,
+                                              std::string(describe(surrogate_)), command_id,
+                                              current_episode_, at));
+          summary = "version " + std::to_string(first_version) + " from " + std::to_string(at) +
+                    " s of episode " + std::to_string(current_episode_) + " (" + plan.status +
+                    ", from the fused covariance at " + std::to_string(fused_->time_s) +
+                    " s); ";
+        }
+      }
+    }
+    const PlanResult plan = planSchedule(planned_for, planRequest());
+    const std::uint32_t full = publish(makeVersion(planned_for, plan.schedule,
+                                                   std::string(describe(surrogate_)), command_id,
+                                                   next_episode, 0.0));
+    summary += "version " + std::to_string(full) + " from episode " +
+               std::to_string(next_episode) + " (" + std::string(describe(surrogate_)) + ", " +
+               plan.status + ")";
+    return {first_version != 0 ? first_version : full, summary};
+  }
+
+  [[nodiscard]] double emulatedNow() const {
+    return std::max(0.0, 1e-9 * static_cast<double>(wallNowNs() - episode_start_ns_) *
+                             options_.time_scale);
+  }
+
+  [[nodiscard]] PlanRequest planRequest() const {
+    PlanRequest request;
+    request.surrogate = surrogate_;
+    request.excluded_sensors.assign(excluded_.begin(), excluded_.end());
+    request.warm_start = book_.latest().schedule;
+    request.max_seconds = 30.0;
+    return request;
+  }
+
+  emulator::ScheduleVersion makeVersion(const Scenario& planned_for, RateSchedule schedule,
+                                        std::string surrogate, std::uint64_t command_id,
+                                        std::uint32_t episode, double at) const {
     emulator::ScheduleVersion v;
     v.version = book_.latest().version + 1;
     v.effective_episode = episode;
-    v.command_id = command_id;
-    std::string how;
-    if (given) {
-      v.schedule = std::move(*given);
-      v.surrogate = "file";
-      how = "schedule file";
-    } else {
-      PlanRequest request;
-      request.surrogate = surrogate_;
-      request.excluded_sensors.assign(excluded_.begin(), excluded_.end());
-      request.warm_start = book_.latest().schedule;
-      request.max_seconds = 30.0;
-      const bool mid_episode = at > 0.0 && fused_ && fused_->episode == episode;
-      if (mid_episode) {
-        request.start_time = at;
-        request.start_covariance = fused_->covariance;
-      }
-      const PlanResult plan = planSchedule(planned_for, request);
-      v.schedule = plan.schedule;
-      v.surrogate = std::string(describe(surrogate_));
-      how = v.surrogate + " plan (" + plan.status + ", " + std::to_string(plan.iterations) +
-            " iterations" +
-            (mid_episode ? ", from the fused covariance at " + std::to_string(fused_->time_s) +
-                               " s"
-                         : "") +
-            ")";
-      if (!mid_episode && at > 0.0) {
-        // No fused estimate of this episode yet: the new schedule starts with the next one.
-        episode = current_episode_ + 1;
-        at = 0.0;
-        v.effective_episode = episode;
-      }
-    }
-    // Planning took time: if the switch is now too close, move it to the next episode.
-    if (running_ && at > 0.0) {
-      const double now = 1e-9 * static_cast<double>(wallNowNs() - episode_start_ns_) *
-                         options_.time_scale;
-      if (at < now + 0.5 * options_.switch_margin_s * options_.time_scale) {
-        v.effective_episode = current_episode_ + 1;
-        at = 0.0;
-      }
-    }
     v.effective_time_s = at;
-    v.bracket = computeBracket(planned_for, v.schedule);
+    v.bracket = computeBracket(planned_for, schedule);
+    v.schedule = std::move(schedule);
+    v.surrogate = std::move(surrogate);
+    v.command_id = command_id;
+    return v;
+  }
+
+  std::uint32_t publish(emulator::ScheduleVersion v) {
     mustWrite(emulator::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest, v),
               "schedule");
-    const std::string summary = "version " + std::to_string(v.version) + " from episode " +
-                                std::to_string(v.effective_episode) + " at " +
-                                std::to_string(v.effective_time_s) + " s: " + how;
     const std::uint32_t number = v.version;
     book_.add(std::move(v));
-    return {number, summary};
+    return number;
   }
 
   struct FusedEstimate {
