@@ -1,0 +1,287 @@
+// The emulator's speed targets (issue 4), each with real processes over Cyclone DDS on
+// loopback, one run id per measurement:
+//   startup     30 sensor processes (one sensor each) started at once: the time until all 30
+//               report READY (scenario and schedule received), median of 3.
+//   latency     publish-to-fusion median at light load (the default scenario in real time,
+//               one process per sensor), against Cyclone's own `ddsperf` ping/pong round trip
+//               / 2 measured in the same run, with the same loopback configuration.
+//   throughput  100 sensors at 200 Hz each (20,000 measurements/s, n = 5) in real time,
+//               10 processes of 10 sensors: received, lost, late, latency median and p99.
+//
+//   emulator_bench [startup|latency|throughput|all]
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/emulator/run_options.hpp"
+
+extern char** environ;
+
+namespace {
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+const std::string kCoordinator = SENSORNET_COORDINATOR;
+const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
+const std::string kSensorAgent = SENSORNET_SENSOR_AGENT;
+const std::string kSourceDir = SENSORNET_SOURCE_DIR;
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const std::size_t mid = values.size() / 2;
+  return values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+}
+
+// Processes of one measurement; all stopped (SIGTERM, then SIGKILL) when it goes away.
+class Processes {
+ public:
+  explicit Processes(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
+  ~Processes() {
+    for (const pid_t pid : pids_) ::kill(pid, SIGTERM);
+    const auto deadline = std::chrono::steady_clock::now() + 3s;
+    for (const pid_t pid : pids_) {
+      while (::waitpid(pid, nullptr, WNOHANG) == 0) {
+        if (std::chrono::steady_clock::now() > deadline) {
+          ::kill(pid, SIGKILL);
+          ::waitpid(pid, nullptr, 0);
+          break;
+        }
+        std::this_thread::sleep_for(10ms);
+      }
+    }
+  }
+  pid_t start(const std::string& name, const std::vector<std::string>& argv,
+              const std::vector<std::string>& extra_env = {}) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    const std::string log = (dir_ / (name + ".log")).string();
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    std::vector<std::string> env_storage(extra_env);
+    std::vector<char*> env;
+    for (char** e = environ; *e != nullptr; ++e) env.push_back(*e);
+    for (auto& e : env_storage) env.push_back(e.data());
+    env.push_back(nullptr);
+    pid_t pid = -1;
+    if (posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data()) != 0) {
+      throw std::runtime_error("cannot start " + argv[0]);
+    }
+    posix_spawn_file_actions_destroy(&actions);
+    pids_.push_back(pid);
+    return pid;
+  }
+  // Exit status of `pid` within `timeout`, or -1.
+  int wait(pid_t pid, std::chrono::seconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    int status = 0;
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) return -1;
+      std::this_thread::sleep_for(10ms);
+    }
+    pids_.erase(std::remove(pids_.begin(), pids_.end(), pid), pids_.end());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  [[nodiscard]] const fs::path& dir() const { return dir_; }
+
+ private:
+  fs::path dir_;
+  std::vector<pid_t> pids_;
+};
+
+std::string runId(const std::string& what, int repeat) {
+  return "bench-" + std::to_string(::getpid()) + "-" + what + "-" + std::to_string(repeat);
+}
+
+fs::path writeRandomScenario(const fs::path& dir, int states, int sensors, double budget) {
+  const fs::path path = dir / "scenario.yaml";
+  std::ofstream(path) << "horizon: 3.0\nintervals: 30\nrandom:\n  states: " << states
+                      << "\n  sensors: " << sensors << "\n  rows_per_sensor: 1\n  seed: 1\n"
+                      << "  budget: " << budget << "\n";
+  return path;
+}
+
+nlohmann::json readReport(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) return {};
+  return nlohmann::json::parse(in);
+}
+
+double startupSeconds(int repeat) {
+  const std::string run = runId("startup", repeat);
+  Processes processes(fs::temp_directory_path() / run);
+  const fs::path scenario = writeRandomScenario(processes.dir(), 5, 30, 5.0);
+  sensornet::emulator::RunOptions options;
+  options.run_id = run;
+  sensornet::dds::Domain domain(options.domainConfig());
+  sensornet::dds::Participant participant(domain);
+  sensornet::dds::Topic<sensornet_SensorStatus> topic(participant);
+  sensornet::dds::Reader<sensornet_SensorStatus> statuses(participant, topic);
+
+  processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run});
+  const pid_t coordinator = processes.start(
+      "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
+                      "--surrogate", "uniform", "--episodes", "1", "--time-scale", "10"});
+  std::this_thread::sleep_for(1500ms);  // scenario and schedule published
+  const auto start = std::chrono::steady_clock::now();
+  for (int j = 0; j < 30; ++j) {
+    processes.start("sensor-" + std::to_string(j),
+                    {kSensorAgent, "--run-id", run, "--sensors", std::to_string(j)});
+  }
+  std::set<std::uint32_t> ready;
+  while (ready.size() < 30 && secondsSince(start) < 60.0) {
+    for (auto& s : statuses.take(64).samples) {
+      if (s.sample->state == sensornet_SENSOR_READY ||
+          s.sample->state == sensornet_SENSOR_RUNNING ||
+          s.sample->state == sensornet_SENSOR_EXCLUDED) {
+        ready.insert(s.sample->sensor_id);
+      }
+    }
+    std::this_thread::sleep_for(2ms);
+  }
+  const double seconds = secondsSince(start);
+  const int code = processes.wait(coordinator, 60s);
+  std::printf("  repeat %d: %zu/30 ready after %.3f s; the run %s\n", repeat, ready.size(),
+              seconds, code == 0 ? "completed" : "FAILED");
+  return ready.size() == 30 ? seconds : -1.0;
+}
+
+// Median of ddsperf's per-second median round-trip times (µs), same loopback configuration.
+double ddsperfRoundTripMicroseconds(const fs::path& dir) {
+  fs::create_directories(dir);
+  const fs::path config = dir / "cyclonedds-loopback.xml";
+  std::ofstream(config) << sensornet::dds::loopbackConfigXml();
+  const std::string uri = "CYCLONEDDS_URI=file://" + config.string();
+  const std::string domain = "219";
+  Processes processes(dir / "ddsperf");
+  processes.start("pong", {"/usr/bin/ddsperf", "-i", domain, "-D", "8", "pong"}, {uri});
+  std::this_thread::sleep_for(500ms);
+  const pid_t ping = processes.start(
+      "ping", {"/usr/bin/ddsperf", "-i", domain, "-D", "6", "ping", "100Hz"}, {uri});
+  processes.wait(ping, 20s);
+  std::ifstream log(processes.dir() / "ping.log");
+  std::vector<double> medians;
+  std::string text;
+  while (std::getline(log, text)) {  // "... mean 51.4us min 19.2us 50% 30.6us 90% ..."
+    const auto at = text.find(" 50% ");
+    if (at != std::string::npos) medians.push_back(std::stod(text.substr(at + 5)));
+  }
+  return median(medians);
+}
+
+void latency() {
+  const std::string run = runId("latency", 0);
+  const fs::path dir = fs::temp_directory_path() / run;
+  const double round_trip_us = ddsperfRoundTripMicroseconds(dir);
+  Processes processes(dir / "run");
+  const fs::path report = processes.dir() / "report.json";
+  processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run, "--report",
+                                    report.string()});
+  for (int j = 0; j < 6; ++j) {
+    processes.start("sensor-" + std::to_string(j),
+                    {kSensorAgent, "--run-id", run, "--sensors", std::to_string(j)});
+  }
+  const pid_t coordinator = processes.start(
+      "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario",
+                      kSourceDir + "/scenarios/default.yaml", "--surrogate", "uniform",
+                      "--episodes", "4", "--time-scale", "1"});
+  const int code = processes.wait(coordinator, 120s);
+  std::this_thread::sleep_for(1s);
+  const nlohmann::json r = readReport(report);
+  if (code != 0 || r.is_null()) {
+    std::printf("latency: the run failed (see %s)\n", processes.dir().c_str());
+    return;
+  }
+  const double median_us = 1e6 * r["latency_s"]["median"].get<double>();
+  const double p99_us = 1e6 * r["latency_s"]["p99"].get<double>();
+  std::printf("latency: ddsperf round trip median %.1f us, /2 = %.1f us\n", round_trip_us,
+              round_trip_us / 2);
+  std::printf("         publish-to-fusion median %.1f us, p99 %.1f us over %d measurements "
+              "(%.2fx round trip / 2; target <= 2x)\n",
+              median_us, p99_us, r["summary"]["received"].get<int>(),
+              median_us / (round_trip_us / 2));
+}
+
+void throughput() {
+  const std::string run = runId("throughput", 0);
+  Processes processes(fs::temp_directory_path() / run);
+  const fs::path scenario = writeRandomScenario(processes.dir(), 5, 100, 20000.0);
+  const fs::path report = processes.dir() / "report.json";
+  processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run, "--report",
+                                    report.string()});
+  for (int block = 0; block < 10; ++block) {
+    const std::string ids = std::to_string(10 * block) + "-" + std::to_string(10 * block + 9);
+    processes.start("sensors-" + std::to_string(block),
+                    {kSensorAgent, "--run-id", run, "--sensors", ids});
+  }
+  const int episodes = 3;
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t coordinator = processes.start(
+      "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
+                      "--surrogate", "uniform", "--episodes", std::to_string(episodes),
+                      "--time-scale", "1", "--ready-timeout", "60"});
+  const int code = processes.wait(coordinator, 180s);
+  const double wall = secondsSince(start);
+  std::this_thread::sleep_for(1s);
+  const nlohmann::json r = readReport(report);
+  if (code != 0 || r.is_null()) {
+    std::printf("throughput: the run failed (see %s)\n", processes.dir().c_str());
+    return;
+  }
+  const auto& s = r["summary"];
+  std::printf("throughput: 100 sensors x 200 Hz, n = 5, %d episodes of 3 s in real time (%.1f s "
+              "wall with start-up)\n",
+              episodes, wall);
+  std::printf("            received %lld of %.0f expected (%.0f/s), lost %lld, late %lld, "
+              "latency median %.0f us, p99 %.0f us\n",
+              s["received"].get<long long>(), s["expected"].get<double>(),
+              s["received"].get<double>() / (3.0 * episodes), s["lost"].get<long long>(),
+              s["late"].get<long long>(), 1e6 * r["latency_s"]["median"].get<double>(),
+              1e6 * r["latency_s"]["p99"].get<double>());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string what = argc > 1 ? argv[1] : "all";
+  if (what != "all" && what != "startup" && what != "latency" && what != "throughput") {
+    std::fprintf(stderr, "usage: emulator_bench [startup|latency|throughput|all]\n");
+    return 2;
+  }
+  if (what == "all" || what == "startup") {
+    std::printf("startup: 30 sensor processes\n");
+    std::vector<double> times;
+    for (int repeat = 0; repeat < 3; ++repeat) times.push_back(startupSeconds(repeat));
+    std::printf("startup: median %.3f s (target < 3 s)\n", median(times));
+  }
+  if (what == "all" || what == "latency") latency();
+  if (what == "all" || what == "throughput") throughput();
+  return 0;
+}
