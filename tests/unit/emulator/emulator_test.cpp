@@ -1,0 +1,309 @@
+// The emulator's shared pieces, without DDS: schedule versions, sensor ids, the sensors'
+// arrival timelines, the fusion of one episode in timestamp order, and the run summary. Each is
+// checked against a direct computation with the math core (the CD-KF run in order by hand,
+// Poisson expectations, sample statistics computed here).
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "sensornet/core/cdkf.hpp"
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/emulator/episode_fusion.hpp"
+#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/emulator/sensor_ids.hpp"
+#include "sensornet/emulator/sensor_timeline.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+Scenario smallScenario() {
+  RandomPlantSpec spec;
+  spec.state_dim = 3;
+  spec.sensor_count = 4;
+  spec.seed = 9;
+  spec.intervals = 6;
+  spec.budget = 8.0;
+  return generateRandomScenario(spec);
+}
+
+ScheduleVersion versionOf(std::uint32_t number, const RateSchedule& schedule,
+                          std::uint32_t episode = 0, double at = 0.0) {
+  ScheduleVersion v;
+  v.version = number;
+  v.effective_episode = episode;
+  v.effective_time_s = at;
+  v.schedule = schedule;
+  v.surrogate = "test";
+  return v;
+}
+
+// Sensor 0 taken out of service: the other three share the budget.
+RateSchedule withoutSensorZero(const Scenario& s) {
+  Eigen::MatrixXd rates = uniformSchedule(s).rates();
+  rates.col(0).setZero();
+  rates *= 4.0 / 3.0;
+  return RateSchedule(s.horizon_s, rates);
+}
+
+TEST(ScheduleBook, KeepsVersionsInOrderAndSplitsTheEpisodeOfASwitch) {
+  const Scenario s = smallScenario();
+  ScheduleBook book;
+  EXPECT_EQ(book.add(versionOf(1, uniformSchedule(s))), ScheduleBook::Outcome::Accepted);
+  EXPECT_EQ(book.add(versionOf(3, withoutSensorZero(s), 2, 1.25)), ScheduleBook::Outcome::Accepted);
+  EXPECT_EQ(book.add(versionOf(2, uniformSchedule(s), 5, 0.0)), ScheduleBook::Outcome::Stale);
+  EXPECT_EQ(book.add(versionOf(3, uniformSchedule(s), 5, 0.0)), ScheduleBook::Outcome::Stale);
+  EXPECT_EQ(book.inForce(2, 1.0)->version, 1u);
+  EXPECT_EQ(book.inForce(2, 1.25)->version, 3u);
+  EXPECT_EQ(book.inForce(3, 0.0)->version, 3u);
+
+  const auto before = book.segments(1, s.horizon_s);
+  ASSERT_EQ(before.size(), 1u);
+  EXPECT_EQ(before[0].version->version, 1u);
+  const auto during = book.segments(2, s.horizon_s);
+  ASSERT_EQ(during.size(), 2u);
+  EXPECT_EQ(during[0].to_s, 1.25);
+  EXPECT_EQ(during[1].from_s, 1.25);
+  EXPECT_EQ(during[1].to_s, s.horizon_s);
+  EXPECT_EQ(during[1].version->version, 3u);
+  EXPECT_TRUE(ScheduleBook().segments(0, 3.0).empty());
+}
+
+TEST(SensorIds, ParsesSinglesListsAndRangesAndRejectsTheRest) {
+  EXPECT_EQ(parseSensorIds("3", "t"), std::vector<int>{3});
+  EXPECT_EQ(parseSensorIds("0-2,7,1", "t"), (std::vector<int>{0, 1, 2, 7}));
+  for (const char* bad : {"", "a", "-1", "3-1", "1,,2", "2-", "1.5", "99999999"}) {
+    EXPECT_THROW((void)parseSensorIds(bad, "t"), InputError) << bad;
+  }
+}
+
+// Recomputing a timeline after a new version must not change what was drawn before its
+// effective time, and after it only the new rates count (sensor 0 is silent).
+TEST(SensorTimeline, ANewVersionChangesOnlyWhatComesAfterItsEffectiveTime) {
+  const Scenario s = smallScenario();
+  const EmulatedPlant plant(s, 4);
+  const std::vector<int> sensors = {0, 1, 2, 3};
+  const double at = plant.timeOf(plant.tickAt(1.3));
+  for (std::uint32_t episode = 0; episode < 50; ++episode) {
+    ScheduleBook book;
+    (void)book.add(versionOf(1, uniformSchedule(s)));
+    const auto before = sensorTimeline(book, plant, 4, episode, sensors, s.horizon_s);
+    (void)book.add(versionOf(2, withoutSensorZero(s), episode, at));
+    const auto after = sensorTimeline(book, plant, 4, episode, sensors, s.horizon_s);
+    std::vector<TimedArrival> head_before, head_after;
+    for (const auto& a : before) if (a.time_s < at) head_before.push_back(a);
+    for (const auto& a : after) if (a.time_s < at) head_after.push_back(a);
+    ASSERT_EQ(head_before.size(), head_after.size()) << "episode " << episode;
+    for (std::size_t i = 0; i < head_before.size(); ++i) {
+      EXPECT_EQ(head_before[i].tick, head_after[i].tick);
+      EXPECT_EQ(head_before[i].sensor, head_after[i].sensor);
+      EXPECT_EQ(head_after[i].version, 1u);
+    }
+    for (const auto& a : after) {
+      if (a.time_s >= at) {
+        EXPECT_EQ(a.version, 2u);
+        EXPECT_NE(a.sensor, 0);
+      }
+    }
+  }
+}
+
+// Counts over many episodes against the schedule: Pearson's chi-square at level 0.001.
+TEST(SensorTimeline, CountsPerSensorMatchTheScheduleInChiSquare) {
+  const Scenario s = smallScenario();
+  const EmulatedPlant plant(s, 4);
+  ScheduleBook book;
+  Eigen::MatrixXd rates = uniformSchedule(s).rates();
+  rates.col(1) *= 0.25;  // unequal rates
+  (void)book.add(versionOf(1, RateSchedule(s.horizon_s, rates)));
+  const int episodes = 400;
+  Eigen::VectorXd counts = Eigen::VectorXd::Zero(4);
+  for (std::uint32_t e = 0; e < episodes; ++e) {
+    for (const auto& a : sensorTimeline(book, plant, 11, e, {0, 1, 2, 3}, s.horizon_s)) {
+      counts(a.sensor) += 1.0;
+    }
+  }
+  const Eigen::VectorXd expected =
+      episodes * book.latest().schedule.expectedCounts(0.0, s.horizon_s);
+  const double statistic = ((counts - expected).array().square() / expected.array()).sum();
+  EXPECT_LT(statistic, 18.47) << counts.transpose() << " vs " << expected.transpose();  // χ²(4)
+}
+
+// Measurements of one episode from a shuffled, partly late arrival order.
+class EpisodeFusionTest : public ::testing::Test {
+ protected:
+  EpisodeFusionTest() : scenario_(smallScenario()), plant_(scenario_, 21) {
+    (void)book_.add(versionOf(1, uniformSchedule(scenario_)));
+  }
+
+  std::vector<FusedMeasurement> measurements(std::uint32_t episode) const {
+    std::vector<FusedMeasurement> all;
+    std::vector<std::uint64_t> seq(4, 0);
+    for (const auto& a :
+         sensorTimeline(book_, plant_, 21, episode, {0, 1, 2, 3}, scenario_.horizon_s)) {
+      FusedMeasurement m;
+      m.sensor = a.sensor;
+      m.seq = seq[static_cast<std::size_t>(a.sensor)]++;
+      m.time_s = a.time_s;
+      m.version = a.version;
+      m.z = plant_.measure(plant_.stateAt(episode, a.tick), a.sensor, episode, m.seq);
+      all.push_back(m);
+    }
+    return all;
+  }
+
+  // The CD-KF over the same measurements in time order, by hand.
+  double inOrderCost(std::vector<FusedMeasurement> all) const {
+    std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+      return std::tie(a.time_s, a.sensor) < std::tie(b.time_s, b.sensor);
+    });
+    CdKalmanFilter filter(scenario_);
+    for (const auto& m : all) {
+      filter.propagateTo(m.time_s);
+      filter.update(m.sensor, m.z);
+    }
+    filter.propagateTo(scenario_.horizon_s);
+    return filter.cost();
+  }
+
+  EpisodeFusion::BracketOf bracketOf() const {
+    return [this](const ScheduleVersion& v) { return computeBracket(scenario_, v.schedule); };
+  }
+
+  Scenario scenario_;
+  EmulatedPlant plant_;
+  ScheduleBook book_;
+};
+
+TEST_F(EpisodeFusionTest, FusesInTimestampOrderWhateverTheArrivalOrder) {
+  for (std::uint32_t episode = 0; episode < 5; ++episode) {
+    std::vector<FusedMeasurement> all = measurements(episode);
+    ASSERT_GT(all.size(), 4u);
+    std::vector<FusedMeasurement> shuffled = all;
+    std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(episode));
+    EpisodeFusion fusion(scenario_, plant_, book_, episode, bracketOf());
+    // Half arrive, the filter moves on to 1.5 s, then the rest: some are late.
+    const std::size_t half = shuffled.size() / 2;
+    for (std::size_t i = 0; i < half; ++i) EXPECT_FALSE(fusion.add(shuffled[i]));
+    fusion.fuseUpTo(1.5);
+    for (std::size_t i = half; i < shuffled.size(); ++i) EXPECT_FALSE(fusion.add(shuffled[i]));
+    std::vector<std::uint64_t> sent(4, 0);
+    for (const auto& m : all) ++sent[static_cast<std::size_t>(m.sensor)];
+    for (int j = 0; j < 4; ++j) fusion.finishSensor(j, sent[static_cast<std::size_t>(j)]);
+    EXPECT_TRUE(fusion.allSensorsFinished());
+    const EpisodeResult r = fusion.finish();
+    EXPECT_NEAR(r.realized_cost, inOrderCost(all), 1e-10 * r.realized_cost);
+    EXPECT_TRUE(r.complete);
+    std::uint64_t received = 0, lost = 0;
+    for (const auto& t : r.sensors) {
+      received += t.received;
+      lost += t.lost;
+      EXPECT_EQ(t.wrong_version, 0u);
+    }
+    EXPECT_EQ(received, all.size());
+    EXPECT_EQ(lost, 0u);
+    const CostBracket bracket = computeBracket(scenario_, uniformSchedule(scenario_));
+    EXPECT_EQ(r.bracket.info, bracket.info);
+    EXPECT_EQ(r.bracket.cov, bracket.cov);
+    EXPECT_EQ(r.latencies_s.size(), all.size());
+  }
+}
+
+TEST_F(EpisodeFusionTest, RejectsMalformedAndDuplicateMeasurementsAndCountsLosses) {
+  std::vector<FusedMeasurement> all = measurements(0);
+  EpisodeFusion fusion(scenario_, plant_, book_, 0, bracketOf());
+  FusedMeasurement bad = all[0];
+  bad.sensor = 9;
+  EXPECT_TRUE(fusion.add(bad));
+  bad = all[0];
+  bad.z = Eigen::VectorXd::Constant(1, std::nan(""));
+  EXPECT_TRUE(fusion.add(bad));
+  bad = all[0];
+  bad.time_s = 99.0;
+  EXPECT_TRUE(fusion.add(bad));
+  EXPECT_FALSE(fusion.add(all[0]));
+  EXPECT_TRUE(fusion.add(all[0]));  // duplicate seq
+  // Sensor all[0].sensor announces one more than it delivered: one lost.
+  fusion.finishSensor(all[0].sensor, 2);
+  const EpisodeResult r = fusion.finish();
+  EXPECT_EQ(r.rejected, 4u);
+  EXPECT_EQ(r.sensors[static_cast<std::size_t>(all[0].sensor)].lost, 1u);
+  EXPECT_FALSE(r.complete);
+}
+
+// With a switch at s, the bracket is the realized ∫<W,P> up to s plus the surrogates of the new
+// version from the fused P(s), computed here by hand with the core filter and rollouts.
+TEST_F(EpisodeFusionTest, BracketsASwitchedEpisodeFromTheFusedCovarianceAtTheSwitch) {
+  Scenario weighted = scenario_;
+  weighted.cost.W = Eigen::MatrixXd::Identity(3, 3);  // a running cost, so the realized part counts
+  const double at = plant_.timeOf(plant_.tickAt(1.1));
+  ScheduleBook book;
+  (void)book.add(versionOf(1, uniformSchedule(weighted)));
+  (void)book.add(versionOf(2, withoutSensorZero(weighted), 0, at));
+  std::vector<FusedMeasurement> all;
+  std::vector<std::uint64_t> seq(4, 0);
+  for (const auto& a : sensorTimeline(book, plant_, 21, 0, {0, 1, 2, 3}, weighted.horizon_s)) {
+    FusedMeasurement m;
+    m.sensor = a.sensor;
+    m.seq = seq[static_cast<std::size_t>(a.sensor)]++;
+    m.time_s = a.time_s;
+    m.version = a.version;
+    m.z = plant_.measure(plant_.stateAt(0, a.tick), a.sensor, 0, m.seq);
+    all.push_back(m);
+  }
+  EpisodeFusion fusion(weighted, plant_, book, 0,
+                       [&](const ScheduleVersion& v) { return computeBracket(weighted, v.schedule); });
+  for (const auto& m : all) EXPECT_FALSE(fusion.add(m));
+  const EpisodeResult r = fusion.finish();
+
+  CdKalmanFilter filter(weighted);
+  for (const auto& m : all) {
+    if (m.time_s > at) break;
+    filter.propagateTo(m.time_s);
+    filter.update(m.sensor, m.z);
+  }
+  filter.propagateTo(at);
+  RolloutOptions options;
+  options.start_time = at;
+  options.start_covariance = filter.covariance();
+  const CostBracket rest = computeBracket(weighted, withoutSensorZero(weighted), options);
+  EXPECT_NEAR(r.bracket.info, filter.runningCost() + rest.info, 1e-9 * r.bracket.info);
+  EXPECT_NEAR(r.bracket.cov, filter.runningCost() + rest.cov, 1e-9 * r.bracket.cov);
+  EXPECT_EQ(r.versions, (std::vector<std::uint32_t>{1, 2}));
+  EXPECT_EQ(r.switch_time_s, at);
+  for (const auto& t : r.sensors) EXPECT_EQ(t.wrong_version, 0u);
+}
+
+TEST(RunReport, SummarizesEpisodesLikeADirectComputation) {
+  RunReport report("r", "d", 2, 3);
+  const std::vector<double> costs = {3.0, 5.0, 10.0, 2.0};
+  for (std::size_t i = 0; i < costs.size(); ++i) {
+    EpisodeResult e;
+    e.episode = static_cast<std::uint32_t>(i);
+    e.realized_cost = costs[i];
+    e.bracket = {1.0 + static_cast<double>(i), 20.0};
+    e.nees = 3.0;
+    e.sensors.resize(2);
+    e.sensors[0].received = 4;
+    e.sensors[0].expected = 4.5;
+    e.latencies_s = {0.001 * static_cast<double>(i + 1)};
+    report.add(e);
+  }
+  const RunSummary s = report.summary();
+  EXPECT_DOUBLE_EQ(s.mean, 5.0);
+  EXPECT_NEAR(s.std_dev, std::sqrt((4.0 + 0.0 + 25.0 + 9.0) / 3.0), 1e-12);
+  EXPECT_NEAR(s.ci95, 1.96 * s.std_dev / 2.0, 1e-12);
+  EXPECT_DOUBLE_EQ(s.bracket_mean.info, 2.5);
+  EXPECT_TRUE(s.meets_bracket);
+  EXPECT_EQ(s.received, 16u);
+  EXPECT_DOUBLE_EQ(s.expected, 18.0);
+  EXPECT_NEAR(s.latency_median_s, 0.0025, 1e-15);
+  EXPECT_DOUBLE_EQ(quantile({1.0, 2.0, 3.0, 4.0, 5.0}, 0.99), 4.96);
+}
+
+}  // namespace
+}  // namespace sensornet::emulator
