@@ -81,10 +81,10 @@ class FusionCenter {
     bool shutdown = false;
     while (!shutdown && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
+      readMeasurements();  // first: the receive time is taken as soon as the wait returns
       readScenario();
       readSchedules();
       shutdown = readControls();
-      readMeasurements();
       advance();
     }
     // Finish what is open (incomplete episodes are marked so in the report).
@@ -188,9 +188,12 @@ class FusionCenter {
 
   void readMeasurements() {
     for (;;) {
+      const std::int64_t received_ns = wallNowNs();
       const std::size_t count = measurement_reader_.takeEach(
           256,
-          [this](const sensornet_Measurement& m, const dds::SampleInfo&) { accept(m); },
+          [this, received_ns](const sensornet_Measurement& m, const dds::SampleInfo&) {
+            accept(m, received_ns);
+          },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
             if (info.instance_state == dds::InstanceState::NoWriters) {
               spdlog::warn("sensor {} has no live writer any more", key.sensor_id);
@@ -200,7 +203,7 @@ class FusionCenter {
     }
   }
 
-  void accept(const sensornet_Measurement& m) {
+  void accept(const sensornet_Measurement& m, std::int64_t received_ns) {
     emulator::FusedMeasurement fused;
     fused.sensor = static_cast<int>(m.sensor_id);
     fused.seq = m.seq;
@@ -209,7 +212,7 @@ class FusionCenter {
     const auto z = dds::viewSequence(m.z);
     fused.z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(z.size()));
     fused.publish_wall_ns = m.publish_wall_time_ns;
-    fused.receive_wall_ns = wallNowNs();
+    fused.receive_wall_ns = received_ns;
     if (dds::viewString(m.run_id) != options_.run.run_id) {
       ++rejected_wire_;
       spdlog::warn("rejected a measurement of another run '{}'", dds::viewString(m.run_id));
