@@ -8,7 +8,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools
   libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   coinor-libipopt-dev
-  libgtest-dev libgmock-dev
+  libgtest-dev libgmock-dev docker-compose
 )
 
 missing=()

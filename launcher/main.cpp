@@ -1,0 +1,29 @@
+// sensornet: launches an emulation on this host and talks to a running one.
+//   sensornet launch SCENARIO [...]   run coordinator, fusion center and sensors; show progress
+//   sensornet replan [...]            change the schedule of the running emulation
+//   sensornet status [...]            show its sensors and schedule
+
+#include <vector>
+
+#include "launch_command.hpp"
+#include "replan_command.hpp"
+#include "sensornet/io/command_line.hpp"
+#include "status_command.hpp"
+
+int main(int argc, char** argv) {
+  return sensornet::runProgram("sensornet", [&] {
+    sensornet::configureLogging("sensornet");
+    CLI::App app{
+        "sensornet: a multi-process emulator of sensor networks for continuous-discrete Kalman "
+        "filtering over Cyclone DDS. Start a run with `sensornet launch scenarios/default.yaml`; "
+        "while it runs, `sensornet replan` changes its schedule and `sensornet status` shows its "
+        "sensors."};
+    app.name("sensornet");
+    app.require_subcommand(1);
+    const std::vector<sensornet::Subcommand> subcommands = {
+        sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
+        sensornet::launcher::addStatusCommand(app)};
+    if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
+    return sensornet::runChosenSubcommand(subcommands);
+  });
+}

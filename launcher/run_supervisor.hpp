@@ -1,0 +1,56 @@
+#pragma once
+// Watching the processes of a launched run until they are done or the run must stop: shows
+// progress while it waits, and turns what happens (a child failing, Ctrl-C, the time limit)
+// into the one reason the run ended.
+//
+//   RunSupervisor supervisor(group, progress, deadline);
+//   if (supervisor.awaitExit("coordinator", RunSupervisor::kNoLimit) && ...) { ... }
+//   if (const auto& failure = supervisor.failure()) report(*failure);
+
+#include <chrono>
+#include <optional>
+#include <set>
+#include <string>
+
+#include "process_group.hpp"
+#include "progress_watcher.hpp"
+
+namespace sensornet::launcher {
+
+enum class RunFailureKind { ChildFailed, Interrupted, TimedOut };
+
+struct RunFailure {
+  RunFailureKind kind = RunFailureKind::ChildFailed;
+  std::string child;   // the child that failed (ChildFailed)
+  std::string reason;  // one line: "exited with status 1", "interrupted by SIGINT", ...
+  int signal = 0;      // the interrupting signal (Interrupted)
+};
+
+class RunSupervisor {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr std::chrono::milliseconds kNoLimit = std::chrono::hours(24 * 365);
+
+  // `deadline`: when the whole run must be over (--timeout), if ever.
+  RunSupervisor(ProcessGroup& group, ProgressWatcher& progress,
+                std::optional<Clock::time_point> deadline);
+
+  // Watches until `name` has ended successfully (true), or until the run fails or `limit`
+  // passes (false; failure() tells which, and stays empty when only `limit` passed).
+  [[nodiscard]] bool awaitExit(const std::string& name, std::chrono::milliseconds limit);
+  // Records a failure found by the caller (the first one recorded wins).
+  void fail(RunFailure failure);
+  [[nodiscard]] const std::optional<RunFailure>& failure() const noexcept { return failure_; }
+
+ private:
+  // Shows the progress reported meanwhile and collects the children that ended.
+  void step();
+
+  ProcessGroup& group_;
+  ProgressWatcher& progress_;
+  std::optional<Clock::time_point> deadline_;
+  std::set<std::string> ended_;
+  std::optional<RunFailure> failure_;
+};
+
+}  // namespace sensornet::launcher

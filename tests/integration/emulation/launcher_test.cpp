@@ -1,0 +1,433 @@
+// The `sensornet` launcher with real processes over Cyclone DDS on loopback: a launched run
+// completes and leaves no process behind; bad input fails fast; a signal, a failing child or a
+// killed launcher stops every child; `status` and `replan` reach a live run (found through the
+// current-run record) and fail clearly when no run answers.
+//
+// "No process left behind" is checked independently of what the launcher says: every test
+// uses its own run id, and no process on the host may still carry that run id on its command
+// line (every child gets --run-id), nor be one of the pids the sensors reported.
+
+#include <dirent.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sensornet/dds/domain.hpp"
+#include "support/process.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using sensornet::testing::ProcessResult;
+using sensornet::testing::runProcess;
+using namespace std::chrono_literals;
+
+const std::string kLauncher = SENSORNET_LAUNCHER;
+const std::string kScenario = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml";
+constexpr int kDefaultSensors = 6;
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Processes (other than this one) whose command line contains `token`.
+std::vector<pid_t> processesMentioning(const std::string& token) {
+  std::vector<pid_t> found;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = std::stoi(name);
+    if (pid == ::getpid()) continue;
+    std::string cmdline = readText(entry.path() / "cmdline");
+    for (char& c : cmdline) c = c == '\0' ? ' ' : c;
+    if (cmdline.find(token) != std::string::npos) found.push_back(pid);
+  }
+  return found;
+}
+
+// Waits until no process mentions `token`; the ones still there after `limit`.
+std::vector<pid_t> leftoversAfter(const std::string& token, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  std::vector<pid_t> left = processesMentioning(token);
+  while (!left.empty() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(50ms);
+    left = processesMentioning(token);
+  }
+  return left;
+}
+
+// The `sensornet launch` process of the run, if it is running.
+std::optional<pid_t> launcherOf(const std::string& run_id) {
+  for (const pid_t pid : processesMentioning(run_id)) {
+    const std::string cmdline = readText("/proc/" + std::to_string(pid) + "/cmdline");
+    if (cmdline.starts_with(kLauncher + '\0' + "launch" + '\0')) return pid;
+  }
+  return std::nullopt;
+}
+
+bool isAliveWith(pid_t pid, const std::string& token) {
+  std::string cmdline = readText("/proc/" + std::to_string(pid) + "/cmdline");
+  for (char& c : cmdline) c = c == '\0' ? ' ' : c;
+  return cmdline.find(token) != std::string::npos;
+}
+
+// Kills whatever still carries the run id when the test ends, pass or fail, so that a failing
+// test never leaves processes for the next one.
+class LeftoverGuard {
+ public:
+  explicit LeftoverGuard(std::string run_id) : run_id_(std::move(run_id)) {}
+  LeftoverGuard(const LeftoverGuard&) = delete;
+  LeftoverGuard& operator=(const LeftoverGuard&) = delete;
+  ~LeftoverGuard() {
+    for (const pid_t pid : processesMentioning(run_id_)) ::kill(pid, SIGKILL);
+  }
+
+ private:
+  std::string run_id_;
+};
+
+// A program running on a thread of its own (runProcess with a time limit), for the tests that
+// act on a run while it goes on.
+class RunningProgram {
+ public:
+  RunningProgram(std::vector<std::string> argv, std::chrono::milliseconds limit)
+      : thread_([this, argv = std::move(argv), limit] {
+          result_ = runProcess(argv, limit);
+          done_ = true;
+        }) {}
+  // Blocks until the program ended.
+  const ProcessResult& result() {
+    if (thread_.joinable()) thread_.join();
+    return result_;
+  }
+  [[nodiscard]] bool done() const { return done_; }
+
+ private:
+  ProcessResult result_;
+  std::atomic<bool> done_{false};
+  std::jthread thread_;
+};
+
+class Launcher : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/sensornet-launcher-test-XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    // Keep the current-run record of these tests away from the user's.
+    ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
+    ::unsetenv("SENSORNET_CYCLONE_CONFIG");
+    ::unsetenv("SENSORNET_BIN_DIR");
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    run_id_ = "lt-" + std::to_string(::getpid()) + "-" + std::string(info->name()).substr(0, 24);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+
+  [[nodiscard]] std::vector<std::string> launchArgs(int episodes, double time_scale) const {
+    std::ostringstream scale;
+    scale << time_scale;
+    return {kLauncher,
+            "launch",
+            kScenario,
+            "--episodes",
+            std::to_string(episodes),
+            "--time-scale",
+            scale.str(),
+            "--run-id",
+            run_id_,
+            "--report",
+            (dir_ / "report.json").string(),
+            "--log-dir",
+            (dir_ / "logs").string()};
+  }
+
+  // Polls `sensornet status --json` until every sensor says it is running.
+  std::optional<json> waitUntilRunning(std::chrono::seconds limit) {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < deadline) {
+      const ProcessResult r = runProcess({kLauncher, "status", "--wait", "1", "--json"}, 10s);
+      if (r.exit_code == 0) {
+        const json doc = json::parse(r.out, nullptr, false);
+        int running = 0;
+        for (const json& s : doc.value("sensors", json::array()))
+          running += s["state"] == "running";
+        if (running == kDefaultSensors) return doc;
+      }
+      std::this_thread::sleep_for(200ms);
+    }
+    return std::nullopt;
+  }
+
+  fs::path dir_;
+  std::string run_id_;
+};
+
+TEST_F(Launcher, HelpTeachesLaunchReplanAndStatus) {
+  const ProcessResult top = runProcess({kLauncher, "--help"}, 10s);
+  EXPECT_EQ(top.exit_code, 0);
+  for (const char* word : {"launch", "replan", "status"}) {
+    EXPECT_NE(top.out.find(word), std::string::npos) << word;
+  }
+  const ProcessResult launch = runProcess({kLauncher, "launch", "--help"}, 10s);
+  EXPECT_EQ(launch.exit_code, 0);
+  EXPECT_NE(launch.out.find("sensornet replan"), std::string::npos) << launch.out;
+  EXPECT_NE(launch.out.find("sensornet status"), std::string::npos) << launch.out;
+  EXPECT_NE(launch.out.find("--sensors-per-process"), std::string::npos);
+  EXPECT_NE(launch.out.find("--time-scale"), std::string::npos);
+}
+
+TEST_F(Launcher, BadScenarioFailsFastWithOneLineAndExitTwo) {
+  const fs::path bad = dir_ / "bad.yaml";
+  std::ofstream(bad) << "horizon: soon\nintervals: 30\n";
+  std::vector<std::string> argv = launchArgs(3, 10);
+  argv[2] = bad.string();
+  const auto started = std::chrono::steady_clock::now();
+  const ProcessResult r = runProcess(argv, 10s);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_LT(std::chrono::steady_clock::now() - started, 3s);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("bad.yaml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("horizon"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "logs")) << "nothing may start on bad input";
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+}
+
+TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(3, 10);
+  argv.push_back("--json");
+  const ProcessResult r = runProcess(argv, 60s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  // The report is the fusion center's, for this run and its 3 episodes.
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object()) << "no report at " << dir_ / "report.json";
+  EXPECT_EQ(report["run_id"], run_id_);
+  EXPECT_EQ(report["episodes"], 3);
+  EXPECT_EQ(report["status"], "completed");
+
+  // One JSON line on stdout: the report's summary plus run id and report path.
+  const json line = json::parse(r.out, nullptr, false);
+  ASSERT_TRUE(line.is_object()) << r.out;
+  EXPECT_EQ(line["run_id"], run_id_);
+  EXPECT_EQ(line["report"], (dir_ / "report.json").string());
+  EXPECT_EQ(line["mean"], report["summary"]["mean"]);
+  EXPECT_EQ(line["meets_bracket"], report["summary"]["meets_bracket"]);
+
+  // Progress: one line per episode.
+  for (int episode = 1; episode <= 3; ++episode) {
+    EXPECT_NE(r.err.find("episode " + std::to_string(episode) + "/3: realized"), std::string::npos)
+        << r.err;
+  }
+  // It started 1 fusion center, 6 sensor agents (one sensor each) and 1 coordinator, and none
+  // of them is left.
+  std::vector<pid_t> pids;
+  const std::string marker = " (pid ";
+  for (std::size_t at = r.err.find(marker); at != std::string::npos;
+       at = r.err.find(marker, at + 1)) {
+    pids.push_back(std::stoi(r.err.substr(at + marker.size())));
+  }
+  EXPECT_EQ(pids.size(), 2u + kDefaultSensors) << r.err;
+  for (const pid_t pid : pids) EXPECT_FALSE(isAliveWith(pid, run_id_)) << pid;
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+  // The current-run record is gone with the run.
+  EXPECT_FALSE(fs::exists(dir_ / "sensornet" / "current-run"));
+}
+
+TEST_F(Launcher, SensorsPerProcessPutsBlocksOfSensorsInOneAgent) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(2, 10);
+  argv.insert(argv.end(), {"--sensors-per-process", "4"});
+  const ProcessResult r = runProcess(argv, 60s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // ceil(6 / 4) = 2 agents: sensors 0-3 and 4-5.
+  EXPECT_NE(r.err.find("started sensor_agent-0-3 "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("started sensor_agent-4-5 "), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("started sensor_agent-1"), std::string::npos) << r.err;
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object());
+  EXPECT_EQ(report["sensors"].size(), static_cast<std::size_t>(kDefaultSensors));
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+}
+
+TEST_F(Launcher, DomainIdReachesEveryChild) {
+  const LeftoverGuard guard(run_id_);
+  // A domain other than the one the run id hashes to.
+  const int domain = sensornet::dds::domainIdForRun(run_id_) == 7 ? 8 : 7;
+  std::vector<std::string> argv = launchArgs(2, 10);
+  argv.insert(argv.end(), {"--domain-id", std::to_string(domain)});
+  const ProcessResult r = runProcess(argv, 60s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The progress comes over DDS from the fusion center: it reaches the launcher only if both
+  // are on that domain.
+  EXPECT_NE(r.err.find("episode 2/2: realized"), std::string::npos) << r.err;
+}
+
+TEST_F(Launcher, TimeoutStopsTheRunAndFails) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(100, 1);
+  argv.insert(argv.end(), {"--timeout", "2"});
+  const auto started = std::chrono::steady_clock::now();
+  const ProcessResult r = runProcess(argv, 30s);
+  const auto took = std::chrono::steady_clock::now() - started;
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("did not end within --timeout"), std::string::npos) << r.err;
+  EXPECT_GE(took, 2s);
+  EXPECT_LT(took, 8s) << "2 s, then at most 3 s of grace";
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+}
+
+TEST_F(Launcher, SigtermMidRunStopsEveryChild) {
+  const LeftoverGuard guard(run_id_);
+  RunningProgram launcher(launchArgs(100, 1), 60s);
+  // Mid-run: every sensor says it is running (found through the current-run record).
+  const std::optional<json> status = waitUntilRunning(25s);
+  ASSERT_TRUE(status.has_value()) << "the run never got going";
+  std::vector<pid_t> sensor_pids;
+  for (const json& s : (*status)["sensors"]) sensor_pids.push_back(s["pid"].get<pid_t>());
+
+  const std::optional<pid_t> launcher_pid = launcherOf(run_id_);
+  ASSERT_TRUE(launcher_pid.has_value());
+  ASSERT_EQ(::kill(*launcher_pid, SIGTERM), 0);
+  const auto stopped = std::chrono::steady_clock::now();
+  const ProcessResult& r = launcher.result();
+  EXPECT_LT(std::chrono::steady_clock::now() - stopped, 8s) << "3 s grace, then SIGKILL";
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("interrupted by SIGTERM"), std::string::npos) << r.err;
+  for (const pid_t pid : sensor_pids) EXPECT_FALSE(isAliveWith(pid, run_id_)) << pid;
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+}
+
+TEST_F(Launcher, KilledLauncherTakesItsChildrenAlong) {
+  const LeftoverGuard guard(run_id_);
+  RunningProgram launcher(launchArgs(100, 1), 60s);
+  // Wait until all 8 children are up (each carries the run id), then kill the launcher hard.
+  const auto deadline = std::chrono::steady_clock::now() + 15s;
+  while (processesMentioning(run_id_).size() < 1u + 2u + kDefaultSensors &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(50ms);
+  }
+  const std::optional<pid_t> launcher_pid = launcherOf(run_id_);
+  ASSERT_TRUE(launcher_pid.has_value());
+  ASSERT_EQ(processesMentioning(run_id_).size(), 1u + 2u + kDefaultSensors);
+  ASSERT_EQ(::kill(*launcher_pid, SIGKILL), 0);
+  EXPECT_EQ(launcher.result().exit_code, 128 + SIGKILL);
+  // PR_SET_PDEATHSIG: every child gets SIGTERM when the launcher dies, and leaves.
+  EXPECT_EQ(leftoversAfter(run_id_, 5s), std::vector<pid_t>{});
+  // The killed launcher could not forget its current-run record; `status` sees it is stale.
+  const ProcessResult status = runProcess({kLauncher, "status"}, 10s);
+  EXPECT_EQ(status.exit_code, 2);
+  EXPECT_NE(status.err.find(run_id_ + ", is over"), std::string::npos) << status.err;
+}
+
+TEST_F(Launcher, FailingChildStopsTheRunAndShowsItsLog) {
+  const LeftoverGuard guard(run_id_);
+  // A bin directory whose sensor agent fails at once; the other programs are the real ones.
+  const fs::path bin = dir_ / "bin";
+  fs::create_directories(bin);
+  fs::create_symlink(SENSORNET_COORDINATOR, bin / "coordinator");
+  fs::create_symlink(SENSORNET_FUSION_CENTER, bin / "fusion_center");
+  std::ofstream(bin / "sensor_agent")
+      << "#!/bin/sh\necho 'fake sensor: cannot go on' >&2\nexit 3\n";
+  fs::permissions(bin / "sensor_agent", fs::perms::owner_all);
+  ::setenv("SENSORNET_BIN_DIR", bin.c_str(), 1);
+
+  const ProcessResult r = runProcess(launchArgs(3, 10), 30s);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("exited with status 3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("fake sensor: cannot go on"), std::string::npos) << "its log's last lines";
+  EXPECT_EQ(leftoversAfter(run_id_, 2s), std::vector<pid_t>{});
+}
+
+TEST_F(Launcher, MissingProgramIsNamed) {
+  ::setenv("SENSORNET_BIN_DIR", dir_.c_str(), 1);
+  const ProcessResult r = runProcess(launchArgs(3, 10), 10s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find((dir_ / "coordinator").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("SENSORNET_BIN_DIR"), std::string::npos) << r.err;
+}
+
+TEST_F(Launcher, StatusAndReplanReachALiveRunWithoutRunId) {
+  const LeftoverGuard guard(run_id_);
+  RunningProgram launcher(launchArgs(100, 1), 60s);
+  const std::optional<json> status = waitUntilRunning(25s);
+  ASSERT_TRUE(status.has_value()) << "the run never got going";
+  EXPECT_EQ((*status)["run_id"], run_id_);
+  ASSERT_EQ((*status)["sensors"].size(), static_cast<std::size_t>(kDefaultSensors));
+  for (const json& s : (*status)["sensors"]) {
+    EXPECT_GT(s["pid"].get<int>(), 0);
+    EXPECT_TRUE(isAliveWith(s["pid"].get<pid_t>(), run_id_)) << s.dump();
+  }
+  EXPECT_EQ((*status)["schedule"]["version"], 1);
+
+  const ProcessResult replan = runProcess({kLauncher, "replan", "--surrogate", "cov"}, 20s);
+  EXPECT_EQ(replan.exit_code, 0) << replan.out << replan.err;
+  EXPECT_NE(replan.out.find("accepted: version 2"), std::string::npos) << replan.out;
+
+  const std::optional<pid_t> launcher_pid = launcherOf(run_id_);
+  ASSERT_TRUE(launcher_pid.has_value());
+  ::kill(*launcher_pid, SIGINT);
+  EXPECT_EQ(launcher.result().exit_code, 130);
+  EXPECT_EQ(leftoversAfter(run_id_, 1s), std::vector<pid_t>{});
+}
+
+TEST_F(Launcher, ReplanWithoutCoordinatorTimesOutClearly) {
+  const auto started = std::chrono::steady_clock::now();
+  const ProcessResult r = runProcess(
+      {kLauncher, "replan", "--run-id", run_id_, "--surrogate", "cov", "--timeout", "1"}, 10s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_LT(std::chrono::steady_clock::now() - started, 5s);
+  EXPECT_NE(r.err.find("no answer within 1 s"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no coordinator of run " + run_id_), std::string::npos) << r.err;
+}
+
+TEST_F(Launcher, ReplanTakesExactlyOneChange) {
+  const ProcessResult none = runProcess({kLauncher, "replan", "--run-id", run_id_}, 10s);
+  EXPECT_EQ(none.exit_code, 2) << none.err;
+  const ProcessResult two = runProcess(
+      {kLauncher, "replan", "--run-id", run_id_, "--surrogate", "cov", "--budget", "4"}, 10s);
+  EXPECT_EQ(two.exit_code, 2) << two.err;
+  const ProcessResult bad =
+      runProcess({kLauncher, "replan", "--run-id", run_id_, "--surrogate", "uniformish"}, 10s);
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
+TEST_F(Launcher, ReplanAndStatusWithoutAnyRunAskForARunId) {
+  for (const char* command : {"replan", "status"}) {
+    std::vector<std::string> argv = {kLauncher, command};
+    if (std::string(command) == "replan") argv.insert(argv.end(), {"--surrogate", "cov"});
+    const ProcessResult r = runProcess(argv, 10s);
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_NE(r.err.find("--run-id"), std::string::npos) << r.err;
+  }
+}
+
+TEST_F(Launcher, StatusOfASilentRunSaysNothingAnswered) {
+  const ProcessResult r =
+      runProcess({kLauncher, "status", "--run-id", run_id_, "--wait", "0.5"}, 10s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("nothing of run " + run_id_ + " answered"), std::string::npos) << r.err;
+}
+
+}  // namespace
