@@ -369,11 +369,12 @@ class Coordinator {
         request.start_time = at;
         request.start_covariance = fused_->covariance;
         const PlanResult plan = planSchedule(planned_for, request);
+        emulator::ScheduleVersion tail = makeVersion(
+            planned_for, plan.schedule, std::string(describe(surrogate_)), command_id,
+            current_episode_, at);
         // Planning took time: publish only if every process still has time to switch.
         if (at >= emulatedNow() + 0.5 * margin) {
-          first_version = publish(makeVersion(planned_for, plan.schedule,
-                                              std::string(describe(surrogate_)), command_id,
-                                              current_episode_, at));
+          first_version = publish(std::move(tail));
           summary = "version " + std::to_string(first_version) + " from " + std::to_string(at) +
                     " s of episode " + std::to_string(current_episode_) + " (" + plan.status +
                     ", from the fused covariance at " + std::to_string(fused_->time_s) +

@@ -58,6 +58,8 @@ void borrowSequence(Seq& field, const Range& values) {
 [[nodiscard]] inline char* borrowString(const std::string& text) {
   return const_cast<char*>(text.c_str());
 }
+// A temporary would be gone before write(): refused at compile time.
+char* borrowString(const std::string&& text) = delete;
 
 template <WireSequence Seq>
 [[nodiscard]] std::span<const WireElement<Seq>> viewSequence(const Seq& field) {

@@ -185,7 +185,7 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   run.startSensors("0-2");
   run.startSensors("3-5");
   run.startCoordinator({"--scenario", kDefaultScenario, "--surrogate", "uniform", "--episodes",
-                        std::to_string(episodes), "--time-scale", "2", "--switch-margin", "0.3"});
+                        std::to_string(episodes), "--time-scale", "1", "--switch-margin", "1.0"});
 
   emulator::RunOptions options;
   options.run_id = run.runId();
@@ -206,18 +206,23 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
     std::this_thread::sleep_for(20ms);
   }
   ASSERT_TRUE(first_report);
-  std::this_thread::sleep_for(500ms);  // into episode 1 (1.5 s of wall time long)
+  // Into episode 1 (3 s of wall time long; it starts 0.2 s after the report), so that the
+  // fusion center has published a covariance of it: the switch lands about 1.8 s into it, with
+  // a second of wall time for planning and for every process to hear of it (ample even in the
+  // sanitizer build, where planning is ten times slower).
+  std::this_thread::sleep_for(1000ms);
 
   ASSERT_TRUE(commands.waitForReaders(1, 5s));
   const std::vector<std::uint32_t> excluded = {0};
   const std::string issuer = "emulation test";
+  const std::string empty;
   sensornet_Command command{};
   command.run_id = dds::borrowString(run.runId());
   command.command_id = static_cast<std::uint64_t>(emulator::wallNowNs());
   command.kind = sensornet_COMMAND_EXCLUDE_SENSORS;
-  command.surrogate = dds::borrowString("");
+  command.surrogate = dds::borrowString(empty);
   dds::borrowSequence(command.sensor_ids, excluded);
-  command.schedule_json = dds::borrowString("");
+  command.schedule_json = dds::borrowString(empty);
   command.issuer = dds::borrowString(issuer);
   command.issued_wall_time_ns = emulator::wallNowNs();
   ASSERT_EQ(commands.write(command), dds::WriteResult::Written);
