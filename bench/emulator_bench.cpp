@@ -13,13 +13,11 @@
 //
 //   emulator_bench [startup|latency|throughput|all]
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <memory>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -35,12 +33,12 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/emulator/run_options.hpp"
-
-extern char** environ;
+#include "support/background_process.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
+using sensornet::testing::BackgroundProcess;
 namespace fs = std::filesystem;
 
 const std::string kCoordinator = SENSORNET_COORDINATOR;
@@ -59,64 +57,21 @@ double median(std::vector<double> values) {
   return values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
 }
 
-// Processes of one measurement; all stopped (SIGTERM, then SIGKILL) when it goes away.
+// Processes of one measurement, each logging to <dir>/<name>.log; all stopped (SIGTERM, then
+// SIGKILL) when it goes away.
 class Processes {
  public:
   explicit Processes(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
-  ~Processes() {
-    for (const pid_t pid : pids_) ::kill(pid, SIGTERM);
-    const auto deadline = std::chrono::steady_clock::now() + 3s;
-    for (const pid_t pid : pids_) {
-      while (::waitpid(pid, nullptr, WNOHANG) == 0) {
-        if (std::chrono::steady_clock::now() > deadline) {
-          ::kill(pid, SIGKILL);
-          ::waitpid(pid, nullptr, 0);
-          break;
-        }
-        std::this_thread::sleep_for(10ms);
-      }
-    }
-  }
-  pid_t start(const std::string& name, const std::vector<std::string>& argv,
-              const std::vector<std::string>& extra_env = {}) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    const std::string log = (dir_ / (name + ".log")).string();
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    std::vector<std::string> env_storage(extra_env);
-    std::vector<char*> env;
-    for (char** e = environ; *e != nullptr; ++e) env.push_back(*e);
-    for (auto& e : env_storage) env.push_back(e.data());
-    env.push_back(nullptr);
-    pid_t pid = -1;
-    if (posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data()) != 0) {
-      throw std::runtime_error("cannot start " + argv[0]);
-    }
-    posix_spawn_file_actions_destroy(&actions);
-    pids_.push_back(pid);
-    return pid;
-  }
-  // Exit status of `pid` within `timeout`, or -1.
-  int wait(pid_t pid, std::chrono::seconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    int status = 0;
-    while (::waitpid(pid, &status, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() > deadline) return -1;
-      std::this_thread::sleep_for(10ms);
-    }
-    pids_.erase(std::remove(pids_.begin(), pids_.end(), pid), pids_.end());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  BackgroundProcess& start(const std::string& name, const std::vector<std::string>& argv) {
+    processes_.push_back(
+        std::make_unique<BackgroundProcess>(argv, (dir_ / (name + ".log")).string()));
+    return *processes_.back();
   }
   [[nodiscard]] const fs::path& dir() const { return dir_; }
 
  private:
   fs::path dir_;
-  std::vector<pid_t> pids_;
+  std::vector<std::unique_ptr<BackgroundProcess>> processes_;
 };
 
 std::string runId(const std::string& what, int repeat) {
@@ -149,7 +104,7 @@ double startupSeconds(int repeat) {
   sensornet::dds::Reader<sensornet_SensorStatus> statuses(participant, topic);
 
   processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run});
-  const pid_t coordinator = processes.start(
+  BackgroundProcess& coordinator = processes.start(
       "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
                       "--surrogate", "uniform", "--episodes", "1", "--time-scale", "10"});
   std::this_thread::sleep_for(1500ms);  // scenario and schedule published
@@ -170,7 +125,7 @@ double startupSeconds(int repeat) {
     std::this_thread::sleep_for(2ms);
   }
   const double seconds = secondsSince(start);
-  const int code = processes.wait(coordinator, 60s);
+  const int code = coordinator.waitForExit(60s).value_or(-1);
   std::printf("  repeat %d: %zu/30 ready after %.3f s; the run %s\n", repeat, ready.size(),
               seconds, code == 0 ? "completed" : "FAILED");
   return ready.size() == 30 ? seconds : -1.0;
@@ -181,14 +136,17 @@ double ddsperfRoundTripMicroseconds(const fs::path& dir) {
   fs::create_directories(dir);
   const fs::path config = dir / "cyclonedds-loopback.xml";
   std::ofstream(config) << sensornet::dds::loopbackConfigXml();
-  const std::string uri = "CYCLONEDDS_URI=file://" + config.string();
+  // ddsperf reads its configuration from the environment (this process creates its own
+  // domains explicitly, so the variable does not touch it).
+  ::setenv("CYCLONEDDS_URI", ("file://" + config.string()).c_str(), 1);
   const std::string domain = "219";
   Processes processes(dir / "ddsperf");
-  processes.start("pong", {"/usr/bin/ddsperf", "-i", domain, "-D", "8", "pong"}, {uri});
+  processes.start("pong", {"/usr/bin/ddsperf", "-i", domain, "-D", "8", "pong"});
   std::this_thread::sleep_for(500ms);
-  const pid_t ping = processes.start(
-      "ping", {"/usr/bin/ddsperf", "-i", domain, "-D", "6", "ping", "100Hz"}, {uri});
-  processes.wait(ping, 20s);
+  BackgroundProcess& ping = processes.start(
+      "ping", {"/usr/bin/ddsperf", "-i", domain, "-D", "6", "ping", "100Hz"});
+  (void)ping.waitForExit(20s);
+  ::unsetenv("CYCLONEDDS_URI");
   std::ifstream log(processes.dir() / "ping.log");
   std::vector<double> medians;
   std::string text;
@@ -211,11 +169,11 @@ void latency() {
     processes.start("sensor-" + std::to_string(j),
                     {kSensorAgent, "--run-id", run, "--sensors", std::to_string(j)});
   }
-  const pid_t coordinator = processes.start(
+  BackgroundProcess& coordinator = processes.start(
       "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario",
                       kSourceDir + "/scenarios/default.yaml", "--surrogate", "uniform",
                       "--episodes", "20", "--time-scale", "10"});
-  const int code = processes.wait(coordinator, 120s);
+  const int code = coordinator.waitForExit(120s).value_or(-1);
   std::this_thread::sleep_for(1s);
   const nlohmann::json r = readReport(report);
   if (code != 0 || r.is_null()) {
@@ -246,11 +204,11 @@ void throughput() {
   }
   const int episodes = 3;
   const auto start = std::chrono::steady_clock::now();
-  const pid_t coordinator = processes.start(
+  BackgroundProcess& coordinator = processes.start(
       "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
                       "--surrogate", "uniform", "--episodes", std::to_string(episodes),
                       "--time-scale", "1", "--ready-timeout", "60"});
-  const int code = processes.wait(coordinator, 180s);
+  const int code = coordinator.waitForExit(180s).value_or(-1);
   const double wall = secondsSince(start);
   std::this_thread::sleep_for(1s);
   const nlohmann::json r = readReport(report);

@@ -3,12 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
-#include <sstream>
 #include <thread>
 
 #include "sensornet/core/emulated_plant.hpp"
@@ -21,6 +19,7 @@
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/scenario_file.hpp"
@@ -45,14 +44,6 @@ struct ServeOptions {
   double report_timeout_s = 10.0;  // wall seconds past an episode's end to wait for its report
   bool json = false;
 };
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "a readable scenario file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
 
@@ -153,13 +144,13 @@ class Coordinator {
 
   bool runEpisode(std::uint32_t episode) {
     current_episode_ = episode;
-    episode_start_ns_ = wallNowNs() + toNs(options_.start_lead_s);
+    clock_ = {wallNowNs() + toNs(options_.start_lead_s), options_.time_scale};
     const emulator::ScheduleVersion* v = book_.inForce(episode, 0.0);
     sensornet_EpisodeControl c{};
     c.run_id = dds::borrowString(options_.run.run_id);
     c.episode = episode;
     c.command = sensornet_EPISODE_START;
-    c.start_wall_time_ns = episode_start_ns_;
+    c.start_wall_time_ns = clock_.start_wall_ns;
     c.time_scale = options_.time_scale;
     c.seed = run_.seed;
     c.schedule_version = v->version;
@@ -167,7 +158,7 @@ class Coordinator {
     running_ = true;
     const double wall_length = run_.scenario.horizon_s / options_.time_scale;
     const std::int64_t deadline =
-        episode_start_ns_ + toNs(wall_length + options_.report_timeout_s);
+        clock_.start_wall_ns + toNs(wall_length + options_.report_timeout_s);
     while (!reported_.count(episode)) {
       pump(10ms);
       if (emulator::stopRequested()) return false;
@@ -392,10 +383,7 @@ class Coordinator {
     return {first_version != 0 ? first_version : full, summary};
   }
 
-  [[nodiscard]] double emulatedNow() const {
-    return std::max(0.0, 1e-9 * static_cast<double>(wallNowNs() - episode_start_ns_) *
-                             options_.time_scale);
-  }
+  [[nodiscard]] double emulatedNow() const { return std::max(0.0, clock_.emulatedNow()); }
 
   [[nodiscard]] PlanRequest planRequest() const {
     PlanRequest request;
@@ -469,7 +457,7 @@ class Coordinator {
   std::set<std::uint32_t> reported_;
   std::optional<FusedEstimate> fused_;
   std::uint32_t current_episode_ = 0;
-  std::int64_t episode_start_ns_ = 0;
+  emulator::EpisodeClock clock_;  // of the current episode
   bool running_ = false;
   bool stopping_ = false;
   int episodes_done_ = 0;
@@ -477,8 +465,8 @@ class Coordinator {
 
 int runServe(const ServeOptions& options) {
   emulator::RunScenario run;
-  run.yaml = readText(options.scenario_path);
-  run.scenario = loadScenarioFile(options.scenario_path);
+  run.yaml = readTextFile(options.scenario_path, "scenario");  // read once: parsed and sent
+  run.scenario = parseScenarioYaml(run.yaml, options.scenario_path);
   run.digest = emulator::digestOf(run.yaml);
   run.seed = options.seed;
   (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning

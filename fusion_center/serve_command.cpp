@@ -17,6 +17,7 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
@@ -39,12 +40,8 @@ struct ServeOptions {
 
 // An episode in progress: its clock and its fusion.
 struct OpenEpisode {
-  std::int64_t start_wall_ns = 0;
-  double time_scale = 1.0;
+  emulator::EpisodeClock clock;
   std::unique_ptr<emulator::EpisodeFusion> fusion;
-  [[nodiscard]] double emulatedAt(std::int64_t wall_ns) const {
-    return 1e-9 * static_cast<double>(wall_ns - start_wall_ns) * time_scale;
-  }
 };
 
 class FusionCenter {
@@ -53,27 +50,17 @@ class FusionCenter {
       : options_(options),
         domain_(options.run.domainConfig()),
         participant_(domain_),
-        scenario_topic_(participant_),
-        schedule_topic_(participant_),
-        control_topic_(participant_),
+        inputs_(participant_),
         measurement_topic_(participant_),
         report_topic_(participant_),
         state_topic_(participant_),
-        scenario_reader_(participant_, scenario_topic_),
-        schedule_reader_(participant_, schedule_topic_),
-        control_reader_(participant_, control_topic_),
         measurement_reader_(participant_, measurement_topic_),
         report_writer_(participant_, report_topic_),
         state_writer_(participant_, state_topic_),
         waitset_(participant_),
-        scenario_ready_(scenario_reader_),
-        schedule_ready_(schedule_reader_),
-        control_ready_(control_reader_),
         measurement_ready_(measurement_reader_) {
-    waitset_.attach(scenario_ready_, 1);
-    waitset_.attach(schedule_ready_, 2);
-    waitset_.attach(control_ready_, 3);
-    waitset_.attach(measurement_ready_, 4);
+    inputs_.attachTo(waitset_);
+    waitset_.attach(measurement_ready_, 1);
   }
 
   int run() {
@@ -82,9 +69,7 @@ class FusionCenter {
     while (!shutdown && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
       readMeasurements();  // first: the receive time is taken as soon as the wait returns
-      readScenario();
-      readSchedules();
-      shutdown = readControls();
+      shutdown = follow();
       advance();
     }
     // Finish what is open (incomplete episodes are marked so in the report).
@@ -97,91 +82,38 @@ class FusionCenter {
   }
 
  private:
-  void readScenario() {
-    for (auto& received : scenario_reader_.take(4).samples) {
-      if (run_) continue;
-      try {
-        run_ = emulator::scenarioFromWire(*received.sample);
-        plant_.emplace(run_->scenario, run_->seed);
-        report_.emplace(options_.run.run_id, run_->digest, run_->scenario.sensorCount(),
-                        run_->scenario.stateDim());
-        spdlog::info("scenario {}: n = {}, M = {}, T = {} s", run_->digest,
-                     run_->scenario.stateDim(), run_->scenario.sensorCount(),
-                     run_->scenario.horizon_s);
-      } catch (const InputError& error) {
-        ++rejected_wire_;
-        spdlog::warn("rejected a scenario sample: {}", error.what());
-      }
+  // Takes what the run announced; returns true on RUN_SHUTDOWN.
+  bool follow() {
+    const emulator::RunInputs::Update update = inputs_.poll();
+    if (update.scenario_arrived) {
+      const Scenario& s = inputs_.scenario();
+      report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim());
     }
+    if (update.new_versions > 0) {
+      for (auto& [episode, open] : open_) open.fusion->scheduleChanged();
+    }
+    for (const emulator::EpisodeStart& start : update.starts) startEpisode(start);
+    return update.shutdown;
   }
 
-  void readSchedules() {
-    if (!run_) return;
-    for (auto& received : schedule_reader_.take(32).samples) {
-      try {
-        emulator::ScheduleVersion v =
-            emulator::scheduleFromWire(*received.sample, run_->scenario, run_->digest);
-        const auto number = v.version;
-        if (book_.add(std::move(v)) == emulator::ScheduleBook::Outcome::Stale) {
-          ++rejected_wire_;
-          spdlog::warn("refused stale schedule version {}", number);
-          continue;
-        }
-        spdlog::info("schedule version {} ({}) from episode {} at {} s", number,
-                     book_.latest().surrogate, book_.latest().effective_episode,
-                     book_.latest().effective_time_s);
-        for (auto& [episode, open] : open_) open.fusion->scheduleChanged();
-      } catch (const InputError& error) {
-        ++rejected_wire_;
-        spdlog::warn("rejected a schedule sample: {}", error.what());
-      }
-    }
-  }
-
-  bool readControls() {
-    bool shutdown = false;
-    for (auto& received : control_reader_.take(16).samples) {
-      const sensornet_EpisodeControl& c = *received.sample;
-      if (c.command == sensornet_RUN_SHUTDOWN) shutdown = true;
-      if (c.command == sensornet_EPISODE_START) {
-        pending_starts_.push_back({c.episode, c.start_wall_time_ns, c.time_scale});
-      }
-    }
-    // A start can overtake the scenario or schedule (other topics): it waits for them.
-    std::erase_if(pending_starts_, [this](const PendingStart& c) { return startEpisode(c); });
-    return shutdown;
-  }
-
-  struct PendingStart {
-    std::uint32_t episode;
-    std::int64_t start_wall_time_ns;
-    double time_scale;
-  };
-
-  // False while the scenario or the schedule in force at the episode's start is missing.
-  bool startEpisode(const PendingStart& c) {
-    if (!run_ || book_.inForce(c.episode, 0.0) == nullptr) return false;
-    if (open_.count(c.episode) != 0 || (last_started_ && c.episode <= *last_started_)) return true;
-    last_started_ = c.episode;
+  void startEpisode(const emulator::EpisodeStart& start) {
     OpenEpisode open;
-    open.start_wall_ns = c.start_wall_time_ns;
-    open.time_scale = c.time_scale > 0.0 ? c.time_scale : 1.0;
+    open.clock = start.clock;
     open.fusion = std::make_unique<emulator::EpisodeFusion>(
-        run_->scenario, *plant_, book_, c.episode,
+        inputs_.scenario(), inputs_.plant(), inputs_.book(), start.episode,
         [this](const emulator::ScheduleVersion& v) { return bracketOf(v); });
-    auto& slot = open_.emplace(c.episode, std::move(open)).first->second;
+    auto& slot = open_.emplace(start.episode, std::move(open)).first->second;
     // Measurements that came before the episode's control sample.
-    if (auto early = early_.find(c.episode); early != early_.end()) {
+    if (auto early = early_.find(start.episode); early != early_.end()) {
       for (auto& m : early->second) route(slot, std::move(m));
       early_.erase(early);
     }
-    return true;
   }
 
   CostBracket bracketOf(const emulator::ScheduleVersion& v) {
     auto it = brackets_.find(v.version);
     if (it == brackets_.end()) {
-      it = brackets_.emplace(v.version, computeBracket(run_->scenario, v.schedule)).first;
+      it = brackets_.emplace(v.version, computeBracket(inputs_.scenario(), v.schedule)).first;
     }
     return it->second;
   }
@@ -220,7 +152,7 @@ class FusionCenter {
     }
     auto open = open_.find(m.episode);
     if (open == open_.end()) {
-      if (last_started_ && m.episode <= *last_started_) {
+      if (inputs_.lastStarted() && m.episode <= *inputs_.lastStarted()) {
         ++rejected_wire_;
         spdlog::warn("rejected a measurement of finished episode {} (sensor {})", m.episode,
                      m.sensor_id);
@@ -246,12 +178,12 @@ class FusionCenter {
     const std::int64_t now = wallNowNs();
     for (auto it = open_.begin(); it != open_.end();) {
       OpenEpisode& open = it->second;
-      const double horizon = run_->scenario.horizon_s;
+      const double horizon = inputs_.scenario().horizon_s;
       const double watermark =
-          open.emulatedAt(now - static_cast<std::int64_t>(1e9 * options_.lag_s));
+          open.clock.emulatedAt(now - static_cast<std::int64_t>(1e9 * options_.lag_s));
       if (watermark > 0.0) open.fusion->fuseUpTo(std::min(watermark, horizon));
       const bool overdue =
-          open.emulatedAt(now) > horizon + options_.grace_s * open.time_scale;
+          open.clock.emulatedAt(now) > horizon + options_.grace_s * open.clock.time_scale;
       if (open.fusion->allSensorsFinished() || overdue) {
         if (!open.fusion->allSensorsFinished()) {
           spdlog::warn("episode {}: end markers missing {} s after T; closing it incomplete",
@@ -270,7 +202,7 @@ class FusionCenter {
     next_state_ns_ = wallNowNs() + static_cast<std::int64_t>(1e9 * options_.state_period_s);
     const Eigen::MatrixXd& P = open.fusion->covariance();
     std::vector<double> values(P.data(), P.data() + P.size());  // symmetric: order is moot
-    const emulator::ScheduleVersion* v = book_.inForce(episode, open.fusion->fusedTime());
+    const emulator::ScheduleVersion* v = inputs_.book().inForce(episode, open.fusion->fusedTime());
     sensornet_FusionState s{};
     s.run_id = dds::borrowString(options_.run.run_id);
     s.episode = episode;
@@ -333,7 +265,8 @@ class FusionCenter {
       spdlog::error("no scenario ever arrived; no report");
       return;
     }
-    const nlohmann::json doc = report_->toJson(book_, status, rejected_wire_);
+    const nlohmann::json doc =
+        report_->toJson(inputs_.book(), status, inputs_.rejected() + rejected_wire_);
     if (!options_.report_path.empty()) {
       writeJsonFile(options_.report_path, doc, "run report");
       spdlog::info("report written to {}", options_.report_path);
@@ -344,34 +277,21 @@ class FusionCenter {
   ServeOptions options_;
   dds::Domain domain_;
   dds::Participant participant_;
-  dds::Topic<sensornet_Scenario> scenario_topic_;
-  dds::Topic<sensornet_Schedule> schedule_topic_;
-  dds::Topic<sensornet_EpisodeControl> control_topic_;
+  emulator::RunInputs inputs_;
   dds::Topic<sensornet_Measurement> measurement_topic_;
   dds::Topic<sensornet_Report> report_topic_;
   dds::Topic<sensornet_FusionState> state_topic_;
-  dds::Reader<sensornet_Scenario> scenario_reader_;
-  dds::Reader<sensornet_Schedule> schedule_reader_;
-  dds::Reader<sensornet_EpisodeControl> control_reader_;
   dds::Reader<sensornet_Measurement> measurement_reader_;
   dds::Writer<sensornet_Report> report_writer_;
   dds::Writer<sensornet_FusionState> state_writer_;
   dds::WaitSet waitset_;
-  dds::ReadCondition scenario_ready_;
-  dds::ReadCondition schedule_ready_;
-  dds::ReadCondition control_ready_;
   dds::ReadCondition measurement_ready_;
 
-  std::optional<emulator::RunScenario> run_;
-  std::optional<EmulatedPlant> plant_;
   std::optional<emulator::RunReport> report_;
-  emulator::ScheduleBook book_;
   std::map<std::uint32_t, CostBracket> brackets_;
   std::map<std::uint32_t, OpenEpisode> open_;
   std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
-  std::optional<std::uint32_t> last_started_;
-  std::vector<PendingStart> pending_starts_;
-  std::uint64_t rejected_wire_ = 0;
+  std::uint64_t rejected_wire_ = 0;  // measurements of other runs or finished episodes
   std::int64_t next_state_ns_ = 0;
 };
 

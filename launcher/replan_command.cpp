@@ -5,10 +5,8 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -71,13 +69,6 @@ struct Reply {
   std::string reason;
 };
 
-std::string readWholeFile(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 Request buildRequest(const ReplanOptions& options, const std::string& run_id) {
   Request request;
   request.run_id = run_id;
@@ -94,9 +85,10 @@ Request buildRequest(const ReplanOptions& options, const std::string& run_id) {
     request.kind = sensornet_COMMAND_SET_BUDGET;
     request.budget = options.budget;
   } else {
-    (void)loadScheduleFile(options.schedule_path);  // bad input fails here, not at the coordinator
     request.kind = sensornet_COMMAND_SCHEDULE_FILE;
-    request.schedule_json = readWholeFile(options.schedule_path);
+    request.schedule_json = readTextFile(options.schedule_path, "schedule");
+    // Bad input fails here, not at the coordinator.
+    (void)parseScheduleJson(request.schedule_json, options.schedule_path);
   }
   return request;
 }

@@ -10,15 +10,16 @@
 #include "sensornet/core/input_error.hpp"
 
 namespace sensornet {
-namespace {
 
-std::string readFile(const std::string& path, const std::string& what) {
+std::string readTextFile(const std::string& path, const std::string& what) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "a readable " + what + " file (cannot open it)");
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
 }
+
+namespace {
 
 // Reads typed values out of a YAML tree; every failure names the file, line and field path.
 class YamlReader {
@@ -268,7 +269,7 @@ Scenario parseScenarioYaml(const std::string& text, const std::string& source) {
 }
 
 Scenario loadScenarioFile(const std::string& path) {
-  return parseScenarioYaml(readFile(path, "scenario"), path);
+  return parseScenarioYaml(readTextFile(path, "scenario"), path);
 }
 
 RateSchedule parseScheduleJson(const std::string& text, const std::string& source) {
@@ -323,7 +324,7 @@ RateSchedule parseScheduleJson(const std::string& text, const std::string& sourc
 }
 
 RateSchedule loadScheduleFile(const std::string& path) {
-  return parseScheduleJson(readFile(path, "schedule"), path);
+  return parseScheduleJson(readTextFile(path, "schedule"), path);
 }
 
 RateSchedule loadScheduleFile(const std::string& path, const Scenario& scenario) {

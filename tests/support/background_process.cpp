@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -87,6 +88,27 @@ bool processExists(pid_t pid) {
   std::getline(stat, line);
   const auto close = line.rfind(')');
   return close == std::string::npos || line.size() < close + 3 || line[close + 2] != 'Z';
+}
+
+std::vector<pid_t> processesMentioning(const std::string& token) {
+  std::vector<pid_t> found;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = std::stoi(name);
+    if (pid == ::getpid()) continue;
+    std::ifstream in(entry.path() / "cmdline");
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::string cmdline = text.str();
+    for (char& c : cmdline) c = c == '\0' ? ' ' : c;
+    if (cmdline.find(token) != std::string::npos) found.push_back(pid);
+  }
+  return found;
+}
+
+LeftoverGuard::~LeftoverGuard() {
+  for (const pid_t pid : processesMentioning(token_)) ::kill(pid, SIGKILL);
 }
 
 }  // namespace sensornet::testing

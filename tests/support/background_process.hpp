@@ -43,4 +43,20 @@ class BackgroundProcess {
 // True while a process with this pid exists (and is not a zombie we own).
 [[nodiscard]] bool processExists(pid_t pid);
 
+// Processes (other than this one) whose command line contains `token` (a run id, say).
+[[nodiscard]] std::vector<pid_t> processesMentioning(const std::string& token);
+
+// Kills (SIGKILL) whatever still mentions the token on its command line when the guard goes
+// away, pass or fail, so that a failing test never leaves processes for the next one.
+class LeftoverGuard {
+ public:
+  explicit LeftoverGuard(std::string token) : token_(std::move(token)) {}
+  LeftoverGuard(const LeftoverGuard&) = delete;
+  LeftoverGuard& operator=(const LeftoverGuard&) = delete;
+  ~LeftoverGuard();
+
+ private:
+  std::string token_;
+};
+
 }  // namespace sensornet::testing

@@ -16,6 +16,9 @@
 namespace sensornet {
 
 // Parses and validates; `source` names the input in error messages.
+// The whole file as text; throws InputError naming the path when it cannot be read. `what`
+// names the file's role ("scenario", "schedule").
+[[nodiscard]] std::string readTextFile(const std::string& path, const std::string& what);
 [[nodiscard]] Scenario parseScenarioYaml(const std::string& text, const std::string& source);
 [[nodiscard]] Scenario loadScenarioFile(const std::string& path);
 

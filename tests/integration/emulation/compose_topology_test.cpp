@@ -26,6 +26,7 @@
 
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "support/background_process.hpp"
 #include "support/process.hpp"
 
 namespace {
@@ -33,6 +34,8 @@ namespace {
 namespace fs = std::filesystem;
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
+using sensornet::testing::LeftoverGuard;
+using sensornet::testing::processesMentioning;
 using namespace std::chrono_literals;
 
 const fs::path kSourceDir = SENSORNET_SOURCE_DIR;
@@ -102,35 +105,6 @@ std::optional<fs::path> findOnPath(const std::string& program) {
   }
   return std::nullopt;
 }
-
-// Processes (other than this one) whose command line contains `token`.
-std::vector<pid_t> processesMentioning(const std::string& token) {
-  std::vector<pid_t> found;
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    const pid_t pid = std::stoi(name);
-    if (pid == ::getpid()) continue;
-    std::string cmdline = readText(entry.path() / "cmdline");
-    for (char& c : cmdline) c = c == '\0' ? ' ' : c;
-    if (cmdline.find(token) != std::string::npos) found.push_back(pid);
-  }
-  return found;
-}
-
-// Kills whatever still carries the run id when the test ends, pass or fail.
-class LeftoverGuard {
- public:
-  explicit LeftoverGuard(std::string run_id) : run_id_(std::move(run_id)) {}
-  LeftoverGuard(const LeftoverGuard&) = delete;
-  LeftoverGuard& operator=(const LeftoverGuard&) = delete;
-  ~LeftoverGuard() {
-    for (const pid_t pid : processesMentioning(run_id_)) ::kill(pid, SIGKILL);
-  }
-
- private:
-  std::string run_id_;
-};
 
 TEST(ComposeTopology, ConfigIsValid) {
   const std::optional<fs::path> compose = findOnPath("docker-compose");

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "sensornet/dds/domain.hpp"
+#include "support/background_process.hpp"
 #include "support/process.hpp"
 
 namespace {
@@ -35,6 +36,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
+using sensornet::testing::LeftoverGuard;
+using sensornet::testing::processesMentioning;
 using namespace std::chrono_literals;
 
 const std::string kLauncher = SENSORNET_LAUNCHER;
@@ -46,21 +49,6 @@ std::string readText(const fs::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-// Processes (other than this one) whose command line contains `token`.
-std::vector<pid_t> processesMentioning(const std::string& token) {
-  std::vector<pid_t> found;
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    const pid_t pid = std::stoi(name);
-    if (pid == ::getpid()) continue;
-    std::string cmdline = readText(entry.path() / "cmdline");
-    for (char& c : cmdline) c = c == '\0' ? ' ' : c;
-    if (cmdline.find(token) != std::string::npos) found.push_back(pid);
-  }
-  return found;
 }
 
 // Waits until no process mentions `token`; the ones still there after `limit`.
@@ -88,21 +76,6 @@ bool isAliveWith(pid_t pid, const std::string& token) {
   for (char& c : cmdline) c = c == '\0' ? ' ' : c;
   return cmdline.find(token) != std::string::npos;
 }
-
-// Kills whatever still carries the run id when the test ends, pass or fail, so that a failing
-// test never leaves processes for the next one.
-class LeftoverGuard {
- public:
-  explicit LeftoverGuard(std::string run_id) : run_id_(std::move(run_id)) {}
-  LeftoverGuard(const LeftoverGuard&) = delete;
-  LeftoverGuard& operator=(const LeftoverGuard&) = delete;
-  ~LeftoverGuard() {
-    for (const pid_t pid : processesMentioning(run_id_)) ::kill(pid, SIGKILL);
-  }
-
- private:
-  std::string run_id_;
-};
 
 // A program running on a thread of its own (runProcess with a time limit), for the tests that
 // act on a run while it goes on.

@@ -1,0 +1,105 @@
+#pragma once
+// What the sensor agents and the fusion center follow of a run: the scenario (once), the
+// schedule versions (stale and malformed ones refused, counted and logged) and the episode
+// controls. An episode start that overtook the scenario or its schedule (they travel on other
+// topics) is held back until both are there; a repeated start (durability replays the last
+// ones to a late joiner) is dropped.
+//
+//   RunInputs inputs(participant);
+//   inputs.attachTo(waitset);                    // wakes the wait on any of the three topics
+//   const RunInputs::Update u = inputs.poll();   // after every wait
+//   if (u.scenario_arrived) ...;                 // inputs.run(), inputs.plant() are set
+//   for (const EpisodeStart& s : u.starts) ...;  // in order, each episode once
+//   if (u.shutdown) ...;
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/dds/waitset.hpp"
+#include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/schedule_book.hpp"
+
+namespace sensornet::emulator {
+
+// The emulated clock of one episode: emulated time 0 at start_wall_ns, time_scale emulated
+// seconds per wall second.
+struct EpisodeClock {
+  std::int64_t start_wall_ns = 0;
+  double time_scale = 1.0;
+
+  [[nodiscard]] double emulatedAt(std::int64_t wall_ns) const {
+    return 1e-9 * static_cast<double>(wall_ns - start_wall_ns) * time_scale;
+  }
+  [[nodiscard]] double emulatedNow() const { return emulatedAt(wallNowNs()); }
+  [[nodiscard]] std::int64_t wallAt(double emulated_s) const {
+    return start_wall_ns + static_cast<std::int64_t>(1e9 * emulated_s / time_scale);
+  }
+};
+
+struct EpisodeStart {
+  std::uint32_t episode = 0;
+  EpisodeClock clock;
+};
+
+class RunInputs {
+ public:
+  struct Update {
+    bool scenario_arrived = false;
+    std::size_t new_versions = 0;  // the last new_versions entries of book().versions()
+    std::vector<EpisodeStart> starts;
+    std::vector<std::uint32_t> stops;
+    bool shutdown = false;
+  };
+
+  explicit RunInputs(const dds::Participant& participant);
+
+  // Attaches the three topics' read conditions with the tokens kScenarioToken.. + 2.
+  void attachTo(dds::WaitSet& waitset);
+  static constexpr dds_attach_t kScenarioToken = 1001;
+
+  // Takes what arrived on the three topics.
+  [[nodiscard]] Update poll();
+
+  [[nodiscard]] bool hasScenario() const { return run_.has_value(); }
+  [[nodiscard]] const RunScenario& run() const { return *run_; }
+  [[nodiscard]] const Scenario& scenario() const { return run_->scenario; }
+  [[nodiscard]] const EmulatedPlant& plant() const { return *plant_; }
+  [[nodiscard]] const ScheduleBook& book() const { return book_; }
+  // The last episode handed out in Update::starts.
+  [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return last_started_; }
+  // Samples refused: malformed scenario or schedule, stale schedule, bad episode control.
+  [[nodiscard]] std::uint64_t rejected() const { return rejected_; }
+
+ private:
+  void readScenario(Update& update);
+  void readSchedules(Update& update);
+  void readControls(Update& update);
+
+  dds::Topic<sensornet_Scenario> scenario_topic_;
+  dds::Topic<sensornet_Schedule> schedule_topic_;
+  dds::Topic<sensornet_EpisodeControl> control_topic_;
+  dds::Reader<sensornet_Scenario> scenario_reader_;
+  dds::Reader<sensornet_Schedule> schedule_reader_;
+  dds::Reader<sensornet_EpisodeControl> control_reader_;
+  dds::ReadCondition scenario_ready_;
+  dds::ReadCondition schedule_ready_;
+  dds::ReadCondition control_ready_;
+
+  std::optional<RunScenario> run_;
+  std::optional<EmulatedPlant> plant_;
+  ScheduleBook book_;
+  struct HeldStart {
+    EpisodeStart start;
+    std::uint64_t seed = 0;  // must be the run's
+  };
+  std::vector<HeldStart> held_starts_;
+  std::optional<std::uint32_t> last_started_;
+  std::uint64_t rejected_ = 0;
+};
+
+}  // namespace sensornet::emulator

@@ -1,0 +1,107 @@
+#include "sensornet/emulator/run_inputs.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet::emulator {
+
+RunInputs::RunInputs(const dds::Participant& participant)
+    : scenario_topic_(participant),
+      schedule_topic_(participant),
+      control_topic_(participant),
+      scenario_reader_(participant, scenario_topic_),
+      schedule_reader_(participant, schedule_topic_),
+      control_reader_(participant, control_topic_),
+      scenario_ready_(scenario_reader_),
+      schedule_ready_(schedule_reader_),
+      control_ready_(control_reader_) {}
+
+void RunInputs::attachTo(dds::WaitSet& waitset) {
+  waitset.attach(scenario_ready_, kScenarioToken);
+  waitset.attach(schedule_ready_, kScenarioToken + 1);
+  waitset.attach(control_ready_, kScenarioToken + 2);
+}
+
+RunInputs::Update RunInputs::poll() {
+  Update update;
+  readScenario(update);
+  readSchedules(update);
+  readControls(update);
+  return update;
+}
+
+void RunInputs::readScenario(Update& update) {
+  for (auto& received : scenario_reader_.take(4).samples) {
+    if (run_) continue;  // one scenario per run
+    try {
+      run_ = scenarioFromWire(*received.sample);
+      plant_.emplace(run_->scenario, run_->seed);
+      update.scenario_arrived = true;
+      spdlog::info("scenario {} received: n = {}, M = {}, T = {} s", run_->digest,
+                   run_->scenario.stateDim(), run_->scenario.sensorCount(),
+                   run_->scenario.horizon_s);
+    } catch (const InputError& error) {
+      ++rejected_;
+      run_.reset();
+      spdlog::warn("rejected a scenario sample: {}", error.what());
+    }
+  }
+}
+
+void RunInputs::readSchedules(Update& update) {
+  if (!run_) return;  // kept by the reader (transient local) until the scenario is known
+  for (auto& received : schedule_reader_.take(32).samples) {
+    try {
+      ScheduleVersion v = scheduleFromWire(*received.sample, run_->scenario, run_->digest);
+      const auto number = v.version;
+      if (book_.add(std::move(v)) == ScheduleBook::Outcome::Stale) {
+        ++rejected_;
+        spdlog::warn("refused stale schedule version {} (have {})", number,
+                     book_.latest().version);
+        continue;
+      }
+      ++update.new_versions;
+      spdlog::info("schedule version {} ({}) from episode {} at {} s", number,
+                   book_.latest().surrogate, book_.latest().effective_episode,
+                   book_.latest().effective_time_s);
+    } catch (const InputError& error) {
+      ++rejected_;
+      spdlog::warn("rejected a schedule sample: {}", error.what());
+    }
+  }
+}
+
+void RunInputs::readControls(Update& update) {
+  for (auto& received : control_reader_.take(16).samples) {
+    const sensornet_EpisodeControl& c = *received.sample;
+    switch (c.command) {
+      case sensornet_RUN_SHUTDOWN:
+        update.shutdown = true;
+        break;
+      case sensornet_EPISODE_STOP:
+        update.stops.push_back(c.episode);
+        break;
+      case sensornet_EPISODE_START:
+        held_starts_.push_back({{c.episode, {c.start_wall_time_ns, c.time_scale}}, c.seed});
+        break;
+    }
+  }
+  // A start waits for the scenario and the schedule in force at the episode's start.
+  std::erase_if(held_starts_, [&](const HeldStart& held) {
+    const EpisodeStart& s = held.start;
+    if (!run_ || book_.inForce(s.episode, 0.0) == nullptr) return false;
+    if (!(s.clock.time_scale > 0.0) || held.seed != run_->seed) {
+      ++rejected_;
+      spdlog::warn("rejected episode control {}: bad time scale or seed", s.episode);
+      return true;
+    }
+    if (!last_started_ || s.episode > *last_started_) {
+      last_started_ = s.episode;
+      update.starts.push_back(s);
+    }
+    return true;
+  });
+}
+
+}  // namespace sensornet::emulator
