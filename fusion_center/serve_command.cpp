@@ -5,10 +5,14 @@
 #include <chrono>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/dds/listener.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
@@ -38,6 +42,37 @@ struct ServeOptions {
   bool json = false;
 };
 
+// A measurement as it came off the wire, stamped on arrival.
+struct Arrival {
+  emulator::FusedMeasurement measurement;
+  std::uint32_t episode = 0;
+  std::string run_id;
+};
+
+// Arrivals handed from Cyclone's receive thread (the listener) to the main loop.
+class Inbox {
+ public:
+  // Returns true if the inbox was empty before: the main loop may be asleep and needs a wake.
+  bool push(std::vector<Arrival> arrivals) {
+    std::lock_guard lock(mutex_);
+    const bool was_empty = arrivals_.empty();
+    if (was_empty) {
+      arrivals_ = std::move(arrivals);
+    } else {
+      for (Arrival& a : arrivals) arrivals_.push_back(std::move(a));
+    }
+    return was_empty;
+  }
+  [[nodiscard]] std::vector<Arrival> drain() {
+    std::lock_guard lock(mutex_);
+    return std::exchange(arrivals_, {});
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<Arrival> arrivals_;
+};
+
 // An episode in progress: its clock and its fusion.
 struct OpenEpisode {
   emulator::EpisodeClock clock;
@@ -58,9 +93,8 @@ class FusionCenter {
         report_writer_(participant_, report_topic_),
         state_writer_(participant_, state_topic_),
         waitset_(participant_),
-        measurement_ready_(measurement_reader_) {
+        arrivals_listener_(measurement_reader_, [this] { onMeasurements(); }) {
     inputs_.attachTo(waitset_);
-    waitset_.attach(measurement_ready_, 1);
   }
 
   int run() {
@@ -68,7 +102,7 @@ class FusionCenter {
     bool shutdown = false;
     while (!shutdown && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
-      readMeasurements();  // first: the receive time is taken as soon as the wait returns
+      for (Arrival& arrival : inbox_.drain()) accept(std::move(arrival));
       shutdown = follow();
       advance();
     }
@@ -118,25 +152,31 @@ class FusionCenter {
     return it->second;
   }
 
-  void readMeasurements() {
+  // In Cyclone's receive thread, as measurements are delivered: takes them, stamps their arrival
+  // there (one thread hop after the wire, as in ddsperf) and hands them to the main loop.
+  void onMeasurements() {
+    constexpr std::size_t kBatch = 64;
+    std::vector<Arrival> arrivals;
     for (;;) {
       const std::int64_t received_ns = wallNowNs();
       const std::size_t count = measurement_reader_.takeEach(
-          256,
-          [this, received_ns](const sensornet_Measurement& m, const dds::SampleInfo&) {
-            accept(m, received_ns);
+          kBatch,
+          [&](const sensornet_Measurement& m, const dds::SampleInfo&) {
+            arrivals.push_back(arrivalOf(m, received_ns));
           },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
             if (info.instance_state == dds::InstanceState::NoWriters) {
               spdlog::warn("sensor {} has no live writer any more", key.sensor_id);
             }
           });
-      if (count < 256) return;
+      if (count < kBatch) break;
     }
+    if (!arrivals.empty() && inbox_.push(std::move(arrivals))) waitset_.wake();
   }
 
-  void accept(const sensornet_Measurement& m, std::int64_t received_ns) {
-    emulator::FusedMeasurement fused;
+  static Arrival arrivalOf(const sensornet_Measurement& m, std::int64_t received_ns) {
+    Arrival a;
+    emulator::FusedMeasurement& fused = a.measurement;
     fused.sensor = static_cast<int>(m.sensor_id);
     fused.seq = m.seq;
     fused.time_s = m.emulated_time_s;
@@ -145,23 +185,30 @@ class FusionCenter {
     fused.z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(z.size()));
     fused.publish_wall_ns = m.publish_wall_time_ns;
     fused.receive_wall_ns = received_ns;
-    if (dds::viewString(m.run_id) != options_.run.run_id) {
+    a.episode = m.episode;
+    a.run_id = dds::viewString(m.run_id);
+    return a;
+  }
+
+  void accept(Arrival arrival) {
+    if (arrival.run_id != options_.run.run_id) {
       ++rejected_wire_;
-      spdlog::warn("rejected a measurement of another run '{}'", dds::viewString(m.run_id));
+      spdlog::warn("rejected a measurement of another run '{}'", arrival.run_id);
       return;
     }
-    auto open = open_.find(m.episode);
+    const std::uint32_t episode = arrival.episode;
+    auto open = open_.find(episode);
     if (open == open_.end()) {
-      if (inputs_.lastStarted() && m.episode <= *inputs_.lastStarted()) {
+      if (inputs_.lastStarted() && episode <= *inputs_.lastStarted()) {
         ++rejected_wire_;
-        spdlog::warn("rejected a measurement of finished episode {} (sensor {})", m.episode,
-                     m.sensor_id);
+        spdlog::warn("rejected a measurement of finished episode {} (sensor {})", episode,
+                     arrival.measurement.sensor);
       } else {
-        early_[m.episode].push_back(std::move(fused));
+        early_[episode].push_back(std::move(arrival.measurement));
       }
       return;
     }
-    route(open->second, std::move(fused));
+    route(open->second, std::move(arrival.measurement));
   }
 
   void route(OpenEpisode& open, emulator::FusedMeasurement m) {
@@ -285,7 +332,10 @@ class FusionCenter {
   dds::Writer<sensornet_Report> report_writer_;
   dds::Writer<sensornet_FusionState> state_writer_;
   dds::WaitSet waitset_;
-  dds::ReadCondition measurement_ready_;
+  Inbox inbox_;
+  // After what its callback touches (reader, waitset, inbox): it is destroyed before them, and
+  // its destructor waits for a callback in progress.
+  dds::DataAvailableListener arrivals_listener_;
 
   std::optional<emulator::RunReport> report_;
   std::map<std::uint32_t, CostBracket> brackets_;

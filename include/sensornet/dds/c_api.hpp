@@ -9,7 +9,8 @@
 //   api.write = [](dds_entity_t, const void*) -> dds_return_t { return DDS_RETCODE_TIMEOUT; };
 //   Domain domain(config, api);   // `api` must outlive the domain and everything made from it
 //
-// Pure memory helpers (QoS objects, dds_sample_free, dds_strretcode) are called directly.
+// Pure memory helpers (QoS and listener objects, dds_sample_free, dds_strretcode) are called
+// directly.
 
 #include <dds/dds.h>
 
@@ -32,6 +33,7 @@ struct CApi {
   dds_return_t (*delete_entity)(dds_entity_t) = ::dds_delete;
   dds_return_t (*get_status_mask)(dds_entity_t, uint32_t*) = ::dds_get_status_mask;
   dds_return_t (*set_status_mask)(dds_entity_t, uint32_t) = ::dds_set_status_mask;
+  dds_return_t (*set_listener)(dds_entity_t, const dds_listener_t*) = ::dds_set_listener;
 
   // Waiting.
   dds_return_t (*waitset_attach)(dds_entity_t, dds_entity_t, dds_attach_t) = ::dds_waitset_attach;

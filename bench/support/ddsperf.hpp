@@ -1,0 +1,35 @@
+#pragma once
+// Cyclone's own `ddsperf` ping/pong on loopback, as the yardstick of the latency benchmarks.
+//
+// What ddsperf prints: for each second, the round trips of that second, each already HALVED
+// (ddsperf records (t_pong_received - t_ping_written) / 2; see update_roundtrip() in its source).
+// The printed "50%" is thus the median round trip / 2, not the round trip. checkHalving() shows
+// it on the installed binary: pinging back to back, (printed mean) x 2 x (round trips in the
+// second) fills the second, ≈ 1.
+
+#include <filesystem>
+#include <vector>
+
+namespace sensornet::bench {
+
+struct DdsperfSecond {
+  double median_us = 0.0;  // as printed: round trip / 2
+  double mean_us = 0.0;    // as printed: round trip / 2
+  long round_trips = 0;
+};
+
+// Runs `ddsperf pong` and `ddsperf ping` (at `rate_hz`, or back to back if 0) for `seconds` on
+// domain `domain_id` with sensornet's loopback configuration; returns the per-second statistics
+// of the ping side (empty if ddsperf failed). Logs go to `dir`.
+[[nodiscard]] std::vector<DdsperfSecond> runDdsperf(const std::filesystem::path& dir,
+                                                     int domain_id, int rate_hz, int seconds);
+
+// The median over seconds of ddsperf's per-second median round trip / 2 (µs).
+[[nodiscard]] double ddsperfHalfRoundTripUs(const std::filesystem::path& dir, int domain_id,
+                                            int rate_hz);
+
+// Back-to-back pinging: the median over seconds of 2 x mean x round trips / 1 s. About 1 if the
+// printed latencies are round trip / 2 (about 0.5 if they were whole round trips).
+[[nodiscard]] double checkHalving(const std::filesystem::path& dir, int domain_id);
+
+}  // namespace sensornet::bench
