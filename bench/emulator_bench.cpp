@@ -6,14 +6,14 @@
 //               time: about 120 measurements/s reach the fusion center), with one process per
 //               sensor and with one process for all 6, against Cyclone's own `ddsperf`
 //               ping/pong round trip / 2 at 100 Hz (each side receives 100 messages/s) measured
-//               in the same round, same loopback configuration; 3 rounds. Comparable rates
-//               matter: an idle process wakes slowly (ddsperf is about 3x slower at 10 Hz than
-//               at 100 Hz on this machine). ddsperf prints round trip / 2 already: the bench
-//               checks that on the installed binary (support/ddsperf.hpp).
+//               in the same round, same loopback configuration; 3 rounds unless told.
+//               Comparable rates matter: an idle process wakes slowly (ddsperf is about 3x
+//               slower at 10 Hz than at 100 Hz on this machine). ddsperf prints round trip / 2
+//               already: the bench checks that on the installed binary (support/ddsperf.hpp).
 //   throughput  100 sensors at 200 Hz each (20,000 measurements/s, n = 5) in real time,
 //               10 processes of 10 sensors: received, lost, late, latency median and p99.
 //
-//   emulator_bench [startup|latency|throughput|all]
+//   emulator_bench [startup|latency|throughput|all] [latency rounds = 3]
 
 #include <unistd.h>
 
@@ -170,15 +170,14 @@ std::optional<LatencyRun> latencyRun(const std::string& run, int agents) {
                     r["summary"]["received"].get<int>()};
 }
 
-void latency() {
-  constexpr int kRounds = 3;
+void latency(int rounds) {
   const fs::path ddsperf_dir = fs::temp_directory_path() / runId("ddsperf", 0);
   std::printf("latency: ddsperf prints round trip / 2; back to back, 2 x mean x count / 1 s = "
               "%.2f (1 if so)\n",
               sensornet::bench::checkHalving(ddsperf_dir, 219));
   std::vector<double> ddsperf_100, ddsperf_20, per_sensor, per_sensor_p99, one_agent,
       one_agent_p99, per_sensor_ratio, one_agent_ratio;
-  for (int round = 0; round < kRounds; ++round) {
+  for (int round = 0; round < rounds; ++round) {
     const std::string tag = runId("latency", round);
     ddsperf_100.push_back(sensornet::bench::ddsperfHalfRoundTripUs(ddsperf_dir, 219, 100));
     ddsperf_20.push_back(sensornet::bench::ddsperfHalfRoundTripUs(ddsperf_dir, 219, 20));
@@ -200,7 +199,7 @@ void latency() {
   }
   std::printf("latency, medians of %d rounds (ratios: per round, against ddsperf at 100 Hz in "
               "that round; target <= 2x):\n",
-              kRounds);
+              rounds);
   std::printf("  ddsperf round trip / 2:               %.1f us at 100 Hz, %.1f us at 20 Hz\n",
               median(ddsperf_100), median(ddsperf_20));
   std::printf("  one process per sensor (6 x ~20/s):  median %.1f us, p99 %.1f us, %.2fx\n",
@@ -252,7 +251,7 @@ void throughput() {
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "startup" && what != "latency" && what != "throughput") {
-    std::fprintf(stderr, "usage: emulator_bench [startup|latency|throughput|all]\n");
+    std::fprintf(stderr, "usage: emulator_bench [startup|latency|throughput|all] [rounds]\n");
     return 2;
   }
   if (what == "all" || what == "startup") {
@@ -261,7 +260,7 @@ int main(int argc, char** argv) {
     for (int repeat = 0; repeat < 3; ++repeat) times.push_back(startupSeconds(repeat));
     std::printf("startup: median %.3f s (target < 3 s)\n", median(times));
   }
-  if (what == "all" || what == "latency") latency();
+  if (what == "all" || what == "latency") latency(argc > 2 ? std::max(1, std::atoi(argv[2])) : 3);
   if (what == "all" || what == "throughput") throughput();
   return 0;
 }

@@ -335,8 +335,9 @@ class Coordinator {
 
   // Plans (or adopts `given`) and publishes the next version, effective as soon as every
   // process can switch: switch_margin_s of wall time from now in the running episode (planned
-  // over the rest of the horizon from the fused covariance), else at the start of the next
-  // episode. A mid-episode change publishes a second version for the episodes after it,
+  // over the rest of the horizon from the fused covariance; later if planning overran, so that
+  // half a margin is always left for the version to reach everyone), else at the start of the
+  // next episode. A mid-episode change publishes a second version for the episodes after it,
   // planned over the whole horizon from P0 with the same settings.
   std::pair<std::uint32_t, std::string> replan(std::uint64_t command_id,
                                                std::optional<RateSchedule> given) {
@@ -352,24 +353,39 @@ class Coordinator {
     // Mid-episode: the rest of this episode, from the latest fused covariance.
     std::string summary;
     std::uint32_t first_version = 0;
-    if (running_ && fused_ && fused_->episode == current_episode_) {
+    if (running_ && !(fused_ && fused_->episode == current_episode_)) {
+      summary = "not in episode " + std::to_string(current_episode_) +
+                ": no fused covariance of it yet; ";
+    } else if (running_) {
       const double margin = options_.switch_margin_s * options_.time_scale;
       const double at = plant_.timeOf(plant_.tickAt(emulatedNow() + margin));
-      if (at < run_.scenario.horizon_s) {
+      if (at >= run_.scenario.horizon_s) {
+        summary = "not in episode " + std::to_string(current_episode_) +
+                  ": it ends within the switch margin; ";
+      } else {
         PlanRequest request = planRequest();
         request.start_time = at;
         request.start_covariance = fused_->covariance;
         const PlanResult plan = planSchedule(planned_for, request);
-        emulator::ScheduleVersion tail = makeVersion(
-            planned_for, plan.schedule, std::string(describe(surrogate_)), command_id,
-            current_episode_, at);
-        // Planning took time: publish only if every process still has time to switch.
-        if (at >= emulatedNow() + 0.5 * margin) {
+        emulator::ScheduleVersion tail = makeVersion(planned_for, plan.schedule,
+                                                     std::string(describe(surrogate_)),
+                                                     command_id, current_episode_, at);
+        // Planning took time. Every process must still hear of the version before it takes
+        // effect: if less than half the margin is left, it takes effect later, at the first
+        // tick half a margin from now (the plan's rates from there on; they stay feasible).
+        const double earliest = plant_.timeOf(plant_.tickAt(emulatedNow() + 0.5 * margin) + 1);
+        tail.effective_time_s = std::max(at, earliest);
+        if (tail.effective_time_s < run_.scenario.horizon_s) {
+          const double effective = tail.effective_time_s;
           first_version = publish(std::move(tail));
-          summary = "version " + std::to_string(first_version) + " from " + std::to_string(at) +
-                    " s of episode " + std::to_string(current_episode_) + " (" + plan.status +
-                    ", from the fused covariance at " + std::to_string(fused_->time_s) +
-                    " s); ";
+          summary = "version " + std::to_string(first_version) + " from " +
+                    std::to_string(effective) + " s of episode " +
+                    std::to_string(current_episode_) + " (" + plan.status +
+                    ", planned from the fused covariance at " + std::to_string(fused_->time_s) +
+                    " s for " + std::to_string(at) + " s); ";
+        } else {
+          summary = "not in episode " + std::to_string(current_episode_) +
+                    ": planning outlasted it; ";
         }
       }
     }
