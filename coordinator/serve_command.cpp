@@ -218,11 +218,11 @@ class Coordinator {
     for (auto& received : report_reader_.take(16).samples) {
       const sensornet_Report& r = *received.sample;
       if (!reported_.insert(r.episode).second) continue;
-      spdlog::info("episode {}/{}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} in "
-                   "[{:.6g}, {:.6g}] (95%)",
-                   r.episode + 1, options_.episodes, r.realized_cost, r.bracket_lower,
-                   r.bracket_upper, r.summary.realized_mean, r.summary.realized_ci95_low,
-                   r.summary.realized_ci95_high);
+      spdlog::info("[{}/{}] episode {}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} "
+                   "in [{:.6g}, {:.6g}] (95%)",
+                   r.summary.episodes, options_.episodes, r.episode, r.realized_cost,
+                   r.bracket_lower, r.bracket_upper, r.summary.realized_mean,
+                   r.summary.realized_ci95_low, r.summary.realized_ci95_high);
     }
   }
 

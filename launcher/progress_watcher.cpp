@@ -16,9 +16,10 @@ std::string formatProgress(const sensornet_Report& report, int episodes_planned)
   const double ci95 = 0.5 * (s.realized_ci95_high - s.realized_ci95_low);
   char line[256];
   std::snprintf(line, sizeof line,
-                "episode %u/%d: realized %.4g, running mean %.4g \u00b1 %.2g (95%%), bracket "
-                "[%.4g, %.4g]",
-                report.episode + 1, episodes_planned, report.realized_cost, s.realized_mean, ci95,
+                "[%u/%d] episode %u: realized %.4g, running mean %.4g \u00b1 %.2g (95%%), "
+                "bracket [%.4g, %.4g]",
+                s.episodes, episodes_planned, report.episode, report.realized_cost,
+                s.realized_mean, ci95,
                 s.bracket_lower_mean, s.bracket_upper_mean);
   std::string text = line;
   const auto versions = dds::viewSequence(report.schedule_versions);

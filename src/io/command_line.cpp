@@ -5,6 +5,8 @@
 
 #include <cstdio>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "sensornet/core/input_error.hpp"
 
@@ -30,6 +32,21 @@ int runProgram(const std::string& program, const std::function<int()>& body) {
 }
 
 std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv) {
+  // CLI11 reports an unknown first word as a missing subcommand; name it instead.
+  const std::vector<CLI::App*> subcommands = app.get_subcommands([](CLI::App*) { return true; });
+  if (!subcommands.empty() && argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : subcommands) {
+      known = known || sub->check_name(argv[1]);
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr, "%s: error: unknown subcommand '%s' (expected one of: %s; see --help)\n",
+                   app.get_name().c_str(), argv[1], names.c_str());
+      return kExitBadInput;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -112,7 +112,9 @@ TEST(CoordinatorTimetable, BadInputGivesOneLineAndNonZeroExit) {
   expectOneLineError(
       runProcess({kCoordinator, "timetable", "--sigma2", "1", "--v0", "1", "--variances", "1"}),
       "--horizon");
-  expectOneLineError(runProcess({kCoordinator, "frobnicate"}), "subcommand");
+  expectOneLineError(runProcess({kCoordinator, "frobnicate"}),
+                     "unknown subcommand 'frobnicate' (expected one of: plan, serve, timetable");
+  expectOneLineError(runProcess({kFusionCenter}), "subcommand is required");
 }
 
 TEST(FusionCenterEvaluate, PrintsTheContractedJson) {

@@ -209,9 +209,10 @@ TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
   EXPECT_EQ(line["meets_bracket"], report["summary"]["meets_bracket"]);
 
   // Progress: one line per episode.
-  for (int episode = 1; episode <= 3; ++episode) {
-    EXPECT_NE(r.err.find("episode " + std::to_string(episode) + "/3: realized"), std::string::npos)
-        << r.err;
+  for (int episode = 0; episode < 3; ++episode) {
+    const std::string progress = "[" + std::to_string(episode + 1) + "/3] episode " +
+                                 std::to_string(episode) + ": realized";
+    EXPECT_NE(r.err.find(progress), std::string::npos) << r.err;
   }
   // It started 1 fusion center, 6 sensor agents (one sensor each) and 1 coordinator, and none
   // of them is left.
@@ -254,7 +255,7 @@ TEST_F(Launcher, DomainIdReachesEveryChild) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The progress comes over DDS from the fusion center: it reaches the launcher only if both
   // are on that domain.
-  EXPECT_NE(r.err.find("episode 2/2: realized"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[2/2] episode 1: realized"), std::string::npos) << r.err;
 }
 
 TEST_F(Launcher, TimeoutStopsTheRunAndFails) {
