@@ -208,10 +208,15 @@ class Agent {
     }
     for (const int id : options_.sensors) {
       const double rate = v != nullptr ? v->schedule.rateAt(t, id) : 0.0;
-      const sensornet_SensorState shown =
-          state == sensornet_SENSOR_READY && v != nullptr && v->schedule.rates().col(id).isZero()
-              ? sensornet_SENSOR_EXCLUDED
-              : state;
+      // Excluded: the schedule in force gives it no rate for the rest of the episode (or, idle,
+      // for a whole episode).
+      const bool silent_from_now =
+          v != nullptr && v->schedule.rates()
+                              .col(id)
+                              .tail(v->schedule.intervals() - v->schedule.intervalAt(t))
+                              .isZero();
+      const bool live = state == sensornet_SENSOR_READY || state == sensornet_SENSOR_RUNNING;
+      const sensornet_SensorState shown = live && silent_from_now ? sensornet_SENSOR_EXCLUDED : state;
       sensornet_SensorStatus s{};
       s.sensor_id = static_cast<std::uint32_t>(id);
       s.run_id = dds::borrowString(options_.run.run_id);

@@ -197,6 +197,8 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   dds::Reader<sensornet_Report> reports(participant, report_topic);
   dds::Writer<sensornet_Command> commands(participant, command_topic);
   dds::Reader<sensornet_CommandReply> replies(participant, reply_topic);
+  dds::Topic<sensornet_SensorStatus> status_topic(participant);
+  dds::Reader<sensornet_SensorStatus> statuses(participant, status_topic);
 
   // Wait for episode 0's report: episode 1 is then about to start.
   const auto deadline = std::chrono::steady_clock::now() + 60s;
@@ -238,6 +240,23 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   }
   ASSERT_TRUE(version.has_value()) << "no reply from the coordinator";
   EXPECT_EQ(*version, 2u);
+  // Once version 2 is in force (the rest of the running episode), `status` shows sensor 0 as
+  // excluded, and only it.
+  bool zero_excluded = false;
+  const auto status_deadline = std::chrono::steady_clock::now() + 6s;
+  while (!zero_excluded && std::chrono::steady_clock::now() < status_deadline) {
+    for (auto& s : statuses.take(32).samples) {
+      const bool says_excluded = s.sample->state == sensornet_SENSOR_EXCLUDED;
+      if (s.sample->sensor_id == 0) {
+        zero_excluded |= says_excluded && s.sample->schedule_version == *version;
+      } else {
+        EXPECT_FALSE(says_excluded) << "sensor " << s.sample->sensor_id << " under version "
+                               << s.sample->schedule_version;
+      }
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+  EXPECT_TRUE(zero_excluded) << "sensor 0 never reported itself excluded";
 
   const nlohmann::json report = run.finish(60s);
   expectCompleteAndLossless(report, episodes);
