@@ -208,15 +208,17 @@ class Agent {
     }
     for (const int id : options_.sensors) {
       const double rate = v != nullptr ? v->schedule.rateAt(t, id) : 0.0;
-      // Excluded: the schedule in force gives it no rate for the rest of the episode (or, idle,
-      // for a whole episode).
-      const bool silent_from_now =
-          v != nullptr && v->schedule.rates()
-                              .col(id)
-                              .tail(v->schedule.intervals() - v->schedule.intervalAt(t))
-                              .isZero();
+      // Excluded: the version in force gives it no rate at all, from where the version took
+      // effect (a sensor a plan merely leaves idle late in an episode is still running).
+      bool excluded_by_version = false;
+      if (v != nullptr) {
+        const RateSchedule& schedule = v->schedule;
+        const int first =
+            v->effective_episode == episode ? schedule.intervalAt(v->effective_time_s) : 0;
+        excluded_by_version = schedule.rates().col(id).tail(schedule.intervals() - first).isZero();
+      }
       const bool live = state == sensornet_SENSOR_READY || state == sensornet_SENSOR_RUNNING;
-      const sensornet_SensorState shown = live && silent_from_now ? sensornet_SENSOR_EXCLUDED : state;
+      const sensornet_SensorState shown = live && excluded_by_version ? sensornet_SENSOR_EXCLUDED : state;
       sensornet_SensorStatus s{};
       s.sensor_id = static_cast<std::uint32_t>(id);
       s.run_id = dds::borrowString(options_.run.run_id);
