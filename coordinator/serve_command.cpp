@@ -12,6 +12,7 @@
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/planner.hpp"
+#include "sensornet/core/surrogate.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
@@ -365,7 +366,7 @@ class Coordinator {
       } else {
         PlanRequest request = planRequest();
         request.start_time = at;
-        request.start_covariance = fused_->covariance;
+        request.start_covariance = covarianceExpectedAt(at);
         const PlanResult plan = planSchedule(planned_for, request);
         emulator::ScheduleVersion tail = makeVersion(planned_for, plan.schedule,
                                                      std::string(describe(surrogate_)),
@@ -382,7 +383,7 @@ class Coordinator {
                     std::to_string(effective) + " s of episode " +
                     std::to_string(current_episode_) + " (" + plan.status +
                     ", planned from the fused covariance at " + std::to_string(fused_->time_s) +
-                    " s for " + std::to_string(at) + " s); ";
+                    " s carried to " + std::to_string(at) + " s); ";
         } else {
           summary = "not in episode " + std::to_string(current_episode_) +
                     ": planning outlasted it; ";
@@ -397,6 +398,22 @@ class Coordinator {
                std::to_string(next_episode) + " (" + std::string(describe(surrogate_)) + ", " +
                plan.status + ")";
     return {first_version != 0 ? first_version : full, summary};
+  }
+
+  // The latest fused covariance carried forward to `at` (what arrives in between is not fused
+  // yet) by the surrogate of the plan's form under the version in force: the plan of the rest
+  // of the episode starts from the covariance expected when it takes effect.
+  [[nodiscard]] Eigen::MatrixXd covarianceExpectedAt(double at) const {
+    const emulator::ScheduleVersion* v = book_.inForce(current_episode_, fused_->time_s);
+    if (v == nullptr || !(fused_->time_s < at)) return fused_->covariance;
+    RolloutOptions carry;
+    carry.start_time = fused_->time_s;
+    carry.end_time = at;
+    carry.start_covariance = fused_->covariance;
+    const SurrogateForm form = surrogate_ == PlanSurrogate::Information
+                                   ? SurrogateForm::Information
+                                   : SurrogateForm::Covariance;
+    return rollout(form, run_.scenario, v->schedule, carry).covariances.back();
   }
 
   [[nodiscard]] double emulatedNow() const { return std::max(0.0, clock_.emulatedNow()); }

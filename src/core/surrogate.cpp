@@ -333,6 +333,11 @@ Eigen::MatrixXd startCovariance(const Scenario& scenario, const RolloutOptions& 
                      "a time in [0, " + std::to_string(horizon) + "], got " +
                          std::to_string(options.start_time));
   }
+  if (options.end_time && !(*options.end_time >= options.start_time && *options.end_time <= horizon)) {
+    throw InputError(kSource, "options.end_time",
+                     "a time in [start_time, " + std::to_string(horizon) + "], got " +
+                         std::to_string(*options.end_time));
+  }
   if (!options.start_covariance) {
     if (options.start_time > 0.0) {
       throw InputError(kSource, "options.start_covariance",
@@ -367,19 +372,24 @@ struct Segment {
   int interval;
 };
 
-// The pieces of [start_time, T] on which the rates are constant.
-std::vector<Segment> segmentsFrom(const RateSchedule& schedule, double start_time) {
+// The pieces of [start_time, end_time] on which the rates are constant.
+std::vector<Segment> segmentsOf(const RateSchedule& schedule, double start_time,
+                                double end_time) {
   const int count = schedule.intervals();
   const double horizon = schedule.horizon();
+  const double rounding = 1e-12 * horizon;
   auto boundary = [&](int k) { return k >= count ? horizon : schedule.intervalStart(k); };
   std::vector<Segment> segments;
-  if (!(start_time < horizon)) return segments;
+  if (!(end_time - start_time > rounding)) return segments;
   int k = schedule.intervalAt(start_time);
   // A start time within rounding of the next boundary starts the next interval, rather than
-  // leaving a sliver of the previous one.
-  while (k + 1 < count && boundary(k + 1) - start_time <= 1e-12 * horizon) ++k;
-  segments.push_back({start_time, boundary(k + 1), k});
-  for (int i = k + 1; i < count; ++i) segments.push_back({boundary(i), boundary(i + 1), i});
+  // leaving a sliver of the previous one; likewise an end time ends at a boundary near it.
+  while (k + 1 < count && boundary(k + 1) - start_time <= rounding) ++k;
+  for (double from = start_time; k < count && end_time - from > rounding; ++k) {
+    const double to = boundary(k + 1) - end_time > -rounding ? end_time : boundary(k + 1);
+    segments.push_back({from, to, k});
+    from = to;
+  }
   return segments;
 }
 
@@ -412,7 +422,8 @@ SurrogateRollout rolloutWith(Flow& flow, const char* form_name, const Scenario& 
 
   // Restarted at every boundary: the right-hand side jumps there, and a step across a jump
   // would be rejected until it lands on it anyway. The step size carries over as a first guess.
-  for (const Segment& segment : segmentsFrom(schedule, options.start_time)) {
+  const double end_time = options.end_time.value_or(scenario.horizon_s);
+  for (const Segment& segment : segmentsOf(schedule, options.start_time, end_time)) {
     flow.useRates(schedule.rates().row(segment.interval).transpose());
     OdeSolution solution =
         integrateDormandPrince(rhs, segment.start, segment.end, std::move(y), ode);
@@ -430,7 +441,9 @@ SurrogateRollout rolloutWith(Flow& flow, const char* form_name, const Scenario& 
   }
 
   result.running_cost = y(n * n);
-  result.terminal_cost = scenario.cost.WT.cwiseProduct(result.covariances.back()).sum();
+  const bool reaches_horizon = !options.end_time || *options.end_time == scenario.horizon_s;
+  result.terminal_cost =
+      reaches_horizon ? scenario.cost.WT.cwiseProduct(result.covariances.back()).sum() : 0.0;
   result.cost = result.running_cost + result.terminal_cost;
   return result;
 }

@@ -35,24 +35,27 @@ enum class SurrogateForm { Information, Covariance };
 struct RolloutOptions {
   double relative_tolerance = 1e-10;  // the bracket is a property of the model, not of the step
   double absolute_tolerance = 1e-12;
-  double start_time = 0.0;  // roll out over [start_time, T] ...
+  double start_time = 0.0;  // roll out over [start_time, end_time] ...
   // ... from this covariance at start_time. Required when start_time > 0; P0 when absent.
   std::optional<Eigen::MatrixXd> start_covariance;
+  // T when absent. A rollout that stops before T predicts covariances (its last one is the
+  // covariance at end_time); its costs cover [start_time, end_time] without a terminal term.
+  std::optional<double> end_time;
 };
 
 struct SurrogateRollout {
-  std::vector<double> times;                 // start_time, the interval boundaries after it, T
+  std::vector<double> times;                 // start_time, the interval boundaries, end_time
   std::vector<Eigen::MatrixXd> covariances;  // P_info = Ys^{-1} or Ps at those times
   double running_cost = 0.0;                 // ∫ <W, P> dt over [start_time, T]
-  double terminal_cost = 0.0;                // <W_T, P(T)>
-  double cost = 0.0;                         // the sum: J of eq. (6) over [start_time, T]
+  double terminal_cost = 0.0;                // <W_T, P(T)> (0 if the rollout ends before T)
+  double cost = 0.0;                         // the sum: J of eq. (6) over [start_time, end]
   int steps = 0;                             // accepted integrator steps
 };
 
 // Throw InputError when the schedule does not fit the scenario (sensor count, horizon), has a
 // negative or non-finite rate, or the options are out of range (start_time outside [0, T],
 // start_covariance not n x n symmetric positive definite). The scenario itself is assumed to have
-// passed validateScenario. Throw std::runtime_error if the integrator cannot reach T.
+// passed validateScenario. end_time must lie in [start_time, T]. Throw std::runtime_error if the integrator cannot reach T.
 [[nodiscard]] SurrogateRollout rolloutInformationForm(const Scenario& scenario,
                                                       const RateSchedule& schedule,
                                                       const RolloutOptions& options = {});

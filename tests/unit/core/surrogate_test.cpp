@@ -232,6 +232,27 @@ TEST(InformationForm, StartsMidIntervalFromAGivenCovariance) {
   EXPECT_LT(relativeError(r.cost, exact.trace()), kRelTol);
 }
 
+// A prediction over [1.1, 1.6]: interval 4 from 1.1, then interval 5 up to mid-interval 1.6.
+TEST(InformationForm, StopsAtAnEndTimeInsideAnInterval) {
+  const Scenario s = smallScenario(9, 3, 4, 1, 1.0, 2.0, 8);
+  Rng rng = Rng::keyed(9, 14);
+  const RateSchedule schedule = randomFeasibleSchedule(s, rng);
+  RolloutOptions options;
+  options.start_time = 1.1;
+  options.end_time = 1.6;  // inside interval 6 = [1.5, 1.75)
+  options.start_covariance = randomPositiveDefinite(3, rng);
+  const SurrogateRollout r = rolloutInformationForm(s, schedule, options);
+
+  ASSERT_EQ(r.times.size(), 4u);  // 1.1, 1.25, 1.5, 1.6
+  EXPECT_EQ(r.times.back(), 1.6);
+  MatrixXd exact = exactRiccatiStep(s.plant.A, s.plant.Q, informationRate(s, schedule, 4),
+                                    *options.start_covariance, 0.15);
+  exact = exactRiccatiStep(s.plant.A, s.plant.Q, informationRate(s, schedule, 5), exact, 0.25);
+  exact = exactRiccatiStep(s.plant.A, s.plant.Q, informationRate(s, schedule, 6), exact, 0.1);
+  EXPECT_LT(relativeError(r.covariances.back(), exact), kRelTol);
+  EXPECT_EQ(r.terminal_cost, 0.0) << "no terminal term before T";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Covariance form, eq. (15)
 
@@ -434,6 +455,20 @@ TEST(Surrogates, BothReduceToTheLyapunovFlowWithoutMeasurements) {
     }
     EXPECT_LT(relativeError(r.running_cost, running), kRelTol);
     EXPECT_LT(relativeError(r.terminal_cost, frobenius(s.cost.WT, terminal)), kRelTol);
+  }
+}
+
+TEST(Surrogates, BothPredictTheLyapunovFlowUpToAnEndTime) {
+  const DiagonalPlant d = diagonalPlant();
+  const Scenario& s = d.scenario;
+  const RateSchedule silent(s.horizon_s, MatrixXd::Zero(s.intervals, 1));
+  RolloutOptions options;
+  options.end_time = 0.37 * s.horizon_s;  // not on a boundary
+  for (const SurrogateForm form : {SurrogateForm::Information, SurrogateForm::Covariance}) {
+    SCOPED_TRACE(form == SurrogateForm::Information ? "information" : "covariance");
+    const SurrogateRollout r = rollout(form, s, silent, options);
+    EXPECT_EQ(r.times.back(), *options.end_time);
+    EXPECT_LT(relativeError(r.covariances.back(), lyapunovAt(d, *options.end_time)), kRelTol);
   }
 }
 
@@ -658,6 +693,12 @@ TEST(RolloutInput, RejectsBadOptions) {
   options.start_covariance = (MatrixXd(3, 3) << 1, 0.5, 0, 0, 1, 0, 0, 0, 1).finished();
   EXPECT_EQ(fieldFor(options), "options.start_covariance");
   options.start_covariance = MatrixXd::Identity(3, 3);
+  EXPECT_NO_THROW((void)rolloutInformationForm(s, schedule, options));
+  options.end_time = 0.5;  // before start_time
+  EXPECT_EQ(fieldFor(options), "options.end_time");
+  options.end_time = 2.5;  // past T
+  EXPECT_EQ(fieldFor(options), "options.end_time");
+  options.end_time = 2.0;
   EXPECT_NO_THROW((void)rolloutInformationForm(s, schedule, options));
   options.relative_tolerance = 0.0;
   EXPECT_EQ(fieldFor(options), "options.relative_tolerance");
