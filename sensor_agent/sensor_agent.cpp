@@ -196,15 +196,18 @@ class Agent {
 
   void publishStatus(sensornet_SensorState state, const std::string& detail) {
     next_status_ns_ = wallNowNs() + static_cast<std::int64_t>(1e9 * options_.status_period_s);
-    // The version in force now (the same for every hosted sensor).
-    const std::uint32_t episode = episode_ ? episode_->number : inputs_.lastStarted().value_or(0);
+    // The version in force now, or between episodes the one the next episode starts with (the
+    // same for every hosted sensor).
+    const std::optional<std::uint32_t> last = inputs_.lastStarted();
+    const std::uint32_t episode = episode_ ? episode_->number : last.value_or(0);
+    const std::uint32_t in_force_episode = episode_ ? episode : (last ? *last + 1 : 0);
     const emulator::ScheduleVersion* v = nullptr;
     double t = 0.0;
     if (inputs_.hasScenario() && !inputs_.book().empty()) {
       if (episode_) {
         t = std::clamp(episode_->clock.emulatedNow(), 0.0, inputs_.scenario().horizon_s);
       }
-      v = inputs_.book().inForce(episode, t);
+      v = inputs_.book().inForce(in_force_episode, t);
     }
     for (const int id : options_.sensors) {
       const double rate = v != nullptr ? v->schedule.rateAt(t, id) : 0.0;
@@ -214,7 +217,8 @@ class Agent {
       if (v != nullptr) {
         const RateSchedule& schedule = v->schedule;
         const int first =
-            v->effective_episode == episode ? schedule.intervalAt(v->effective_time_s) : 0;
+            v->effective_episode == in_force_episode ? schedule.intervalAt(v->effective_time_s)
+                                                     : 0;
         excluded_by_version = schedule.rates().col(id).tail(schedule.intervals() - first).isZero();
       }
       const bool live = state == sensornet_SENSOR_READY || state == sensornet_SENSOR_RUNNING;
