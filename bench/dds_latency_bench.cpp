@@ -20,7 +20,6 @@
 #include <dds/dds.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -40,37 +39,37 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
+using sensornet::emulator::wallNowNs;
 using sensornet::testing::BackgroundProcess;
 namespace dds = sensornet::dds;
+namespace emulator = sensornet::emulator;
 namespace fs = std::filesystem;
 
 constexpr dds_domainid_t kDomain = 218;
 const char* const kEchoTopic = "sensornet/bench/MeasurementEcho";
 
-std::int64_t wallNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
-}
+double median(std::vector<double> values) { return emulator::quantile(std::move(values), 0.5); }
 
 dds::Qos qosNamed(const std::string& name) {
   if (name == "bare") return dds::Qos().reliable().volatileDurability().keepLast(1);
   return dds::measurementQos();
 }
 
-dds::DomainConfig probeDomain() { return dds::DomainConfig::loopback(kDomain, "latency-probe"); }
+// Every role's entities: the measurements, and the echoes of the ping-pong.
+struct Probe {
+  dds::Domain domain{dds::DomainConfig::loopback(kDomain, "latency-probe")};
+  dds::Participant participant{domain};
+  dds::Topic<sensornet_Measurement> measurements{participant};
+  dds::Topic<sensornet_Measurement> echoes{participant, kEchoTopic};
+};
 
 // Latencies (µs) collected by a callback in another thread.
 struct Samples {
@@ -98,10 +97,8 @@ void sendAtRate(dds::Writer<sensornet_Measurement>& writer, double rate_hz, int 
 }
 
 int publish(const std::string& qos, double rate_hz, int samples) {
-  dds::Domain domain(probeDomain());
-  dds::Participant participant(domain);
-  dds::Topic<sensornet_Measurement> topic(participant);
-  dds::Writer<sensornet_Measurement> writer(participant, topic, qosNamed(qos));
+  Probe probe;
+  dds::Writer<sensornet_Measurement> writer(probe.participant, probe.measurements, qosNamed(qos));
   if (!writer.waitForReaders(1, 10s)) return 2;
   std::this_thread::sleep_for(500ms);
   sendAtRate(writer, rate_hz, samples);
@@ -120,10 +117,8 @@ void takeAll(dds::Reader<sensornet_Measurement>& reader, OnSample on_sample) {
 
 // Prints the median one-way latency (µs) over `samples` measurements.
 int subscribe(const std::string& qos, const std::string& receive, int samples) {
-  dds::Domain domain(probeDomain());
-  dds::Participant participant(domain);
-  dds::Topic<sensornet_Measurement> topic(participant);
-  dds::Reader<sensornet_Measurement> reader(participant, topic, qosNamed(qos));
+  Probe probe;
+  dds::Reader<sensornet_Measurement> reader(probe.participant, probe.measurements, qosNamed(qos));
   Samples got;
   const auto record = [&](const sensornet_Measurement& m, std::int64_t stamp) {
     std::lock_guard lock(got.mutex);
@@ -135,7 +130,7 @@ int subscribe(const std::string& qos, const std::string& receive, int samples) {
     while (got.count < samples) std::this_thread::sleep_for(50ms);
   } else {
     dds::ReadCondition ready(reader);
-    dds::WaitSet waitset(participant);
+    dds::WaitSet waitset(probe.participant);
     waitset.attach(ready, 1);
     while (got.count < samples) {
       (void)waitset.wait(10ms);
@@ -151,12 +146,9 @@ int subscribe(const std::string& qos, const std::string& receive, int samples) {
 // prints the medians of the hop out and the hop back (µs). The pong writes its own receive
 // stamp into `seq`.
 int ping(const std::string& qos, double rate_hz, int samples) {
-  dds::Domain domain(probeDomain());
-  dds::Participant participant(domain);
-  dds::Topic<sensornet_Measurement> topic(participant);
-  dds::Topic<sensornet_Measurement> echo_topic(participant, kEchoTopic);
-  dds::Writer<sensornet_Measurement> writer(participant, topic, qosNamed(qos));
-  dds::Reader<sensornet_Measurement> echoes(participant, echo_topic, qosNamed(qos));
+  Probe probe;
+  dds::Writer<sensornet_Measurement> writer(probe.participant, probe.measurements, qosNamed(qos));
+  dds::Reader<sensornet_Measurement> echoes(probe.participant, probe.echoes, qosNamed(qos));
   Samples got;
   dds::DataAvailableListener listener(echoes, [&] {
     takeAll(echoes, [&](const sensornet_Measurement& m, std::int64_t stamp) {
@@ -178,12 +170,9 @@ int ping(const std::string& qos, double rate_hz, int samples) {
 
 // Pong side: echoes every measurement from its listener, with its receive stamp in `seq`.
 int pong(const std::string& qos, int samples) {
-  dds::Domain domain(probeDomain());
-  dds::Participant participant(domain);
-  dds::Topic<sensornet_Measurement> topic(participant);
-  dds::Topic<sensornet_Measurement> echo_topic(participant, kEchoTopic);
-  dds::Reader<sensornet_Measurement> reader(participant, topic, qosNamed(qos));
-  dds::Writer<sensornet_Measurement> echo(participant, echo_topic, qosNamed(qos));
+  Probe probe;
+  dds::Reader<sensornet_Measurement> reader(probe.participant, probe.measurements, qosNamed(qos));
+  dds::Writer<sensornet_Measurement> echo(probe.participant, probe.echoes, qosNamed(qos));
   std::atomic<int> echoed{0};
   dds::DataAvailableListener listener(reader, [&] {
     takeAll(reader, [&](const sensornet_Measurement& m, std::int64_t stamp) {

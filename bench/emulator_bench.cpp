@@ -36,6 +36,7 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"
 
@@ -55,10 +56,7 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 }
 
 double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t mid = values.size() / 2;
-  return values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+  return sensornet::emulator::quantile(std::move(values), 0.5);
 }
 
 // Processes of one measurement, each logging to <dir>/<name>.log; all stopped (SIGTERM, then

@@ -354,15 +354,16 @@ class Coordinator {
     // Mid-episode: the rest of this episode, from the latest fused covariance.
     std::string summary;
     std::uint32_t first_version = 0;
+    const auto notInThisEpisode = [this](const char* why) {
+      return "not in episode " + std::to_string(current_episode_) + ": " + why + "; ";
+    };
     if (running_ && !(fused_ && fused_->episode == current_episode_)) {
-      summary = "not in episode " + std::to_string(current_episode_) +
-                ": no fused covariance of it yet; ";
+      summary = notInThisEpisode("no fused covariance of it yet");
     } else if (running_) {
       const double margin = options_.switch_margin_s * options_.time_scale;
       const double at = plant_.timeOf(plant_.tickAt(emulatedNow() + margin));
       if (at >= run_.scenario.horizon_s) {
-        summary = "not in episode " + std::to_string(current_episode_) +
-                  ": it ends within the switch margin; ";
+        summary = notInThisEpisode("it ends within the switch margin");
       } else {
         PlanRequest request = planRequest();
         request.start_time = at;
@@ -385,8 +386,7 @@ class Coordinator {
                     ", planned from the fused covariance at " + std::to_string(fused_->time_s) +
                     " s carried to " + std::to_string(at) + " s); ";
         } else {
-          summary = "not in episode " + std::to_string(current_episode_) +
-                    ": planning outlasted it; ";
+          summary = notInThisEpisode("planning outlasted it");
         }
       }
     }
@@ -410,10 +410,7 @@ class Coordinator {
     carry.start_time = fused_->time_s;
     carry.end_time = at;
     carry.start_covariance = fused_->covariance;
-    const SurrogateForm form = surrogate_ == PlanSurrogate::Information
-                                   ? SurrogateForm::Information
-                                   : SurrogateForm::Covariance;
-    return rollout(form, run_.scenario, v->schedule, carry).covariances.back();
+    return rollout(formOf(surrogate_), run_.scenario, v->schedule, carry).covariances.back();
   }
 
   [[nodiscard]] double emulatedNow() const { return std::max(0.0, clock_.emulatedNow()); }

@@ -3,10 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -46,7 +49,7 @@ struct ServeOptions {
 struct Arrival {
   emulator::FusedMeasurement measurement;
   std::uint32_t episode = 0;
-  std::string run_id;
+  std::optional<std::string> other_run;  // the run id it carries, if not this run's
 };
 
 // Arrivals handed from Cyclone's receive thread (the listener) to the main loop.
@@ -56,11 +59,8 @@ class Inbox {
   bool push(std::vector<Arrival> arrivals) {
     std::lock_guard lock(mutex_);
     const bool was_empty = arrivals_.empty();
-    if (was_empty) {
-      arrivals_ = std::move(arrivals);
-    } else {
-      for (Arrival& a : arrivals) arrivals_.push_back(std::move(a));
-    }
+    arrivals_.insert(arrivals_.end(), std::make_move_iterator(arrivals.begin()),
+                     std::make_move_iterator(arrivals.end()));
     return was_empty;
   }
   [[nodiscard]] std::vector<Arrival> drain() {
@@ -174,7 +174,8 @@ class FusionCenter {
     if (!arrivals.empty() && inbox_.push(std::move(arrivals))) waitset_.wake();
   }
 
-  static Arrival arrivalOf(const sensornet_Measurement& m, std::int64_t received_ns) {
+  // Reads only what never changes after construction (the run id): safe in the receive thread.
+  [[nodiscard]] Arrival arrivalOf(const sensornet_Measurement& m, std::int64_t received_ns) const {
     Arrival a;
     emulator::FusedMeasurement& fused = a.measurement;
     fused.sensor = static_cast<int>(m.sensor_id);
@@ -186,14 +187,16 @@ class FusionCenter {
     fused.publish_wall_ns = m.publish_wall_time_ns;
     fused.receive_wall_ns = received_ns;
     a.episode = m.episode;
-    a.run_id = dds::viewString(m.run_id);
+    if (const std::string_view run = dds::viewString(m.run_id); run != options_.run.run_id) {
+      a.other_run = std::string(run);
+    }
     return a;
   }
 
   void accept(Arrival arrival) {
-    if (arrival.run_id != options_.run.run_id) {
+    if (arrival.other_run) {
       ++rejected_wire_;
-      spdlog::warn("rejected a measurement of another run '{}'", arrival.run_id);
+      spdlog::warn("rejected a measurement of another run '{}'", *arrival.other_run);
       return;
     }
     const std::uint32_t episode = arrival.episode;

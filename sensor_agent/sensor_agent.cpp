@@ -222,7 +222,8 @@ class Agent {
         excluded_by_version = schedule.rates().col(id).tail(schedule.intervals() - first).isZero();
       }
       const bool live = state == sensornet_SENSOR_READY || state == sensornet_SENSOR_RUNNING;
-      const sensornet_SensorState shown = live && excluded_by_version ? sensornet_SENSOR_EXCLUDED : state;
+      const sensornet_SensorState shown =
+          live && excluded_by_version ? sensornet_SENSOR_EXCLUDED : state;
       sensornet_SensorStatus s{};
       s.sensor_id = static_cast<std::uint32_t>(id);
       s.run_id = dds::borrowString(options_.run.run_id);

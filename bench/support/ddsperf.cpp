@@ -1,6 +1,5 @@
 #include "ddsperf.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -9,6 +8,7 @@
 #include <thread>
 
 #include "sensornet/dds/domain.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 
 namespace sensornet::bench {
@@ -17,12 +17,7 @@ namespace {
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t mid = values.size() / 2;
-  return values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
-}
+double median(std::vector<double> values) { return emulator::quantile(std::move(values), 0.5); }
 
 // The number after `key` in `line` ("... mean 51.4us min 19.2us 50% 30.6us ... cnt 98").
 bool numberAfter(const std::string& line, const std::string& key, double& value) {

@@ -40,12 +40,12 @@ void checkRequest(const Scenario& scenario, const PlanRequest& request) {
   }
 }
 
+}  // namespace
+
 SurrogateForm formOf(PlanSurrogate surrogate) {
   return surrogate == PlanSurrogate::Covariance ? SurrogateForm::Covariance
                                                 : SurrogateForm::Information;
 }
-
-}  // namespace
 
 std::string_view describe(PlanSurrogate surrogate) {
   switch (surrogate) {

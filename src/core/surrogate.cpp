@@ -333,7 +333,8 @@ Eigen::MatrixXd startCovariance(const Scenario& scenario, const RolloutOptions& 
                      "a time in [0, " + std::to_string(horizon) + "], got " +
                          std::to_string(options.start_time));
   }
-  if (options.end_time && !(*options.end_time >= options.start_time && *options.end_time <= horizon)) {
+  if (options.end_time &&
+      !(*options.end_time >= options.start_time && *options.end_time <= horizon)) {
     throw InputError(kSource, "options.end_time",
                      "a time in [start_time, " + std::to_string(horizon) + "], got " +
                          std::to_string(*options.end_time));
@@ -441,9 +442,9 @@ SurrogateRollout rolloutWith(Flow& flow, const char* form_name, const Scenario& 
   }
 
   result.running_cost = y(n * n);
-  const bool reaches_horizon = !options.end_time || *options.end_time == scenario.horizon_s;
-  result.terminal_cost =
-      reaches_horizon ? scenario.cost.WT.cwiseProduct(result.covariances.back()).sum() : 0.0;
+  result.terminal_cost = end_time == scenario.horizon_s
+                             ? scenario.cost.WT.cwiseProduct(result.covariances.back()).sum()
+                             : 0.0;
   result.cost = result.running_cost + result.terminal_cost;
   return result;
 }

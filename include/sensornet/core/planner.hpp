@@ -44,6 +44,9 @@ namespace sensornet {
 
 enum class PlanSurrogate { Information, Covariance, Uniform };
 
+// The surrogate form a plan of this kind rolls out (a uniform plan uses the information form).
+[[nodiscard]] SurrogateForm formOf(PlanSurrogate surrogate);
+
 // The optimizer: a spectral projected gradient method of our own (the default, see
 // bench/README.md for why), or IPOPT with a limited-memory Hessian.
 enum class PlanMethod { ProjectedGradient, Ipopt };

@@ -46,16 +46,17 @@ struct RolloutOptions {
 struct SurrogateRollout {
   std::vector<double> times;                 // start_time, the interval boundaries, end_time
   std::vector<Eigen::MatrixXd> covariances;  // P_info = Ys^{-1} or Ps at those times
-  double running_cost = 0.0;                 // ∫ <W, P> dt over [start_time, T]
+  double running_cost = 0.0;                 // ∫ <W, P> dt over [start_time, end_time]
   double terminal_cost = 0.0;                // <W_T, P(T)> (0 if the rollout ends before T)
-  double cost = 0.0;                         // the sum: J of eq. (6) over [start_time, end]
+  double cost = 0.0;                         // the sum: J of eq. (6) over [start_time, end_time]
   int steps = 0;                             // accepted integrator steps
 };
 
 // Throw InputError when the schedule does not fit the scenario (sensor count, horizon), has a
 // negative or non-finite rate, or the options are out of range (start_time outside [0, T],
-// start_covariance not n x n symmetric positive definite). The scenario itself is assumed to have
-// passed validateScenario. end_time must lie in [start_time, T]. Throw std::runtime_error if the integrator cannot reach T.
+// end_time outside [start_time, T], start_covariance not n x n symmetric positive definite).
+// The scenario itself is assumed to have passed validateScenario. Throw std::runtime_error if
+// the integrator cannot reach end_time.
 [[nodiscard]] SurrogateRollout rolloutInformationForm(const Scenario& scenario,
                                                       const RateSchedule& schedule,
                                                       const RolloutOptions& options = {});
