@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -132,13 +133,13 @@ Subcommand addPlanCommand(CLI::App& app) {
   cmd->add_option("--tolerance", options->tolerance,
                   "stop when the scale-free projected-gradient residual is below this")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   cmd->add_option("--max-iterations", options->max_iterations, "iteration limit")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(integerRange(0, std::numeric_limits<int>::max()));
   cmd->add_option("--max-seconds", options->max_seconds, "wall-time limit of the solve")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   cmd->add_flag("--json", options->json,
                 "print {\"surrogate\", \"objective\", \"bracket\", \"iterations\", "
                 "\"solve_seconds\", \"status\"} as one JSON line");

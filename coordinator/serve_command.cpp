@@ -547,22 +547,22 @@ Subcommand addServeCommand(CLI::App& app) {
                   "use this schedule file (JSON) instead of planning");
   cmd->add_option("--episodes", options->episodes, "episodes to run")
       ->capture_default_str()
-      ->check(CLI::Range(1, 10'000'000));
+      ->check(integerRange(emulator::kMinEpisodes, emulator::kMaxEpisodes));
   cmd->add_option("--time-scale", options->time_scale,
                   "emulated seconds per wall second (1 = real time, 10 = ten times faster)")
       ->capture_default_str()
-      ->check(CLI::Range(1e-3, 1e4));
+      ->check(numberRange(emulator::kMinTimeScale, emulator::kMaxTimeScale));
   cmd->add_option("--seed", options->seed,
                   "run seed: keys the plant truth, the arrivals and the sensor noise")
       ->capture_default_str();
   cmd->add_option("--ready-timeout", options->ready_timeout_s,
                   "seconds to wait for every sensor and the fusion center")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--switch-margin", options->switch_margin_s,
                   "wall seconds between a live re-plan and the time it takes effect")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--json", options->json, "print a one-line JSON summary at the end");
   return {cmd, [options] { return runServe(*options); }};
 }

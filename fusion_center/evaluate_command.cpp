@@ -99,12 +99,12 @@ Subcommand addEvaluateCommand(CLI::App& app) {
                   "schedule (the largest equal constant rate meeting every constraint)");
   cmd->add_option("--runs", options->runs, "Monte Carlo episodes")
       ->capture_default_str()
-      ->check(CLI::Range(2, 100000000));
+      ->check(integerRange(2, 100'000'000));
   cmd->add_option("--seed", options->seed, "run seed (the result depends only on it)")
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "worker threads (0: one per core)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 1024));
+      ->check(integerRange(0, 1024));
   cmd->add_flag("--no-plant", options->no_plant,
                 "skip simulating the true state (faster; no NEES or squared error)");
   cmd->add_flag("--json", options->json,

@@ -365,11 +365,11 @@ Subcommand addServeCommand(CLI::App& app) {
                   "wall seconds a measurement may take to arrive before it is fused (a later "
                   "one is still fused in order: the episode is re-fused at its end)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--grace", options->grace_s,
                   "wall seconds past the end of an episode to wait for missing sensors")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");
   return {cmd, [options] {
             (void)options->run.domainConfig();

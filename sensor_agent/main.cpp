@@ -3,6 +3,7 @@
 // the episodes come over DDS.
 
 #include "sensor_agent.hpp"
+#include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/command_line.hpp"
 
@@ -24,7 +25,7 @@ int main(int argc, char** argv) {
     app.add_option("--status-period", options.status_period_s,
                    "seconds between SensorStatus samples when nothing changes")
         ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+        ->check(sensornet::positiveNumber(sensornet::emulator::kMaxWallSeconds));
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     options.sensors = sensornet::emulator::parseSensorIds(sensors, "--sensors");
     (void)options.run.domainConfig();  // bad run or domain id: one line, exit 2, before DDS

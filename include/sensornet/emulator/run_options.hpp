@@ -23,6 +23,18 @@
 
 namespace sensornet::emulator {
 
+// Limits of the numeric options of the emulator processes (coordinator serve, fusion_center
+// serve, sensor_agent). The launcher checks its own options against the same constants, so
+// that a value one of them would refuse is refused before any process starts.
+inline constexpr double kMinTimeScale = 1e-3;  // --time-scale: emulated seconds per wall second
+inline constexpr double kMaxTimeScale = 1e4;
+inline constexpr int kMinEpisodes = 1;  // --episodes
+inline constexpr int kMaxEpisodes = 10'000'000;
+// Wall-clock durations in seconds (--ready-timeout, --switch-margin, --lag, --grace,
+// --status-period): at most about 11.6 days, so that they stay exact in int64 nanoseconds
+// added to the wall clock.
+inline constexpr double kMaxWallSeconds = 1e6;
+
 // The environment variable read when --cyclone-config is not given.
 inline constexpr const char* kCycloneConfigVariable = "SENSORNET_CYCLONE_CONFIG";
 

@@ -12,7 +12,9 @@
 //   }
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -46,6 +48,26 @@ struct Subcommand {
 
 // Runs the subcommand the user chose (parseCommandLine must have succeeded).
 int runChosenSubcommand(const std::vector<Subcommand>& subcommands);
+
+// Checks for numeric options. Unlike CLI::Range and CLI::PositiveNumber, they refuse NaN and
+// infinities and print numbers readably (CLI11 prints bounds with std::to_string: 300 digits
+// for DBL_MAX). CLI11 puts the option's name in front of the message:
+//
+//   cmd->add_option("--time-scale", scale)->check(numberRange(1e-3, 1e4));
+//   // --time-scale 1e308: "--time-scale: expected a number from 0.001 to 10000, got 1e+308"
+//
+// A finite number from lo to hi (both included).
+[[nodiscard]] CLI::Validator numberRange(double lo, double hi);
+// A finite number > 0, at most hi.
+[[nodiscard]] CLI::Validator positiveNumber(double hi = std::numeric_limits<double>::max());
+// A finite number >= 0, at most hi.
+[[nodiscard]] CLI::Validator nonNegativeNumber(double hi = std::numeric_limits<double>::max());
+// An integer (no fraction, no exponent) from lo to hi (both included).
+[[nodiscard]] CLI::Validator integerRange(std::int64_t lo, std::int64_t hi);
+
+// Readable text that reads back as `value`: the shortest digits, in fixed notation unless that
+// is much longer ("0.001", "10000", "1e+308", "inf").
+[[nodiscard]] std::string formatNumber(double value);
 
 // Prints a JSON document on standard output, one document per line.
 void printJson(const nlohmann::json& doc);
