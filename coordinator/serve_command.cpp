@@ -22,6 +22,7 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
@@ -42,7 +43,7 @@ struct ServeOptions {
   double ready_timeout_s = 30.0;
   double start_lead_s = 0.2;     // wall seconds between announcing an episode and its start
   double switch_margin_s = 0.3;  // wall seconds between a re-plan and its effective time
-  double report_timeout_s = 10.0;  // wall seconds past an episode's end to wait for its report
+  double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
   bool json = false;
 };
 
@@ -99,11 +100,12 @@ class Coordinator {
     for (std::uint32_t e = 0; e < static_cast<std::uint32_t>(options_.episodes) && !stopping_;
          ++e) {
       if (!runEpisode(e)) {
-        shutDown();
+        shutDown(emulator::stopRequested() ? "the coordinator was stopped by a signal"
+                                           : "no report of episode " + std::to_string(e));
         return kExitFailure;
       }
     }
-    shutDown();
+    shutDown("");
     if (emulator::stopRequested()) return kExitFailure;
     if (options_.json) {
       printJson({{"run_id", options_.run.run_id},
@@ -155,17 +157,25 @@ class Coordinator {
     c.time_scale = options_.time_scale;
     c.seed = run_.seed;
     c.schedule_version = v->version;
+    c.episodes_planned = static_cast<std::uint32_t>(options_.episodes);
     mustWrite(control_writer_.write(c), "episode control");
     running_ = true;
-    const double wall_length = run_.scenario.horizon_s / options_.time_scale;
-    const std::int64_t deadline =
-        clock_.start_wall_ns + toNs(wall_length + options_.report_timeout_s);
+    // The fusion center closes the episode once every sensor's count is in, which after a
+    // stall can take a while; it publishes its state meanwhile. Give up only when it has shown
+    // no sign of life for report_timeout_s after the episode's end, not counting the time this
+    // process was stalled itself.
+    const std::int64_t end_ns = clock_.wallAt(run_.scenario.horizon_s);
+    fusion_heard_ns_ = end_ns;
     while (!reported_.count(episode)) {
       pump(10ms);
       if (emulator::stopRequested()) return false;
-      if (wallNowNs() > deadline) {
-        spdlog::error("no report of episode {} within {} s of its end", episode,
-                      options_.report_timeout_s);
+      const std::int64_t now = wallNowNs();
+      const std::int64_t from = std::max(end_ns, fusion_heard_ns_);
+      if (now > from && 1e-9 * static_cast<double>(now - from) -
+                                stall_watch_.stalledBetween(from, now) >
+                            options_.report_timeout_s) {
+        spdlog::error("no report of episode {} and no sign of the fusion center for {} s",
+                      episode, options_.report_timeout_s);
         return false;
       }
     }
@@ -174,7 +184,8 @@ class Coordinator {
     return true;
   }
 
-  void shutDown() {
+  // Ends the run; `failure` empty when every episode ran.
+  void shutDown(const std::string& failure) {
     sensornet_EpisodeControl c{};
     c.run_id = dds::borrowString(options_.run.run_id);
     c.episode = current_episode_;
@@ -183,6 +194,9 @@ class Coordinator {
     c.time_scale = options_.time_scale;
     c.seed = run_.seed;
     c.schedule_version = book_.latest().version;
+    c.episodes_planned = static_cast<std::uint32_t>(episodes_done_);
+    c.aborted = !failure.empty();
+    c.detail = dds::borrowString(failure);
     if (control_writer_.write(c) == dds::WriteResult::TimedOut) {
       spdlog::warn("the shutdown announcement timed out");
     }
@@ -194,10 +208,14 @@ class Coordinator {
   // Waits up to `timeout` for something to read, then reads everything.
   void pump(std::chrono::nanoseconds timeout) {
     (void)waitset_.wait(timeout);
+    if (const auto stall = stall_watch_.tick(wallNowNs())) {
+      spdlog::warn("the coordinator was stalled for {:.3g} s", stall->seconds());
+    }
     readStatuses();
     readReports();
     readFusionStates();
     readCommands();
+    stall_watch_.busyUntil(wallNowNs());  // planning a live change is work, not a stall
   }
 
   void readStatuses() {
@@ -218,6 +236,7 @@ class Coordinator {
   void readReports() {
     for (auto& received : report_reader_.take(16).samples) {
       const sensornet_Report& r = *received.sample;
+      fusion_heard_ns_ = std::max(fusion_heard_ns_, wallNowNs());
       if (!reported_.insert(r.episode).second) continue;
       spdlog::info("[{}/{}] episode {}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} "
                    "in [{:.6g}, {:.6g}] (95%)",
@@ -237,6 +256,7 @@ class Coordinator {
                                                             static_cast<Eigen::Index>(n),
                                                             static_cast<Eigen::Index>(n));
       fused_ = FusedEstimate{s.episode, s.emulated_time_s, 0.5 * (P + P.transpose())};
+      fusion_heard_ns_ = std::max(fusion_heard_ns_, wallNowNs());
     }
   }
 
@@ -269,9 +289,28 @@ class Coordinator {
     }
   }
 
-  // Returns (new version or 0, one-line summary); throws InputError to refuse.
+  // Returns (new version or 0, one-line summary); throws InputError to refuse. A change of
+  // settings (surrogate, excluded sensors, budget) holds only once its plans are published: a
+  // refused or failed re-plan leaves them as they were.
   std::pair<std::uint32_t, std::string> execute(const sensornet_Command& c) {
     const std::string source = "command " + std::to_string(c.command_id);
+    const auto replanWith = [&](PlanSurrogate surrogate, std::set<int> excluded,
+                                ResourceConstraints constraints) {
+      const PlanSurrogate kept_surrogate = surrogate_;
+      std::set<int> kept_excluded = excluded_;
+      ResourceConstraints kept_constraints = constraints_;
+      surrogate_ = surrogate;
+      excluded_ = std::move(excluded);
+      constraints_ = std::move(constraints);
+      try {
+        return replan(c.command_id, std::nullopt);
+      } catch (...) {
+        surrogate_ = kept_surrogate;
+        excluded_ = std::move(kept_excluded);
+        constraints_ = std::move(kept_constraints);
+        throw;
+      }
+    };
     switch (c.kind) {
       case sensornet_COMMAND_STATUS:
         return {0, "running episode " + std::to_string(current_episode_) + ", schedule v" +
@@ -281,16 +320,15 @@ class Coordinator {
         return {0, "the run ends after the current episode"};
       case sensornet_COMMAND_REPLAN: {
         const std::string s(dds::viewString(c.surrogate));
+        PlanSurrogate surrogate = PlanSurrogate::Uniform;
         if (s == "info") {
-          surrogate_ = PlanSurrogate::Information;
+          surrogate = PlanSurrogate::Information;
         } else if (s == "cov") {
-          surrogate_ = PlanSurrogate::Covariance;
-        } else if (s == "uniform") {
-          surrogate_ = PlanSurrogate::Uniform;
-        } else {
+          surrogate = PlanSurrogate::Covariance;
+        } else if (s != "uniform") {
           throw InputError(source, "surrogate", "info, cov or uniform, got '" + s + "'");
         }
-        return replan(c.command_id, std::nullopt);
+        return replanWith(surrogate, excluded_, constraints_);
       }
       case sensornet_COMMAND_EXCLUDE_SENSORS: {
         std::set<int> excluded = excluded_;
@@ -304,8 +342,7 @@ class Coordinator {
         if (static_cast<int>(excluded.size()) == run_.scenario.sensorCount()) {
           throw InputError(source, "sensor_ids", "at least one sensor left in service");
         }
-        excluded_ = std::move(excluded);
-        return replan(c.command_id, std::nullopt);
+        return replanWith(surrogate_, std::move(excluded), constraints_);
       }
       case sensornet_COMMAND_SET_BUDGET: {
         const auto b = dds::viewSequence(c.budget);
@@ -315,11 +352,21 @@ class Coordinator {
         }
         for (const double value : b) {
           if (!(value > 0.0) || !std::isfinite(value)) {
-            throw InputError(source, "budget", "finite values > 0");
+            throw InputError(source, "budget", "finite values > 0, got " + formatNumber(value));
           }
         }
-        constraints_.b = Eigen::Map<const Eigen::VectorXd>(b.data(), constraints_.b.size());
-        return replan(c.command_id, std::nullopt);
+        ResourceConstraints constraints = constraints_;
+        constraints.b = Eigen::Map<const Eigen::VectorXd>(b.data(), constraints_.b.size());
+        // The rules of a scenario file hold for a live budget too (at most
+        // kMaxMeasurementsPerHorizon expected measurements per sensor and horizon, ...).
+        Scenario check = run_.scenario;
+        check.constraints = constraints;
+        try {
+          validateScenario(check, source);
+        } catch (const InputError& e) {
+          throw InputError(source, "budget", e.expected());
+        }
+        return replanWith(surrogate_, excluded_, std::move(constraints));
       }
       case sensornet_COMMAND_SCHEDULE_FILE: {
         RateSchedule schedule =
@@ -340,64 +387,94 @@ class Coordinator {
   // half a margin is always left for the version to reach everyone), else at the start of the
   // next episode. A mid-episode change publishes a second version for the episodes after it,
   // planned over the whole horizon from P0 with the same settings.
+  //
+  // Both plans are made, and both must be ones the planner reports as optimal ("acceptable"
+  // is taken and named in the summary; "not_optimized" is the uniform schedule), before either
+  // is published: otherwise this throws InputError and nothing is published.
   std::pair<std::uint32_t, std::string> replan(std::uint64_t command_id,
                                                std::optional<RateSchedule> given) {
     Scenario planned_for = run_.scenario;
     planned_for.constraints = constraints_;
     const std::uint32_t next_episode = running_ || episodes_done_ > 0 ? current_episode_ + 1 : 0;
+    const std::string surrogate(describe(surrogate_));
 
     if (given) {
       emulator::ScheduleVersion v = makeVersion(planned_for, std::move(*given), "file",
                                                 command_id, next_episode, 0.0);
       return {publish(std::move(v)), "schedule file"};
     }
+    const auto requireOptimal = [&](const PlanResult& plan, const std::string& which) {
+      if (plan.status == "optimal" || plan.status == "acceptable" ||
+          plan.status == "not_optimized") {
+        return;
+      }
+      throw InputError(
+          "command " + std::to_string(command_id), "plan",
+          "a plan the planner reports as optimal, but the " + which + " " + surrogate +
+              " plan ended '" + plan.status + "' (kkt residual " +
+              formatNumber(plan.kkt_residual) + " after " + std::to_string(plan.iterations) +
+              " iterations); nothing was published, the settings are unchanged");
+    };
+    const auto describePlan = [](const PlanResult& plan) {
+      return plan.status == "acceptable" ? std::string("acceptable: IPOPT's looser tolerance")
+                                         : plan.status;
+    };
     // Mid-episode: the rest of this episode, from the latest fused covariance.
     std::string summary;
-    std::uint32_t first_version = 0;
     const auto notInThisEpisode = [this](const char* why) {
       return "not in episode " + std::to_string(current_episode_) + ": " + why + "; ";
     };
+    std::optional<PlanResult> tail_plan;
+    double at = 0.0;
+    const double margin = options_.switch_margin_s * options_.time_scale;
     if (running_ && !(fused_ && fused_->episode == current_episode_)) {
       summary = notInThisEpisode("no fused covariance of it yet");
     } else if (running_) {
-      const double margin = options_.switch_margin_s * options_.time_scale;
-      const double at = plant_.timeOf(plant_.tickAt(emulatedNow() + margin));
+      at = plant_.timeOf(plant_.tickAt(emulatedNow() + margin));
       if (at >= run_.scenario.horizon_s) {
         summary = notInThisEpisode("it ends within the switch margin");
       } else {
         PlanRequest request = planRequest();
         request.start_time = at;
         request.start_covariance = covarianceExpectedAt(at);
-        const PlanResult plan = planSchedule(planned_for, request);
-        emulator::ScheduleVersion tail = makeVersion(planned_for, plan.schedule,
-                                                     std::string(describe(surrogate_)),
-                                                     command_id, current_episode_, at);
-        // Planning took time. Every process must still hear of the version before it takes
-        // effect: if less than half the margin is left, it takes effect later, at the first
-        // tick half a margin from now (the plan's rates from there on; they stay feasible).
-        const double earliest = plant_.timeOf(plant_.tickAt(emulatedNow() + 0.5 * margin) + 1);
-        tail.effective_time_s = std::max(at, earliest);
-        if (tail.effective_time_s < run_.scenario.horizon_s) {
-          const double effective = tail.effective_time_s;
-          first_version = publish(std::move(tail));
-          summary = "version " + std::to_string(first_version) + " from " +
-                    std::to_string(effective) + " s of episode " +
-                    std::to_string(current_episode_) + " (" + plan.status +
-                    ", planned from the fused covariance at " + std::to_string(fused_->time_s) +
-                    " s carried to " + std::to_string(at) + " s); ";
-        } else {
-          summary = notInThisEpisode("planning outlasted it");
-        }
+        tail_plan = planSchedule(planned_for, request);
+        requireOptimal(*tail_plan, "mid-episode");
       }
     }
     const PlanResult plan = planSchedule(planned_for, planRequest());
-    const std::uint32_t full = publish(makeVersion(planned_for, plan.schedule,
-                                                   std::string(describe(surrogate_)), command_id,
-                                                   next_episode, 0.0));
-    summary += "version " + std::to_string(full) + " from episode " +
-               std::to_string(next_episode) + " (" + std::string(describe(surrogate_)) + ", " +
-               plan.status + ")";
-    return {first_version != 0 ? first_version : full, summary};
+    requireOptimal(plan, "full-horizon");
+    std::optional<emulator::ScheduleVersion> tail;
+    if (tail_plan) {
+      tail = makeVersion(planned_for, tail_plan->schedule, surrogate, command_id,
+                         current_episode_, at);
+    }
+    emulator::ScheduleVersion full =
+        makeVersion(planned_for, plan.schedule, surrogate, command_id, next_episode, 0.0);
+
+    // Planning took time. Every process must still hear of the version before it takes
+    // effect: if less than half the margin is left, it takes effect later, at the first tick
+    // half a margin from now (the plan's rates from there on; they stay feasible).
+    std::uint32_t first_version = 0;
+    if (tail) {
+      const double earliest = plant_.timeOf(plant_.tickAt(emulatedNow() + 0.5 * margin) + 1);
+      tail->effective_time_s = std::max(at, earliest);
+      if (tail->effective_time_s < run_.scenario.horizon_s) {
+        const double effective = tail->effective_time_s;
+        first_version = publish(std::move(*tail));
+        summary = "version " + std::to_string(first_version) + " from " +
+                  std::to_string(effective) + " s of episode " +
+                  std::to_string(current_episode_) + " (" + describePlan(*tail_plan) +
+                  ", planned from the fused covariance at " + std::to_string(fused_->time_s) +
+                  " s carried to " + std::to_string(at) + " s); ";
+      } else {
+        summary = notInThisEpisode("planning outlasted it");
+      }
+    }
+    full.version = book_.latest().version + 1;  // after the mid-episode version, if any
+    const std::uint32_t full_version = publish(std::move(full));
+    summary += "version " + std::to_string(full_version) + " from episode " +
+               std::to_string(next_episode) + " (" + surrogate + ", " + describePlan(plan) + ")";
+    return {first_version != 0 ? first_version : full_version, summary};
   }
 
   // The latest fused covariance carried forward to `at` (what arrives in between is not fused
@@ -485,6 +562,8 @@ class Coordinator {
 
   std::set<int> ready_sensors_;
   std::set<std::uint32_t> reported_;
+  std::int64_t fusion_heard_ns_ = 0;  // the fusion center's latest state or report
+  emulator::StallWatch stall_watch_;
   std::optional<FusedEstimate> fused_;
   std::uint32_t current_episode_ = 0;
   emulator::EpisodeClock clock_;  // of the current episode

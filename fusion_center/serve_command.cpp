@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -27,6 +28,7 @@
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
@@ -35,15 +37,21 @@ namespace {
 
 using namespace std::chrono_literals;
 using emulator::wallNowNs;
+using nlohmann::json;
+
+constexpr const char* kProcess = "fusion_center";
 
 struct ServeOptions {
   emulator::RunOptions run;
   std::string report_path;
-  double lag_s = 0.05;          // wall seconds a measurement may take to arrive before fusion
-  double grace_s = 5.0;         // wall seconds past T to wait for missing end markers
-  double state_period_s = 0.05; // FusionState publication period (wall seconds)
+  double lag_s = 0.05;           // wall seconds a measurement may take to arrive before fusion
+  double stall_limit_s = 12.0;   // wall seconds a sensor that owes measurements may stay silent
+  double keep_up_limit_s = 1.0;  // wall seconds of drain or sensor lag that count as overload
+  double state_period_s = 0.05;  // FusionState publication period (wall seconds)
   bool json = false;
 };
+
+std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
 
 // A measurement as it came off the wire, stamped on arrival.
 struct Arrival {
@@ -73,10 +81,15 @@ class Inbox {
   std::vector<Arrival> arrivals_;
 };
 
-// An episode in progress: its clock and its fusion.
+// An episode in progress: its clock, its fusion and what the fusion center heard of it.
 struct OpenEpisode {
   emulator::EpisodeClock clock;
   std::unique_ptr<emulator::EpisodeFusion> fusion;
+  std::vector<std::int64_t> last_heard_ns;  // per sensor: its last measurement, tally or status
+  std::vector<sensornet_EpisodeTally> tallies;  // as received (sent, lag, stalls), per sensor
+  std::int64_t last_tally_ns = 0;               // publication wall time of the latest tally
+  std::optional<std::int64_t> settled_ns;       // when everything owed was in
+  std::uint64_t backlog = 0;
 };
 
 class FusionCenter {
@@ -87,37 +100,55 @@ class FusionCenter {
         participant_(domain_),
         inputs_(participant_),
         measurement_topic_(participant_),
+        tally_topic_(participant_),
+        status_topic_(participant_),
         report_topic_(participant_),
         state_topic_(participant_),
         measurement_reader_(participant_, measurement_topic_),
+        tally_reader_(participant_, tally_topic_),
+        status_reader_(participant_, status_topic_),
         report_writer_(participant_, report_topic_),
         state_writer_(participant_, state_topic_),
         waitset_(participant_),
+        tally_ready_(tally_reader_),
+        status_ready_(status_reader_),
         arrivals_listener_(measurement_reader_, [this] { onMeasurements(); }) {
     inputs_.attachTo(waitset_);
+    waitset_.attach(tally_ready_, 1);
+    waitset_.attach(status_ready_, 2);
+    if (!options_.report_path.empty()) {
+      const auto log_path = emulator::episodeLogPath(options_.report_path);
+      episode_log_.emplace(log_path);
+      spdlog::info("episode log: {}", log_path.string());
+    }
   }
 
   int run() {
     spdlog::info("fusion center of run {} waiting for the scenario", options_.run.run_id);
-    bool shutdown = false;
-    while (!shutdown && !emulator::stopRequested()) {
+    std::optional<emulator::RunEnd> end;
+    while (!end && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
+      noteOwnStall();
       for (Arrival& arrival : inbox_.drain()) accept(std::move(arrival));
-      shutdown = follow();
+      end = follow();
+      readTallies();
+      readStatuses();
       advance();
     }
-    // Finish what is open (incomplete episodes are marked so in the report).
-    for (auto& [number, open] : open_) finishEpisode(open);
+    // Finish what is open: an episode still owed measurements is closed incomplete.
+    for (auto& [number, open] : open_) closeUnsettled(number, open, "the run ended");
+    for (auto& [number, open] : open_) finishEpisode(number, open);
     open_.clear();
-    const std::string status = shutdown ? "completed" : "interrupted";
+    const std::string status = decideStatus(end);
     writeReport(status);
     (void)report_writer_.waitForAcks(2s);
-    return shutdown ? kExitOk : kExitFailure;
+    spdlog::info("run {}: {}", options_.run.run_id, status);
+    return status == "completed" || status == "degraded" ? kExitOk : kExitFailure;
   }
 
  private:
-  // Takes what the run announced; returns true on RUN_SHUTDOWN.
-  bool follow() {
+  // Takes what the run announced; the run's end on RUN_SHUTDOWN.
+  std::optional<emulator::RunEnd> follow() {
     const emulator::RunInputs::Update update = inputs_.poll();
     if (update.scenario_arrived) {
       const Scenario& s = inputs_.scenario();
@@ -127,20 +158,29 @@ class FusionCenter {
       for (auto& [episode, open] : open_) open.fusion->scheduleChanged();
     }
     for (const emulator::EpisodeStart& start : update.starts) startEpisode(start);
-    return update.shutdown;
+    if (update.shutdown) return update.end;
+    return std::nullopt;
   }
 
   void startEpisode(const emulator::EpisodeStart& start) {
+    episodes_planned_ = start.episodes_planned;
     OpenEpisode open;
     open.clock = start.clock;
     open.fusion = std::make_unique<emulator::EpisodeFusion>(
         inputs_.scenario(), inputs_.plant(), inputs_.book(), start.episode,
         [this](const emulator::ScheduleVersion& v) { return bracketOf(v); });
+    const auto sensors = static_cast<std::size_t>(inputs_.scenario().sensorCount());
+    open.last_heard_ns.assign(sensors, 0);
+    open.tallies.assign(sensors, sensornet_EpisodeTally{});
     auto& slot = open_.emplace(start.episode, std::move(open)).first->second;
-    // Measurements that came before the episode's control sample.
+    // Measurements and tallies that came before the episode's control sample.
     if (auto early = early_.find(start.episode); early != early_.end()) {
       for (auto& m : early->second) route(slot, std::move(m));
       early_.erase(early);
+    }
+    if (auto early = early_tallies_.find(start.episode); early != early_tallies_.end()) {
+      for (const auto& t : early->second) applyTally(slot, t);
+      early_tallies_.erase(early);
     }
   }
 
@@ -166,7 +206,7 @@ class FusionCenter {
           },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
             if (info.instance_state == dds::InstanceState::NoWriters) {
-              spdlog::warn("sensor {} has no live writer any more", key.sensor_id);
+              spdlog::info("sensor {} has no live writer at the moment", key.sensor_id);
             }
           });
       if (count < kBatch) break;
@@ -193,19 +233,24 @@ class FusionCenter {
     return a;
   }
 
+  void rejectOutside(const char* reason, const std::string& detail) {
+    ++rejected_outside_[reason];
+    spdlog::warn("rejected a measurement: {}", detail);
+  }
+
   void accept(Arrival arrival) {
+    ++waiting_;
     if (arrival.other_run) {
-      ++rejected_wire_;
-      spdlog::warn("rejected a measurement of another run '{}'", *arrival.other_run);
+      rejectOutside("other_run", "of another run '" + *arrival.other_run + "'");
       return;
     }
     const std::uint32_t episode = arrival.episode;
     auto open = open_.find(episode);
     if (open == open_.end()) {
       if (inputs_.lastStarted() && episode <= *inputs_.lastStarted()) {
-        ++rejected_wire_;
-        spdlog::warn("rejected a measurement of finished episode {} (sensor {})", episode,
-                     arrival.measurement.sensor);
+        rejectOutside("finished_episode", "of finished episode " + std::to_string(episode) +
+                                              " (sensor " +
+                                              std::to_string(arrival.measurement.sensor) + ")");
       } else {
         early_[episode].push_back(std::move(arrival.measurement));
       }
@@ -215,41 +260,158 @@ class FusionCenter {
   }
 
   void route(OpenEpisode& open, emulator::FusedMeasurement m) {
-    if (m.z.size() == 0) {  // end-of-episode marker: seq = how many the sensor sent
-      open.fusion->finishSensor(m.sensor, m.seq);
+    const int sensor = m.sensor;
+    if (auto rejection = open.fusion->add(std::move(m))) {
+      spdlog::warn("rejected a measurement of episode {}: {}", open.fusion->episode(),
+                   rejection->detail);
       return;
     }
-    if (auto reason = open.fusion->add(std::move(m))) {
-      spdlog::warn("rejected a measurement: {}", *reason);
+    open.last_heard_ns[static_cast<std::size_t>(sensor)] = wallNowNs();
+  }
+
+  void readTallies() {
+    for (auto& received : tally_reader_.take(64).samples) {
+      const sensornet_EpisodeTally& t = *received.sample;
+      if (dds::viewString(t.run_id) != options_.run.run_id) {
+        ++rejected_outside_["other_run"];
+        continue;
+      }
+      if (!inputs_.hasScenario() ||
+          t.sensor_id >= static_cast<std::uint32_t>(inputs_.scenario().sensorCount())) {
+        ++rejected_outside_["malformed_tally"];
+        continue;
+      }
+      if (auto open = open_.find(t.episode); open != open_.end()) {
+        applyTally(open->second, t);
+      } else if (!inputs_.lastStarted() || t.episode > *inputs_.lastStarted()) {
+        early_tallies_[t.episode].push_back(t);
+      } else {
+        lateTally(t);
+      }
     }
+  }
+
+  void applyTally(OpenEpisode& open, const sensornet_EpisodeTally& t) {
+    const auto j = static_cast<std::size_t>(t.sensor_id);
+    open.tallies[j] = t;
+    open.tallies[j].run_id = nullptr;  // borrowed from the sample; not kept
+    open.fusion->setTally(static_cast<int>(t.sensor_id), t.sent);
+    open.last_heard_ns[j] = wallNowNs();
+    open.last_tally_ns = std::max(open.last_tally_ns, t.wall_time_ns);
+  }
+
+  // A tally of an episode closed before it came (the sensor stalled past the limit): the report
+  // names what the episode missed.
+  void lateTally(const sensornet_EpisodeTally& t) {
+    if (closed_without_.erase({t.episode, static_cast<int>(t.sensor_id)}) == 0) return;
+    faults_.push_back(emulator::faultEntry(
+        "late_tally", kProcess, static_cast<int>(t.sensor_id), t.episode, std::nullopt,
+        "sensor " + std::to_string(t.sensor_id) + " reported " + std::to_string(t.sent) +
+            " measurements sent in episode " + std::to_string(t.episode) +
+            " after the episode had been closed without them"));
+  }
+
+  // Statuses carry each sensor's running count: a lower bound of what it sent, for a sensor
+  // whose tally never comes.
+  void readStatuses() {
+    for (auto& received : status_reader_.take(64).samples) {
+      const sensornet_SensorStatus& s = *received.sample;
+      if (dds::viewString(s.run_id) != options_.run.run_id) continue;
+      auto open = open_.find(s.episode);
+      if (open == open_.end() || !inputs_.hasScenario() ||
+          s.sensor_id >= static_cast<std::uint32_t>(inputs_.scenario().sensorCount())) {
+        continue;
+      }
+      open->second.fusion->noteSentAtLeast(static_cast<int>(s.sensor_id), s.sent_in_episode);
+      open->second.last_heard_ns[s.sensor_id] = wallNowNs();
+    }
+  }
+
+  void noteOwnStall() {
+    if (const auto stall = stall_watch_.tick(wallNowNs())) {
+      spdlog::warn("the fusion center was stalled for {:.3g} s", stall->seconds());
+      stalls_.push_back({{"process", kProcess}, {"seconds", stall->seconds()}});
+    }
+  }
+
+  // Wall seconds since `from_ns` during which this process ran.
+  [[nodiscard]] double awakeSince(std::int64_t from_ns, std::int64_t now_ns) const {
+    return 1e-9 * static_cast<double>(now_ns - from_ns) -
+           stall_watch_.stalledBetween(from_ns, now_ns);
   }
 
   void advance() {
     const std::int64_t now = wallNowNs();
+    backlog_ = std::max(backlog_, waiting_);
+    waiting_ = 0;
     for (auto it = open_.begin(); it != open_.end();) {
+      const std::uint32_t number = it->first;
       OpenEpisode& open = it->second;
+      open.backlog = std::max(open.backlog, backlog_);
       const double horizon = inputs_.scenario().horizon_s;
-      const double watermark =
-          open.clock.emulatedAt(now - static_cast<std::int64_t>(1e9 * options_.lag_s));
+      const double watermark = open.clock.emulatedAt(now - toNs(options_.lag_s));
       if (watermark > 0.0) open.fusion->fuseUpTo(std::min(watermark, horizon));
-      const bool overdue =
-          open.clock.emulatedAt(now) > horizon + options_.grace_s * open.clock.time_scale;
-      if (open.fusion->allSensorsFinished() || overdue) {
-        if (!open.fusion->allSensorsFinished()) {
-          spdlog::warn("episode {}: end markers missing {} s after T; closing it incomplete",
-                       it->first, options_.grace_s);
-        }
-        finishEpisode(open);
+      if (open.fusion->allSettled()) {
+        open.settled_ns = now;
+        finishEpisode(number, open);
         it = open_.erase(it);
         continue;
       }
-      if (now >= next_state_ns_ && open.fusion->fusedTime() > 0.0) publishState(it->first, open);
+      if (silentTooLong(open, now)) {
+        closeUnsettled(number, open,
+                       "silent for " + formatSeconds(options_.stall_limit_s) +
+                           " s after the episode ended");
+        finishEpisode(number, open);
+        it = open_.erase(it);
+        continue;
+      }
+      if (now >= next_state_ns_) publishState(number, open);
       ++it;
+    }
+    backlog_ = 0;
+  }
+
+  static std::string formatSeconds(double seconds) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", seconds);
+    return text;
+  }
+
+  // An unsettled sensor silent (no measurement, tally or status) for the stall limit after the
+  // episode's end, not counting the fusion center's own stalls.
+  [[nodiscard]] bool silentTooLong(const OpenEpisode& open, std::int64_t now) const {
+    const std::int64_t end_ns = open.clock.wallAt(inputs_.scenario().horizon_s);
+    if (now < end_ns) return false;
+    for (const int j : open.fusion->unsettled()) {
+      const std::int64_t from = std::max(end_ns, open.last_heard_ns[static_cast<std::size_t>(j)]);
+      if (awakeSince(from, now) <= options_.stall_limit_s) return false;
+    }
+    return true;
+  }
+
+  // Names every sensor the episode still waits for in the faults (the episode is incomplete).
+  void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why) {
+    for (const int j : open.fusion->unsettled()) {
+      const emulator::SensorTally& t = open.fusion->tally(j);
+      std::string detail;
+      if (t.tallied) {
+        detail = "sensor " + std::to_string(j) + " sent " + std::to_string(t.sent) +
+                 " measurements in episode " + std::to_string(number) + ", " +
+                 std::to_string(t.received) + " arrived; the episode was closed when " + why;
+      } else {
+        detail = "sensor " + std::to_string(j) + " never reported its count for episode " +
+                 std::to_string(number) + " (" + std::to_string(t.received) +
+                 " measurements arrived); the episode was closed when " + why;
+        closed_without_.insert({number, j});
+      }
+      faults_.push_back(emulator::faultEntry(t.tallied ? "lost" : "stall", kProcess, j, number,
+                                             open.fusion->fusedTime(), detail));
+      spdlog::warn("episode {}: {}", number, detail);
     }
   }
 
   void publishState(std::uint32_t episode, const OpenEpisode& open) {
-    next_state_ns_ = wallNowNs() + static_cast<std::int64_t>(1e9 * options_.state_period_s);
+    next_state_ns_ = wallNowNs() + toNs(options_.state_period_s);
     const Eigen::MatrixXd& P = open.fusion->covariance();
     std::vector<double> values(P.data(), P.data() + P.size());  // symmetric: order is moot
     const emulator::ScheduleVersion* v = inputs_.book().inForce(episode, open.fusion->fusedTime());
@@ -264,23 +426,61 @@ class FusionCenter {
     (void)state_writer_.write(s);  // keep-last 1: a timeout only loses a superseded estimate
   }
 
-  void finishEpisode(OpenEpisode& open) {
+  void finishEpisode(std::uint32_t number, OpenEpisode& open) {
     emulator::EpisodeResult result = open.fusion->finish();
-    report_->add(result);
+    result.backlog = open.backlog;
+    checkKeepingUp(number, open, result);
+    report_->addLatencies(result.latencies_s);
+    const json entry = emulator::episodeEntry(result);
+    if (episode_log_) episode_log_->append(entry);
+    report_->add(entry);
     const emulator::RunSummary s = report_->summary();
     spdlog::info(
-        "episode {}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; running mean {:.6g} ± {:.3g} "
-        "over {} episodes",
-        result.episode, result.realized_cost, result.bracket.info, result.bracket.cov, s.mean,
-        s.ci95, s.episodes);
+        "episode {}{}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} over {} complete "
+        "episodes",
+        result.episode, result.complete ? "" : " (incomplete)", result.realized_cost,
+        result.bracket.info, result.bracket.cov, s.mean, s.episodes_complete);
     publishReport(result, s);
+  }
+
+  // Overload: the fusion center drained an episode late (not counting its own stalls), or a
+  // sensor published far behind the emulated clock (not counting the sensor's stalls).
+  void checkKeepingUp(std::uint32_t number, const OpenEpisode& open,
+                      emulator::EpisodeResult& result) {
+    if (open.settled_ns) {
+      const std::int64_t from =
+          std::max(open.clock.wallAt(inputs_.scenario().horizon_s), open.last_tally_ns);
+      if (*open.settled_ns > from) result.drain_s = awakeSince(from, *open.settled_ns);
+    }
+    if (result.drain_s > options_.keep_up_limit_s) {
+      faults_.push_back(emulator::faultEntry(
+          "overload", kProcess, std::nullopt, number, std::nullopt,
+          "the fusion center had episode " + std::to_string(number) + " in only " +
+              formatSeconds(result.drain_s) + " s after its last tally (up to " +
+              std::to_string(open.backlog) + " measurements waiting)"));
+    }
+    for (std::size_t j = 0; j < open.tallies.size(); ++j) {
+      const sensornet_EpisodeTally& t = open.tallies[j];
+      if (t.stalled_s > 0.0) {
+        stalls_.push_back({{"process", "sensor " + std::to_string(j)},
+                           {"episode", number},
+                           {"seconds", t.stalled_s}});
+      }
+      if (t.max_lag_s > options_.keep_up_limit_s) {
+        faults_.push_back(emulator::faultEntry(
+            "sensor_lag", "sensor_agent", static_cast<int>(j), number, std::nullopt,
+            "sensor " + std::to_string(j) + " published up to " + formatSeconds(t.max_lag_s) +
+                " s behind the emulated clock in episode " + std::to_string(number)));
+      }
+    }
   }
 
   void publishReport(const emulator::EpisodeResult& e, const emulator::RunSummary& s) {
     std::vector<sensornet_SensorCounts> counts;
     for (std::size_t j = 0; j < e.sensors.size(); ++j) {
       const emulator::SensorTally& t = e.sensors[j];
-      counts.push_back({static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late});
+      counts.push_back(
+          {static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late, t.sent});
     }
     sensornet_Report r{};
     r.run_id = dds::borrowString(options_.run.run_id);
@@ -294,20 +494,59 @@ class FusionCenter {
     r.latency_median_s = s.latency_median_s;
     r.latency_p99_s = s.latency_p99_s;
     r.summary.episodes = s.episodes;
+    r.summary.episodes_complete = s.episodes_complete;
     r.summary.realized_mean = s.mean;
-    r.summary.realized_ci95_low = s.mean - s.ci95;
-    r.summary.realized_ci95_high = s.mean + s.ci95;
+    r.summary.realized_ci95_low = s.ci95_low;
+    r.summary.realized_ci95_high = s.ci95_high;
     r.summary.bracket_lower_mean = s.bracket_mean.info;
     r.summary.bracket_upper_mean = s.bracket_mean.cov;
-    r.summary.meets_bracket = s.meets_bracket;
+    r.summary.meets_bracket = s.meets_bracket.value_or(false);
     r.summary.nees_mean = s.nees_mean;
+    r.summary.sent = s.sent;
     r.summary.received = s.received;
     r.summary.lost = s.lost;
     r.summary.latency_median_s = s.latency_median_s;
     r.summary.latency_p99_s = s.latency_p99_s;
+    r.complete = e.complete;
     if (report_writer_.write(r) == dds::WriteResult::TimedOut) {
       spdlog::warn("the report of episode {} timed out on the wire (kept in the file)", e.episode);
     }
+  }
+
+  // DESIGN.md's run outcome, as far as the fusion center saw it (the launcher adds what it saw
+  // of the processes): failed when the coordinator gave up, interrupted on a signal, degraded
+  // when an episode is missing or incomplete, something was lost or rejected, or it overloaded.
+  std::string decideStatus(const std::optional<emulator::RunEnd>& end) {
+    if (!end) return "interrupted";
+    if (end->aborted) {
+      faults_.push_back(emulator::faultEntry("run_aborted", "coordinator", std::nullopt,
+                                             std::nullopt, std::nullopt, end->detail));
+      return "failed";
+    }
+    if (!report_) return "failed";
+    for (const auto& [reason, count] : inputs_.rejected()) rejected_outside_[reason] += count;
+    for (const auto& [reason, count] : rejected_outside_) report_->countRejected(reason, count);
+    for (const auto& [episode, held] : early_) {
+      report_->countRejected("unknown_episode", held.size());
+    }
+    const emulator::RunSummary s = report_->summary();
+    if (s.episodes < end->episodes_run) {
+      faults_.push_back(emulator::faultEntry(
+          "missing_episodes", kProcess, std::nullopt, std::nullopt, std::nullopt,
+          "the coordinator ran " + std::to_string(end->episodes_run) + " episodes, " +
+              std::to_string(s.episodes) + " were fused"));
+    }
+    if (s.rejectedTotal() > 0) {
+      std::string reasons;
+      for (const auto& [reason, count] : s.rejected) {
+        reasons += (reasons.empty() ? "" : ", ") + std::to_string(count) + " " + reason;
+      }
+      faults_.push_back(emulator::faultEntry("rejected", kProcess, std::nullopt, std::nullopt,
+                                             std::nullopt,
+                                             "samples refused on the wire: " + reasons));
+    }
+    const bool clean = faults_.empty() && s.lost == 0 && s.episodes == s.episodes_complete;
+    return clean ? "completed" : "degraded";
   }
 
   void writeReport(const std::string& status) {
@@ -315,8 +554,11 @@ class FusionCenter {
       spdlog::error("no scenario ever arrived; no report");
       return;
     }
-    const nlohmann::json doc =
-        report_->toJson(inputs_.book(), status, inputs_.rejected() + rejected_wire_);
+    const json extra = {{"episodes_planned", episodes_planned_},
+                        {"seed", inputs_.run().seed},
+                        {"stalls", stalls_}};
+    const json doc =
+        report_->toJson(status, faults_, emulator::scheduleVersionsJson(inputs_.book()), extra);
     if (!options_.report_path.empty()) {
       writeJsonFile(options_.report_path, doc, "run report");
       spdlog::info("report written to {}", options_.report_path);
@@ -329,22 +571,37 @@ class FusionCenter {
   dds::Participant participant_;
   emulator::RunInputs inputs_;
   dds::Topic<sensornet_Measurement> measurement_topic_;
+  dds::Topic<sensornet_EpisodeTally> tally_topic_;
+  dds::Topic<sensornet_SensorStatus> status_topic_;
   dds::Topic<sensornet_Report> report_topic_;
   dds::Topic<sensornet_FusionState> state_topic_;
   dds::Reader<sensornet_Measurement> measurement_reader_;
+  dds::Reader<sensornet_EpisodeTally> tally_reader_;
+  dds::Reader<sensornet_SensorStatus> status_reader_;
   dds::Writer<sensornet_Report> report_writer_;
   dds::Writer<sensornet_FusionState> state_writer_;
   dds::WaitSet waitset_;
+  dds::ReadCondition tally_ready_;
+  dds::ReadCondition status_ready_;
   Inbox inbox_;
   // After what its callback touches (reader, waitset, inbox): it is destroyed before them, and
   // its destructor waits for a callback in progress.
   dds::DataAvailableListener arrivals_listener_;
 
+  std::optional<emulator::EpisodeLog> episode_log_;
   std::optional<emulator::RunReport> report_;
   std::map<std::uint32_t, CostBracket> brackets_;
   std::map<std::uint32_t, OpenEpisode> open_;
   std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
-  std::uint64_t rejected_wire_ = 0;  // measurements of other runs or finished episodes
+  std::map<std::uint32_t, std::vector<sensornet_EpisodeTally>> early_tallies_;
+  std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
+  emulator::RejectionCounts rejected_outside_;  // samples refused before reaching an episode
+  json faults_ = json::array();
+  json stalls_ = json::array();  // stalls absorbed (own and the sensors'), for the report
+  emulator::StallWatch stall_watch_;
+  std::uint32_t episodes_planned_ = 0;
+  std::uint64_t waiting_ = 0;  // measurements taken off the inbox in this loop turn
+  std::uint64_t backlog_ = 0;
   std::int64_t next_state_ns_ = 0;
 };
 
@@ -356,18 +613,30 @@ Subcommand addServeCommand(CLI::App& app) {
       "serve",
       "Fuse a running emulation: the exact CD-KF over every sensor's measurements in timestamp "
       "order, a Report per episode (realized cost against the bracket of the schedule in "
-      "force), and the final report on shutdown. Example:\n  fusion_center serve --run-id demo "
+      "force), and the final report on shutdown. An episode closes when every sensor's "
+      "end-of-episode tally is in and every measurement it counts has arrived; a sensor that "
+      "owes measurements and stays silent past --stall-limit is named in the report's faults. "
+      "Each finished episode is appended at once to the JSON Lines log beside the report "
+      "(report.jsonl beside report.json). Example:\n  fusion_center serve --run-id demo "
       "--report report.json");
   emulator::addRunOptions(*cmd, options->run);
   cmd->add_option("--report", options->report_path,
-                   "final report (JSON) written when the run shuts down");
+                  "final report (JSON) written when the run shuts down; the episode log goes "
+                  "beside it");
   cmd->add_option("--lag", options->lag_s,
                   "wall seconds a measurement may take to arrive before it is fused (a later "
                   "one is still fused in order: the episode is re-fused at its end)")
       ->capture_default_str()
       ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--grace", options->grace_s,
-                  "wall seconds past the end of an episode to wait for missing sensors")
+  cmd->add_option("--stall-limit", options->stall_limit_s,
+                  "wall seconds a sensor that still owes measurements may stay silent after an "
+                  "episode's end before the episode is closed incomplete (longer than the 10 s "
+                  "stalls a run absorbs)")
+      ->capture_default_str()
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  cmd->add_option("--keep-up-limit", options->keep_up_limit_s,
+                  "wall seconds of drain after an episode's end, or of a sensor's lag behind the "
+                  "emulated clock, past which the run is reported as overloaded (degraded)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");

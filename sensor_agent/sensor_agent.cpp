@@ -20,6 +20,7 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
+#include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/command_line.hpp"
 
@@ -39,6 +40,8 @@ struct Episode {
   std::size_t next = 0;  // first arrival not yet published
   double last_published_s = -1.0;
   std::map<int, std::uint64_t> sent;  // per hosted sensor
+  double max_lag_s = 0.0;             // behind the emulated clock, own stalls left out
+  std::uint64_t write_timeouts_at_start = 0;
 };
 
 class Agent {
@@ -49,8 +52,10 @@ class Agent {
         participant_(domain_),
         inputs_(participant_),
         measurement_topic_(participant_),
+        tally_topic_(participant_),
         status_topic_(participant_),
         measurement_writer_(participant_, measurement_topic_),
+        tally_writer_(participant_, tally_topic_),
         status_writer_(participant_, status_topic_),
         waitset_(participant_) {
     inputs_.attachTo(waitset_);
@@ -61,9 +66,11 @@ class Agent {
     while (!emulator::stopRequested()) {
       const auto wait = untilNextArrival();
       (void)waitset_.wait(wait);
+      noteOwnStall();
       if (follow()) {
         publishStatus(sensornet_SENSOR_STOPPED, "run shut down");
         (void)measurement_writer_.waitForAcks(2s);
+        (void)tally_writer_.waitForAcks(2s);
         (void)status_writer_.waitForAcks(1s);
         return kExitOk;
       }
@@ -75,6 +82,12 @@ class Agent {
   }
 
  private:
+  void noteOwnStall() {
+    if (const auto stall = stall_watch_.tick(wallNowNs())) {
+      spdlog::warn("this sensor agent was stalled for {:.3g} s", stall->seconds());
+    }
+  }
+
   std::chrono::nanoseconds untilNextArrival() const {
     if (!episode_ || episode_->next >= episode_->timeline.size()) return kIdleWait;
     const double t = episode_->timeline[episode_->next].time_s;
@@ -136,6 +149,7 @@ class Agent {
     e.clock = start.clock;
     e.timeline = timelineOf(start.episode);
     for (const int id : options_.sensors) e.sent[id] = 0;
+    e.write_timeouts_at_start = write_timeouts_;
     episode_ = std::move(e);
     publishStatus(sensornet_SENSOR_RUNNING, "");
   }
@@ -150,6 +164,7 @@ class Agent {
       const Eigen::VectorXd z =
           plant.measure(plant.stateAt(e.number, a.tick), a.sensor, e.number, seq);
       publishMeasurement(a.sensor, e.number, seq, a.time_s, a.version, z);
+      noteLag(e, a.time_s);
       e.last_published_s = a.time_s;
       ++e.next;
       ++sent_total_;
@@ -157,14 +172,42 @@ class Agent {
     if (now >= inputs_.scenario().horizon_s && e.next >= e.timeline.size()) finishEpisode("");
   }
 
+  // How far behind the emulated clock a measurement went out, leaving out the time this
+  // process was stalled since it fell due (a stall is not overload).
+  void noteLag(Episode& e, double time_s) {
+    const std::int64_t now = wallNowNs();
+    noteOwnStall();
+    const std::int64_t due = e.clock.wallAt(time_s);
+    if (now <= due) return;
+    const double lag = 1e-9 * static_cast<double>(now - due) - stall_watch_.stalledBetween(due, now);
+    e.max_lag_s = std::max(e.max_lag_s, lag);
+  }
+
+  // Publishes each hosted sensor's tally of the episode (`why` empty: it ran to T).
   void finishEpisode(const char* why) {
     Episode& e = *episode_;
-    const double horizon = inputs_.scenario().horizon_s;
-    const std::uint32_t version = inputs_.book().inForce(e.number, horizon)->version;
+    const std::int64_t now = wallNowNs();
+    const double stalled_s = stall_watch_.stalledBetween(e.clock.start_wall_ns, now);
     for (const auto& [sensor, count] : e.sent) {
-      publishMeasurement(sensor, e.number, count, horizon, version, Eigen::VectorXd());
+      sensornet_EpisodeTally t{};
+      t.sensor_id = static_cast<std::uint32_t>(sensor);
+      t.run_id = dds::borrowString(options_.run.run_id);
+      t.episode = e.number;
+      t.sent = count;
+      t.finished = *why == '\0';
+      t.write_timeouts = write_timeouts_ - e.write_timeouts_at_start;
+      t.max_lag_s = e.max_lag_s;
+      t.stalled_s = stalled_s;
+      t.process_id = static_cast<std::int32_t>(::getpid());
+      t.wall_time_ns = now;
+      // Reliable and kept (transient-local): retried like a measurement, never dropped.
+      while (tally_writer_.write(t) == dds::WriteResult::TimedOut) {
+        ++write_timeouts_;
+        if (emulator::stopRequested()) break;
+      }
     }
     if (*why != '\0') spdlog::info("episode {} ended early: {}", e.number, why);
+    stall_watch_.forgetBefore(e.clock.start_wall_ns);
     episode_.reset();
     publishStatus(sensornet_SENSOR_READY, "");
   }
@@ -184,6 +227,7 @@ class Agent {
       m.publish_wall_time_ns = wallNowNs();
       if (measurement_writer_.write(m) == dds::WriteResult::Written) return;
       ++write_timeouts_;
+      noteOwnStall();
       if (emulator::stopRequested()) return;
     }
   }
@@ -246,10 +290,13 @@ class Agent {
   dds::Participant participant_;
   emulator::RunInputs inputs_;
   dds::Topic<sensornet_Measurement> measurement_topic_;
+  dds::Topic<sensornet_EpisodeTally> tally_topic_;
   dds::Topic<sensornet_SensorStatus> status_topic_;
   dds::Writer<sensornet_Measurement> measurement_writer_;
+  dds::Writer<sensornet_EpisodeTally> tally_writer_;
   dds::Writer<sensornet_SensorStatus> status_writer_;
   dds::WaitSet waitset_;
+  emulator::StallWatch stall_watch_;
 
   std::optional<Episode> episode_;
   std::uint64_t sent_total_ = 0;

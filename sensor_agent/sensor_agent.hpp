@@ -3,9 +3,10 @@
 // and the schedule versions over DDS, and for every episode the coordinator starts it
 // publishes each hosted sensor's measurements z = H_j x(t) + v_j at the Poisson arrival
 // instants of the schedule in force (sensor_timeline.hpp), on the emulated clock, then an
-// end-of-episode marker per sensor (a Measurement with no values and seq = the number sent),
-// which tells the fusion center that everything before it has arrived (one writer, reliable,
-// in order).
+// EpisodeTally per sensor: how many it published (seq 0..sent-1), which the fusion center
+// checks its receipts against. A stalled agent (SIGSTOP) publishes what fell due meanwhile as
+// soon as it runs again; the measurements keep their emulated instants, so nothing changes for
+// the filter, and the lag it reports leaves its own stall out.
 
 #include <vector>
 

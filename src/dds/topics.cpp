@@ -31,6 +31,10 @@ Qos measurementQos() {
       .autodisposeUnregistered(false);
 }
 
+Qos episodeTallyQos() {
+  return lastKnownState(kEpisodeTalliesKept).autodisposeUnregistered(false);
+}
+
 Qos sensorStatusQos() {
   return lastKnownState(1)
       .livelinessAutomatic(kSensorLivelinessLease)

@@ -16,8 +16,7 @@ EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plan
       bracket_of_(std::move(bracket_of)),
       filter_(scenario),
       tallies_(static_cast<std::size_t>(scenario.sensorCount())),
-      announced_(tallies_.size(), 0),
-      highest_seq_plus_one_(tallies_.size(), 0) {
+      sent_at_least_(tallies_.size(), 0) {
   scheduleChanged();
 }
 
@@ -33,29 +32,30 @@ void EpisodeFusion::scheduleChanged() {
   }
 }
 
-std::optional<std::string> EpisodeFusion::add(FusedMeasurement m) {
-  const auto reject = [this](std::string reason) -> std::optional<std::string> {
-    ++rejected_;
-    return reason;
+std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
+  const auto reject = [this](const char* reason, std::string detail) -> std::optional<Rejection> {
+    ++rejected_[reason];
+    return Rejection{reason, std::move(detail)};
   };
+  const std::string who = "sensor " + std::to_string(m.sensor);
   if (m.sensor < 0 || m.sensor >= scenario_.sensorCount()) {
-    return reject("sensor id " + std::to_string(m.sensor) + " is not a sensor of the scenario");
+    return reject("unknown_sensor", who + " is not a sensor of the scenario");
   }
   const auto j = static_cast<std::size_t>(m.sensor);
   if (m.z.size() != scenario_.sensors[j].H.rows() || !m.z.allFinite()) {
-    return reject("sensor " + std::to_string(m.sensor) + ": z must hold " +
-                  std::to_string(scenario_.sensors[j].H.rows()) + " finite values");
+    return reject("malformed", who + ": z must hold " +
+                                   std::to_string(scenario_.sensors[j].H.rows()) +
+                                   " finite values");
   }
   if (!(m.time_s >= 0.0 && m.time_s <= scenario_.horizon_s)) {
-    return reject("sensor " + std::to_string(m.sensor) + ": time outside [0, T]");
+    return reject("malformed", who + ": time outside [0, T]");
   }
   if (!seen_.insert({m.sensor, m.seq}).second) {
-    return reject("sensor " + std::to_string(m.sensor) + ": duplicate seq " +
-                  std::to_string(m.seq));
+    return reject("duplicate", who + ": duplicate seq " + std::to_string(m.seq));
   }
   SensorTally& tally = tallies_[j];
   ++tally.received;
-  highest_seq_plus_one_[j] = std::max(highest_seq_plus_one_[j], m.seq + 1);
+  sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
   const std::size_t index = all_.size();
   const Key key{m.time_s, m.sensor, m.seq};
   if (m.time_s < filter_.time()) {
@@ -68,16 +68,32 @@ std::optional<std::string> EpisodeFusion::add(FusedMeasurement m) {
   return std::nullopt;
 }
 
-void EpisodeFusion::finishSensor(int sensor, std::uint64_t count) {
+void EpisodeFusion::setTally(int sensor, std::uint64_t sent) {
   if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
-  const auto j = static_cast<std::size_t>(sensor);
-  tallies_[j].finished = true;
-  announced_[j] = count;
+  SensorTally& tally = tallies_[static_cast<std::size_t>(sensor)];
+  tally.tallied = true;
+  tally.sent = sent;
 }
 
-bool EpisodeFusion::allSensorsFinished() const {
-  return std::all_of(tallies_.begin(), tallies_.end(),
-                     [](const SensorTally& t) { return t.finished; });
+void EpisodeFusion::noteSentAtLeast(int sensor, std::uint64_t sent) {
+  if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
+  auto& at_least = sent_at_least_[static_cast<std::size_t>(sensor)];
+  at_least = std::max(at_least, sent);
+}
+
+bool EpisodeFusion::settled(int sensor) const {
+  const SensorTally& t = tallies_[static_cast<std::size_t>(sensor)];
+  return t.tallied && t.received >= t.sent;
+}
+
+bool EpisodeFusion::allSettled() const { return unsettled().empty(); }
+
+std::vector<int> EpisodeFusion::unsettled() const {
+  std::vector<int> sensors;
+  for (int j = 0; j < scenario_.sensorCount(); ++j) {
+    if (!settled(j)) sensors.push_back(j);
+  }
+  return sensors;
 }
 
 void EpisodeFusion::propagateTo(double t) {
@@ -100,7 +116,6 @@ void EpisodeFusion::fuseUpTo(double t) {
     fuse(all_[pending_.begin()->second]);
     pending_.erase(pending_.begin());
   }
-  if (t > filter_.time()) propagateTo(t);
 }
 
 EpisodeResult EpisodeFusion::finish() {
@@ -118,6 +133,7 @@ EpisodeResult EpisodeFusion::finish() {
     pending_.clear();
   }
   fuseUpTo(scenario_.horizon_s);
+  propagateTo(scenario_.horizon_s);
 
   EpisodeResult result;
   result.episode = episode_;
@@ -135,7 +151,7 @@ EpisodeResult EpisodeFusion::finish() {
   }
   const Eigen::VectorXd error = plant_.stateAt(episode_, plant_.tickCount()) - filter_.mean();
   result.nees = error.dot(filter_.covariance().llt().solve(error));
-  result.complete = allSensorsFinished();
+  result.complete = allSettled();
   std::vector<SensorTally> tallies = tallies_;
   for (const ScheduleSegment& segment : segments_) {
     const Eigen::VectorXd expected =
@@ -157,8 +173,8 @@ EpisodeResult EpisodeFusion::finish() {
   }
   for (std::size_t j = 0; j < tallies.size(); ++j) {
     SensorTally tally = tallies[j];
-    const std::uint64_t sent = tally.finished ? announced_[j] : highest_seq_plus_one_[j];
-    tally.lost = sent > tally.received ? sent - tally.received : 0;
+    if (!tally.tallied) tally.sent = sent_at_least_[j];
+    tally.lost = tally.sent > tally.received ? tally.sent - tally.received : 0;
     result.sensors.push_back(tally);
   }
   for (const FusedMeasurement& m : all_) {

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/dds/wire.hpp"
 
 namespace sensornet::emulator {
 
@@ -42,7 +43,7 @@ void RunInputs::readScenario(Update& update) {
                    run_->scenario.stateDim(), run_->scenario.sensorCount(),
                    run_->scenario.horizon_s);
     } catch (const InputError& error) {
-      ++rejected_;
+      reject("malformed_scenario");
       run_.reset();
       spdlog::warn("rejected a scenario sample: {}", error.what());
     }
@@ -56,7 +57,7 @@ void RunInputs::readSchedules(Update& update) {
       ScheduleVersion v = scheduleFromWire(*received.sample, run_->scenario, run_->digest);
       const auto number = v.version;
       if (book_.add(std::move(v)) == ScheduleBook::Outcome::Stale) {
-        ++rejected_;
+        reject("stale_schedule");
         spdlog::warn("refused stale schedule version {} (have {})", number,
                      book_.latest().version);
         continue;
@@ -66,7 +67,7 @@ void RunInputs::readSchedules(Update& update) {
                    book_.latest().surrogate, book_.latest().effective_episode,
                    book_.latest().effective_time_s);
     } catch (const InputError& error) {
-      ++rejected_;
+      reject("malformed_schedule");
       spdlog::warn("rejected a schedule sample: {}", error.what());
     }
   }
@@ -78,12 +79,14 @@ void RunInputs::readControls(Update& update) {
     switch (c.command) {
       case sensornet_RUN_SHUTDOWN:
         update.shutdown = true;
+        update.end = {c.episodes_planned, c.aborted, std::string(dds::viewString(c.detail))};
         break;
       case sensornet_EPISODE_STOP:
         update.stops.push_back(c.episode);
         break;
       case sensornet_EPISODE_START:
-        held_starts_.push_back({{c.episode, {c.start_wall_time_ns, c.time_scale}}, c.seed});
+        held_starts_.push_back(
+            {{c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned}, c.seed});
         break;
     }
   }
@@ -92,7 +95,7 @@ void RunInputs::readControls(Update& update) {
     const EpisodeStart& s = held.start;
     if (!run_ || book_.inForce(s.episode, 0.0) == nullptr) return false;
     if (!(s.clock.time_scale > 0.0) || held.seed != run_->seed) {
-      ++rejected_;
+      reject("malformed_episode_control");
       spdlog::warn("rejected episode control {}: bad time scale or seed", s.episode);
       return true;
     }

@@ -2,8 +2,34 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+
+#include "sensornet/core/student_t.hpp"
 
 namespace sensornet::emulator {
+namespace {
+
+using nlohmann::json;
+
+// One value per sensor of an episode's tallies.
+template <typename Field>
+json perSensor(const EpisodeResult& r, Field field) {
+  json values = json::array();
+  for (const SensorTally& t : r.sensors) values.push_back(field(t));
+  return values;
+}
+
+std::uint64_t sumOf(const json& values) {
+  std::uint64_t total = 0;
+  for (const json& v : values) total += v.get<std::uint64_t>();
+  return total;
+}
+
+json optionalJson(const std::optional<double>& value) {
+  return value ? json(*value) : json(nullptr);
+}
+
+}  // namespace
 
 double quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;
@@ -15,6 +41,33 @@ double quantile(std::vector<double> values, double q) {
   return values[below] + fraction * (values[above] - values[below]);
 }
 
+std::uint64_t RunSummary::rejectedTotal() const {
+  std::uint64_t total = 0;
+  for (const auto& [reason, count] : rejected) total += count;
+  return total;
+}
+
+json episodeEntry(const EpisodeResult& r) {
+  return {{"episode", r.episode},
+          {"realized_cost", r.realized_cost},
+          {"bracket", {{"info", r.bracket.info}, {"cov", r.bracket.cov}}},
+          {"schedule_versions", r.versions},
+          {"switch_time_s", r.switch_time_s},
+          {"nees", r.nees},
+          {"complete", r.complete},
+          {"sent", perSensor(r, [](const SensorTally& t) { return t.sent; })},
+          {"received", perSensor(r, [](const SensorTally& t) { return t.received; })},
+          {"lost", perSensor(r, [](const SensorTally& t) { return t.lost; })},
+          {"late", perSensor(r, [](const SensorTally& t) { return t.late; })},
+          {"expected", perSensor(r, [](const SensorTally& t) { return t.expected; })},
+          {"wrong_version", perSensor(r, [](const SensorTally& t) { return t.wrong_version; })},
+          {"rejected", r.rejected},
+          {"drain_s", r.drain_s},
+          {"backlog", r.backlog},
+          {"latency_median_s", quantile(r.latencies_s, 0.5)},
+          {"latency_p99_s", quantile(r.latencies_s, 0.99)}};
+}
+
 RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor_count,
                      int state_dim)
     : run_id_(std::move(run_id)),
@@ -22,46 +75,70 @@ RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor
       sensor_count_(sensor_count),
       state_dim_(state_dim) {}
 
-void RunReport::add(EpisodeResult result) {
-  latencies_s_.insert(latencies_s_.end(), result.latencies_s.begin(), result.latencies_s.end());
-  result.latencies_s.clear();  // kept once, in latencies_s_
-  episodes_.push_back(std::move(result));
+void RunReport::add(json entry) { episodes_.push_back(std::move(entry)); }
+
+void RunReport::addLatencies(const std::vector<double>& latencies_s) {
+  latencies_s_.insert(latencies_s_.end(), latencies_s.begin(), latencies_s.end());
+}
+
+void RunReport::countRejected(const std::string& reason, std::uint64_t count) {
+  if (count > 0) rejected_outside_[reason] += count;
 }
 
 RunSummary RunReport::summary() const {
   RunSummary s;
   s.episodes = static_cast<std::uint32_t>(episodes_.size());
-  if (episodes_.empty()) return s;
-  const double k = static_cast<double>(episodes_.size());
-  for (const EpisodeResult& e : episodes_) {
-    s.mean += e.realized_cost / k;
-    s.bracket_mean.info += e.bracket.info / k;
-    s.bracket_mean.cov += e.bracket.cov / k;
-    s.nees_mean += e.nees / k;
-    s.rejected += e.rejected;
-    for (const SensorTally& t : e.sensors) {
-      s.received += t.received;
-      s.expected += t.expected;
-      s.lost += t.lost;
-      s.late += t.late;
+  s.rejected = rejected_outside_;
+  std::vector<double> costs;
+  std::vector<double> episode_medians;
+  for (const json& e : episodes_) {
+    s.sent += sumOf(e.at("sent"));
+    s.received += sumOf(e.at("received"));
+    s.lost += sumOf(e.at("lost"));
+    s.late += sumOf(e.value("late", json::array()));
+    for (const json& x : e.value("expected", json::array())) s.expected += x.get<double>();
+    if (const auto rejected = e.find("rejected"); rejected != e.end() && rejected->is_object()) {
+      for (const auto& [reason, count] : rejected->items()) {
+        s.rejected[reason] += count.get<std::uint64_t>();
+      }
     }
+    episode_medians.push_back(e.value("latency_median_s", 0.0));
+    if (!e.at("complete").get<bool>()) continue;
+    costs.push_back(e.at("realized_cost").get<double>());
+    s.bracket_mean.info += e.at("bracket").at("info").get<double>();
+    s.bracket_mean.cov += e.at("bracket").at("cov").get<double>();
+    s.nees_mean += e.value("nees", 0.0);
   }
-  if (episodes_.size() > 1) {
+  s.episodes_complete = static_cast<std::uint32_t>(costs.size());
+  if (!costs.empty()) {
+    const double k = static_cast<double>(costs.size());
+    for (const double c : costs) s.mean += c / k;
+    s.bracket_mean.info /= k;
+    s.bracket_mean.cov /= k;
+    s.nees_mean /= k;
+    s.ci95_low = s.ci95_high = s.mean;
+  }
+  if (costs.size() >= 2) {
+    const double k = static_cast<double>(costs.size());
     double squares = 0.0;
-    for (const EpisodeResult& e : episodes_) squares += std::pow(e.realized_cost - s.mean, 2);
+    for (const double c : costs) squares += (c - s.mean) * (c - s.mean);
     s.std_dev = std::sqrt(squares / (k - 1.0));
-    s.ci95 = 1.96 * s.std_dev / std::sqrt(k);
+    s.ci95 = studentTQuantile(0.975, k - 1.0) * s.std_dev / std::sqrt(k);
+    s.ci95_low = std::max(0.0, s.mean - *s.ci95);
+    s.ci95_high = s.mean + *s.ci95;
+    s.meets_bracket = s.ci95_low <= s.bracket_mean.cov && s.ci95_high >= s.bracket_mean.info;
   }
-  s.meets_bracket = s.mean - s.ci95 <= s.bracket_mean.cov && s.mean + s.ci95 >= s.bracket_mean.info;
-  s.latency_median_s = quantile(latencies_s_, 0.5);
-  s.latency_p99_s = quantile(latencies_s_, 0.99);
+  if (!latencies_s_.empty()) {
+    s.latency_median_s = quantile(latencies_s_, 0.5);
+    s.latency_p99_s = quantile(latencies_s_, 0.99);
+  } else {
+    s.latency_median_s = quantile(episode_medians, 0.5);
+    s.latency_p99_s = quantile(episode_medians, 0.99);
+  }
   return s;
 }
 
-nlohmann::json RunReport::toJson(const ScheduleBook& book, const std::string& status,
-                                 std::uint64_t rejected_wire) const {
-  using nlohmann::json;
-  const RunSummary s = summary();
+json scheduleVersionsJson(const ScheduleBook& book) {
   json versions = json::array();
   for (const ScheduleVersion& v : book.versions()) {
     versions.push_back({{"version", v.version},
@@ -71,62 +148,118 @@ nlohmann::json RunReport::toJson(const ScheduleBook& book, const std::string& st
                         {"bracket", {{"info", v.bracket.info}, {"cov", v.bracket.cov}}},
                         {"command_id", v.command_id}});
   }
-  json per_episode = json::array();
-  std::vector<SensorTally> totals(static_cast<std::size_t>(sensor_count_));
-  for (const EpisodeResult& e : episodes_) {
-    json received = json::array();
-    for (std::size_t j = 0; j < e.sensors.size(); ++j) {
-      const SensorTally& t = e.sensors[j];
-      received.push_back(t.received);
-      SensorTally& total = totals[j];
-      total.received += t.received;
-      total.expected += t.expected;
-      total.lost += t.lost;
-      total.late += t.late;
-      total.wrong_version += t.wrong_version;
+  return versions;
+}
+
+json RunReport::toJson(const std::string& status, const json& faults,
+                       const json& schedule_versions, const json& extra) const {
+  const RunSummary s = summary();
+  const auto sensors = static_cast<std::size_t>(sensor_count_);
+  std::vector<std::uint64_t> sent(sensors), received(sensors), lost(sensors), late(sensors),
+      wrong(sensors);
+  std::vector<double> expected(sensors);
+  const auto add = [](auto& totals, const json& values) {
+    for (std::size_t j = 0; j < values.size() && j < totals.size(); ++j) {
+      totals[j] += values[j].get<typename std::decay_t<decltype(totals)>::value_type>();
     }
-    per_episode.push_back({{"episode", e.episode},
-                           {"realized_cost", e.realized_cost},
-                           {"bracket", {{"info", e.bracket.info}, {"cov", e.bracket.cov}}},
-                           {"schedule_versions", e.versions},
-                           {"switch_time_s", e.switch_time_s},
-                           {"nees", e.nees},
-                           {"complete", e.complete},
-                           {"received", received}});
+  };
+  for (const json& e : episodes_) {
+    add(sent, e.at("sent"));
+    add(received, e.at("received"));
+    add(lost, e.at("lost"));
+    add(late, e.value("late", json::array()));
+    add(wrong, e.value("wrong_version", json::array()));
+    add(expected, e.value("expected", json::array()));
   }
-  json sensors = json::array();
-  for (std::size_t j = 0; j < totals.size(); ++j) {
-    const SensorTally& t = totals[j];
-    sensors.push_back({{"sensor_id", j},
-                       {"received", t.received},
-                       {"expected", t.expected},
-                       {"lost", t.lost},
-                       {"late", t.late},
-                       {"wrong_version", t.wrong_version}});
+  json per_sensor = json::array();
+  for (std::size_t j = 0; j < sensors; ++j) {
+    per_sensor.push_back({{"sensor_id", j},
+                          {"sent", sent[j]},
+                          {"received", received[j]},
+                          {"lost", lost[j]},
+                          {"late", late[j]},
+                          {"expected", expected[j]},
+                          {"wrong_version", wrong[j]}});
   }
-  return {{"run_id", run_id_},
-          {"status", status},
-          {"scenario", {{"digest", digest_}, {"sensors", sensor_count_}, {"states", state_dim_}}},
-          {"episodes", s.episodes},
-          {"schedule_versions", versions},
-          {"per_episode", per_episode},
-          {"summary",
-           {{"episodes", s.episodes},
-            {"mean", s.mean},
-            {"std", s.std_dev},
-            {"ci95", s.ci95},
-            {"ci95_low", s.mean - s.ci95},
-            {"ci95_high", s.mean + s.ci95},
-            {"bracket", {{"info", s.bracket_mean.info}, {"cov", s.bracket_mean.cov}}},
-            {"meets_bracket", s.meets_bracket},
-            {"nees_mean", s.nees_mean},
-            {"received", s.received},
-            {"expected", s.expected},
-            {"lost", s.lost},
-            {"late", s.late},
-            {"rejected", s.rejected + rejected_wire}}},
-          {"sensors", sensors},
-          {"latency_s", {{"median", s.latency_median_s}, {"p99", s.latency_p99_s}}}};
+  json report = {
+      {"run_id", run_id_},
+      {"status", status},
+      {"faults", faults.is_array() ? faults : json::array()},
+      {"scenario", {{"digest", digest_}, {"sensors", sensor_count_}, {"states", state_dim_}}},
+      {"episodes", s.episodes},
+      {"schedule_versions", schedule_versions},
+      {"per_episode", episodes_},
+      {"summary",
+       {{"episodes", s.episodes},
+        {"episodes_complete", s.episodes_complete},
+        {"episodes_incomplete", s.episodes - s.episodes_complete},
+        {"mean", s.mean},
+        {"std", s.std_dev},
+        {"ci95", optionalJson(s.ci95)},
+        {"ci95_low", s.ci95_low},
+        {"ci95_high", s.ci95_high},
+        {"bracket", {{"info", s.bracket_mean.info}, {"cov", s.bracket_mean.cov}}},
+        {"meets_bracket", s.meets_bracket ? json(*s.meets_bracket) : json(nullptr)},
+        {"nees_mean", s.nees_mean},
+        {"sent", s.sent},
+        {"received", s.received},
+        {"expected", s.expected},
+        {"lost", s.lost},
+        {"late", s.late},
+        {"rejected", s.rejectedTotal()},
+        {"rejected_by_reason", s.rejected}}},
+      {"sensors", per_sensor},
+      {"latency_s", {{"median", s.latency_median_s}, {"p99", s.latency_p99_s}}}};
+  for (const auto& [key, value] : extra.items()) report[key] = value;
+  return report;
+}
+
+json faultEntry(const std::string& kind, const std::string& process, std::optional<int> sensor,
+                std::optional<std::uint32_t> episode, std::optional<double> emulated_time_s,
+                const std::string& detail) {
+  return {{"kind", kind},
+          {"process", process},
+          {"sensor", sensor ? json(*sensor) : json(nullptr)},
+          {"episode", episode ? json(*episode) : json(nullptr)},
+          {"emulated_time_s", optionalJson(emulated_time_s)},
+          {"detail", detail}};
+}
+
+std::filesystem::path episodeLogPath(const std::filesystem::path& report_path) {
+  std::filesystem::path log = report_path;
+  if (log.extension() == ".json") return log.replace_extension(".jsonl");
+  return log += ".jsonl";
+}
+
+EpisodeLog::EpisodeLog(const std::filesystem::path& path)
+    : path_(path), out_(path, std::ios::trunc) {
+  if (!out_) throw std::runtime_error("cannot write the episode log " + path.string());
+}
+
+void EpisodeLog::append(const json& entry) {
+  out_ << entry.dump() << '\n';
+  out_.flush();
+  if (!out_) throw std::runtime_error("cannot append to the episode log " + path_.string());
+}
+
+std::vector<json> readEpisodeLog(const std::filesystem::path& path) {
+  std::vector<json> entries;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    json entry = json::parse(line, nullptr, false);
+    if (entry.is_object() && entry.contains("episode")) entries.push_back(std::move(entry));
+  }
+  return entries;
+}
+
+json reportFromEpisodes(const std::string& run_id, int sensor_count,
+                        const std::vector<json>& per_episode, const std::string& status,
+                        const json& faults) {
+  RunReport report(run_id, "", sensor_count, 0);
+  for (const json& entry : per_episode) report.add(entry);
+  return report.toJson(status, faults, json::array(),
+                       {{"rebuilt_from", "episode log (the fusion center wrote no report)"}});
 }
 
 }  // namespace sensornet::emulator

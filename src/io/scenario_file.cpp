@@ -1,11 +1,18 @@
 #include "sensornet/io/scenario_file.hpp"
 
+#include <sys/stat.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "sensornet/core/input_error.hpp"
 
@@ -20,6 +27,13 @@ std::string readTextFile(const std::string& path, const std::string& what) {
 }
 
 namespace {
+
+// A number shown in an error message: cut short when it is long (400 digits).
+std::string shortened(const std::string& text) {
+  constexpr std::size_t kShown = 30;
+  if (text.size() <= kShown) return text;
+  return text.substr(0, kShown) + "... (" + std::to_string(text.size()) + " characters)";
+}
 
 // Reads typed values out of a YAML tree; every failure names the file, line and field path.
 class YamlReader {
@@ -50,7 +64,14 @@ class YamlReader {
     try {
       value = node.as<double>();
     } catch (const YAML::Exception&) {
-      fail(node, field, "a number, got '" + text + "'");
+      // yaml-cpp refuses a number too large for a double (1e309) like any other text.
+      char* end = nullptr;
+      const double parsed = std::strtod(text.c_str(), &end);
+      if (!text.empty() && *end == '\0' && std::isinf(parsed)) {
+        fail(node, field,
+             "a finite number, got '" + shortened(text) + "' (the number overflows a double)");
+      }
+      fail(node, field, "a number, got '" + shortened(text) + "'");
     }
     if (!std::isfinite(value)) fail(node, field, "a finite number, got '" + text + "'");
     return value;
@@ -272,13 +293,99 @@ Scenario loadScenarioFile(const std::string& path) {
   return parseScenarioYaml(readTextFile(path, "scenario"), path);
 }
 
-RateSchedule parseScheduleJson(const std::string& text, const std::string& source) {
-  nlohmann::json doc;
+namespace {
+
+// A number in JSON text that does not fit a double ("1e309").
+struct OverflowingNumber {
+  std::size_t offset = 0;
+  int line = 1;  // 1-based
+  std::string text;
+};
+
+// Every number in JSON `text` that overflows a double. Meant for text the JSON parser refused
+// for such a number (its exception carries no position), so the text is valid JSON up to
+// there: strings are skipped, and a number is the longest run of number characters.
+std::vector<OverflowingNumber> overflowingNumbers(const std::string& text) {
+  std::vector<OverflowingNumber> found;
+  int line = 1;
+  for (std::size_t at = 0; at < text.size(); ++at) {
+    const char c = text[at];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '"') {
+      for (++at; at < text.size() && text[at] != '"'; ++at) {
+        if (text[at] == '\\') ++at;
+      }
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      const std::size_t end = text.find_first_not_of("+-.0123456789eE", at);
+      std::string number = text.substr(at, end == std::string::npos ? end : end - at);
+      const std::size_t length = number.size();
+      if (!std::isfinite(std::strtod(number.c_str(), nullptr))) {
+        found.push_back({at, line, std::move(number)});
+      }
+      at += length - 1;
+    }
+  }
+  return found;
+}
+
+// The field path ("rates[2][1]") of the first string value equal to `marker` in `doc`.
+std::optional<std::string> fieldHolding(const nlohmann::json& doc, const std::string& marker,
+                                        const std::string& path = "") {
+  if (doc.is_string() && doc.get<std::string>() == marker) return path;
+  if (doc.is_object()) {
+    for (const auto& [key, value] : doc.items()) {
+      if (auto field = fieldHolding(value, marker, path.empty() ? key : path + "." + key)) {
+        return field;
+      }
+    }
+  } else if (doc.is_array()) {
+    for (std::size_t i = 0; i < doc.size(); ++i) {
+      if (auto field = fieldHolding(doc[i], marker, path + "[" + std::to_string(i) + "]")) {
+        return field;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// The InputError for JSON text the parser refused for an overflowing number: the line and the
+// field of the first one. The field is found by parsing again with that number replaced by a
+// marker string (and any later one by 0).
+InputError overflowError(const std::string& text, const std::string& source,
+                         const std::string& library_message) {
+  const std::vector<OverflowingNumber> numbers = overflowingNumbers(text);
+  if (numbers.empty()) {
+    return InputError(source, "", "a finite number (" + library_message + ")");
+  }
+  const std::string marker = "@sensornet: the overflowing number@";
+  std::string patched = text;
+  for (std::size_t i = numbers.size(); i-- > 0;) {  // from the back: offsets stay valid
+    patched.replace(numbers[i].offset, numbers[i].text.size(), i == 0 ? "\"" + marker + "\"" : "0");
+  }
+  const nlohmann::json doc = nlohmann::json::parse(patched, nullptr, /*allow_exceptions=*/false);
+  const std::string field = doc.is_discarded() ? "" : fieldHolding(doc, marker).value_or("");
+  return InputError(source + ":" + std::to_string(numbers.front().line), field,
+                    "a finite number, got " + shortened(numbers.front().text) +
+                        " (the number overflows a double)");
+}
+
+nlohmann::json parseJsonDocument(const std::string& text, const std::string& source) {
   try {
-    doc = nlohmann::json::parse(text);
+    return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(source, "", std::string("valid JSON (") + e.what() + ")");
+  } catch (const nlohmann::json::out_of_range& e) {
+    throw overflowError(text, source, e.what());  // 406: "number overflow parsing '1e309'"
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(source, "", std::string("valid JSON (") + e.what() + ")");
   }
+}
+
+}  // namespace
+
+RateSchedule parseScheduleJson(const std::string& text, const std::string& source) {
+  const nlohmann::json doc = parseJsonDocument(text, source);
   if (!doc.is_object()) throw InputError(source, "(top level)", "a JSON object");
   auto requireNumber = [&](const char* key) {
     if (!doc.contains(key)) throw InputError(source, key, "a value (the field is missing)");
@@ -348,8 +455,16 @@ nlohmann::json scheduleToJson(const RateSchedule& schedule) {
 }
 
 void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what) {
+  // Only a regular file is ever replaced: renaming over a device, a FIFO or a directory would
+  // turn it into a JSON file (or fail after all the work is done).
+  struct stat existing {};
+  if (::lstat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode)) {
+    throw InputError(
+        path, "",
+        "a regular file for the " + what + " (it exists and is a device, FIFO, directory or link)");
+  }
   // Write beside the target and rename, so a reader never sees half a file.
-  const std::string temporary = path + ".tmp";
+  const std::string temporary = path + ".tmp" + std::to_string(::getpid());
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out << doc.dump(2) << '\n';

@@ -20,6 +20,9 @@
 // |                |                  | and retries), volatile, liveliness automatic 1 s and no  |
 // |                |                  | autodispose: a dead or departed sensor's instance goes   |
 // |                |                  | "no writers" within about a second                       |
+// | EpisodeTally   | sensor           | reliable, transient-local, last 16 per sensor: the count |
+// |                |                  | a sensor says it sent in each episode reaches a reader   |
+// |                |                  | that lost its match in a stall once it is back           |
 // | SensorStatus   | sensor           | reliable, transient-local, last 1, liveliness 1 s, no    |
 // |                |                  | autodispose: `status` sees every sensor's latest state   |
 // | Report         | run, episode     | reliable, transient-local, last 1 per episode: a late    |
@@ -46,6 +49,7 @@ namespace sensornet::dds {
 
 inline constexpr std::int32_t kScheduleVersionsKept = 16;
 inline constexpr std::int32_t kEpisodeControlsQueued = 8;
+inline constexpr std::int32_t kEpisodeTalliesKept = 16;
 inline constexpr std::chrono::milliseconds kSensorLivelinessLease{1000};
 inline constexpr std::chrono::milliseconds kMaxBlockingTime{100};
 
@@ -53,6 +57,7 @@ inline constexpr std::chrono::milliseconds kMaxBlockingTime{100};
 [[nodiscard]] Qos scheduleQos();
 [[nodiscard]] Qos episodeControlQos();
 [[nodiscard]] Qos measurementQos();
+[[nodiscard]] Qos episodeTallyQos();
 [[nodiscard]] Qos sensorStatusQos();
 [[nodiscard]] Qos reportQos();
 [[nodiscard]] Qos commandQos();
@@ -87,6 +92,13 @@ struct TopicType<sensornet_Measurement> {
   static constexpr const char* kName = "sensornet/Measurement";
   static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_Measurement_desc; }
   static Qos qos() { return measurementQos(); }
+};
+
+template <>
+struct TopicType<sensornet_EpisodeTally> {
+  static constexpr const char* kName = "sensornet/EpisodeTally";
+  static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_EpisodeTally_desc; }
+  static Qos qos() { return episodeTallyQos(); }
 };
 
 template <>

@@ -4,15 +4,23 @@
 // actually in force, the NEES against the emulated truth, and the counts per sensor.
 //
 //   EpisodeFusion fusion(scenario, plant, book, episode, bracketOf);
-//   fusion.add(measurement);           // any order; returns a reason when it rejects one
+//   fusion.add(measurement);           // any order; returns the rejection when it refuses one
 //   fusion.fuseUpTo(watermark_s);      // online: fuse what can no longer be overtaken
-//   fusion.finishSensor(j, sent);      // sensor j's end-of-episode marker
-//   EpisodeResult r = fusion.finish(); // fuse the rest, propagate to T, bracket
+//   fusion.setTally(j, sent);          // sensor j says it published `sent` in the episode
+//   if (fusion.allSettled()) ...;      // every tally in, and every sent measurement received
+//   EpisodeResult r = fusion.finish(); // fuse the rest, propagate to T, bracket, account
 //
 // Timestamp order: measurements are fused in order of (emulated time, sensor, seq) whatever
 // order they arrive in. One that arrives after the filter has passed its time ("late") is kept
-// and the whole episode is re-fused in order at finish(), so the result never depends on the
-// arrival order.
+// and the whole episode is re-fused in order at finish(). The filter only ever moves from one
+// measurement to the next (and to the switch point and T), never to a wall-clock watermark, so
+// the realized cost is the same floating-point number whatever the arrival order and timing:
+// a run with a stall fuses exactly what a run without one does.
+//
+// Accounting, per sensor (DESIGN.md): sent = received + lost. `sent` is the sensor's own
+// end-of-episode tally; without one, the best lower bound known (its last status, the highest
+// seq received + 1), and the episode is incomplete. Rejected samples are counted by reason and
+// never fused nor received.
 //
 // The bracket in force: with one schedule version over the episode, [J(P_info), J(P_cov)] of
 // that version from P0 (Corollary 1 of the first paper). When versions switched during the
@@ -24,6 +32,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -49,12 +58,22 @@ struct FusedMeasurement {
 };
 
 struct SensorTally {
+  std::uint64_t sent = 0;           // the sensor's tally, else the best lower bound (see above)
   std::uint64_t received = 0;
-  double expected = 0.0;           // ∫ λ_j dt under the versions in force
-  std::uint64_t lost = 0;          // announced (or seq-implied) minus received
-  std::uint64_t late = 0;          // arrived after the filter had passed their time
+  std::uint64_t lost = 0;           // sent - received
+  double expected = 0.0;            // ∫ λ_j dt under the versions in force
+  std::uint64_t late = 0;           // arrived after the filter had passed their time
   std::uint64_t wrong_version = 0;  // drawn under another version than the one in force
-  bool finished = false;           // its end-of-episode marker arrived
+  bool tallied = false;             // its end-of-episode tally arrived
+};
+
+// Rejected samples by reason ("malformed", "duplicate", "other_run", "finished_episode", ...).
+using RejectionCounts = std::map<std::string, std::uint64_t>;
+
+// Why a sample was refused: a short key for the counts, and one line for the log.
+struct Rejection {
+  std::string reason;
+  std::string detail;
 };
 
 struct EpisodeResult {
@@ -66,8 +85,13 @@ struct EpisodeResult {
   double nees = 0.0;                    // e(T)' P(T)^{-1} e(T) against the emulated truth
   std::vector<SensorTally> sensors;
   std::vector<double> latencies_s;      // publish to fusion, one per measurement
-  std::uint64_t rejected = 0;
-  bool complete = false;                // every sensor's end marker arrived
+  RejectionCounts rejected;
+  bool complete = false;                // every tally in and every sent measurement received
+  // Filled in by the fusion center: wall seconds from the later of the episode's end and the
+  // last tally's publication until everything owed was in, less its own stalls; the largest
+  // number of measurements waiting for its main loop during the episode.
+  double drain_s = 0.0;
+  std::uint64_t backlog = 0;
 };
 
 class EpisodeFusion {
@@ -83,13 +107,24 @@ class EpisodeFusion {
   // Call after the book got a version: the stretches of the episode are recomputed. If the
   // filter has already passed the new switch point, finish() re-fuses the episode in order.
   void scheduleChanged();
-  // Accepts a measurement (nullopt) or rejects it with a one-line reason (and counts it).
-  std::optional<std::string> add(FusedMeasurement m);
-  // The end-of-episode marker of `sensor`: it sent `count` measurements (seq 0..count-1).
-  void finishSensor(int sensor, std::uint64_t count);
-  [[nodiscard]] bool allSensorsFinished() const;
+  // Accepts a measurement (nullopt) or rejects it (and counts it by reason).
+  std::optional<Rejection> add(FusedMeasurement m);
+  // Counts a sample of this episode refused before it got here.
+  void countRejected(const std::string& reason) { ++rejected_[reason]; }
+  // The end-of-episode tally of `sensor`: it published `sent` measurements (seq 0..sent-1).
+  void setTally(int sensor, std::uint64_t sent);
+  // A lower bound of what `sensor` published, from its status (used when no tally comes).
+  void noteSentAtLeast(int sensor, std::uint64_t sent);
+  // Its tally is in and every measurement it sent was received.
+  [[nodiscard]] bool settled(int sensor) const;
+  [[nodiscard]] bool allSettled() const;
+  [[nodiscard]] std::vector<int> unsettled() const;
+  [[nodiscard]] const SensorTally& tally(int sensor) const {
+    return tallies_[static_cast<std::size_t>(sensor)];
+  }
 
-  // Fuses, in timestamp order, every buffered measurement with time <= t (t <= T).
+  // Fuses, in timestamp order, every buffered measurement with time <= t (t <= T); the filter
+  // stays at the last measurement fused.
   void fuseUpTo(double t);
   [[nodiscard]] double fusedTime() const { return filter_.time(); }
   [[nodiscard]] const Eigen::MatrixXd& covariance() const { return filter_.covariance(); }
@@ -115,9 +150,8 @@ class EpisodeFusion {
   std::set<std::pair<Key, std::size_t>> pending_;  // indices into all_, in timestamp order
   std::set<std::pair<int, std::uint64_t>> seen_;   // (sensor, seq)
   std::vector<SensorTally> tallies_;
-  std::vector<std::uint64_t> announced_;
-  std::vector<std::uint64_t> highest_seq_plus_one_;
-  std::uint64_t rejected_ = 0;
+  std::vector<std::uint64_t> sent_at_least_;  // status and highest seq + 1
+  RejectionCounts rejected_;
   bool replay_ = false;
 };
 

@@ -13,7 +13,9 @@
 //   if (u.shutdown) ...;
 
 #include <cstdint>
+#include <map>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "sensornet/core/emulated_plant.hpp"
@@ -44,6 +46,14 @@ struct EpisodeClock {
 struct EpisodeStart {
   std::uint32_t episode = 0;
   EpisodeClock clock;
+  std::uint32_t episodes_planned = 0;  // how many episodes the run has
+};
+
+// How the coordinator ended the run (RUN_SHUTDOWN).
+struct RunEnd {
+  std::uint32_t episodes_run = 0;
+  bool aborted = false;  // the run could not finish; `detail` says why
+  std::string detail;
 };
 
 class RunInputs {
@@ -54,6 +64,7 @@ class RunInputs {
     std::vector<EpisodeStart> starts;
     std::vector<std::uint32_t> stops;
     bool shutdown = false;
+    RunEnd end;  // when shutdown
   };
 
   explicit RunInputs(const dds::Participant& participant);
@@ -72,8 +83,9 @@ class RunInputs {
   [[nodiscard]] const ScheduleBook& book() const { return book_; }
   // The last episode handed out in Update::starts.
   [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return last_started_; }
-  // Samples refused: malformed scenario or schedule, stale schedule, bad episode control.
-  [[nodiscard]] std::uint64_t rejected() const { return rejected_; }
+  // Samples refused, by reason: malformed scenario or schedule, stale schedule, bad episode
+  // control.
+  [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const { return rejected_; }
 
  private:
   void readScenario(Update& update);
@@ -97,9 +109,10 @@ class RunInputs {
     EpisodeStart start;
     std::uint64_t seed = 0;  // must be the run's
   };
+  void reject(const char* reason) { ++rejected_[reason]; }
   std::vector<HeldStart> held_starts_;
   std::optional<std::uint32_t> last_started_;
-  std::uint64_t rejected_ = 0;
+  std::map<std::string, std::uint64_t> rejected_;
 };
 
 }  // namespace sensornet::emulator

@@ -1,14 +1,27 @@
 #pragma once
-// The fusion center's account of a run: every episode's result, and the running summary
-// (mean realized cost with its 95% interval against the mean bracket in force, NEES, counts,
-// latency). It fills the Report topic after each episode and writes the final JSON report.
+// The account of a run: every finished episode as one entry (the keys of the report's
+// `per_episode` and of one line of the JSON Lines episode log), the summary over them, and the
+// whole report. The fusion center builds it as episodes finish and appends each entry to the
+// episode log at once; the launcher rebuilds the same report from that log when the fusion
+// center could not write its own (it died), so no finished episode is ever lost.
 //
-//   RunReport report(run_id, digest, scenario);
-//   report.add(fusion.finish());
-//   fillReport(sample, storage, report);   // the DDS Report of the last episode
-//   writeJsonFile(path, report.toJson(book));
+//   RunReport report(run_id, digest, sensor_count, state_dim);
+//   const nlohmann::json entry = episodeEntry(fusion.finish());
+//   log.append(entry);                     // EpisodeLog: one line per episode, flushed
+//   report.add(entry);
+//   writeJsonFile(path, report.toJson(...));
+//
+// Statistics (DESIGN.md): the mean realized cost, its 95% interval and whether it meets the
+// mean bracket are over complete episodes only. The interval is Student's t with K - 1 degrees
+// of freedom, clipped below at zero (a cost is never negative); with fewer than 2 complete
+// episodes there is no interval and `meets_bracket` is undetermined (null in JSON). Counts
+// (sent, received, lost, late, rejected) are over every episode.
 
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,41 +32,92 @@
 namespace sensornet::emulator {
 
 struct RunSummary {
-  std::uint32_t episodes = 0;
+  std::uint32_t episodes = 0;             // finished, complete or not
+  std::uint32_t episodes_complete = 0;    // the statistics below are over these
   double mean = 0.0;
   double std_dev = 0.0;
-  double ci95 = 0.0;  // 1.96 s / sqrt(K)
+  std::optional<double> ci95;             // half-width t_{0.975,K-1} s / sqrt(K); none for K < 2
+  double ci95_low = 0.0;                  // max(0, mean - ci95)
+  double ci95_high = 0.0;
   CostBracket bracket_mean;
-  bool meets_bracket = false;  // [mean - ci95, mean + ci95] meets [info, cov]
+  std::optional<bool> meets_bracket;      // [ci95_low, ci95_high] meets [info, cov]
   double nees_mean = 0.0;
+  std::uint64_t sent = 0;
   std::uint64_t received = 0;
   double expected = 0.0;
   std::uint64_t lost = 0;
   std::uint64_t late = 0;
-  std::uint64_t rejected = 0;
+  RejectionCounts rejected;               // by reason, over episodes and the run's wire
   double latency_median_s = 0.0;
   double latency_p99_s = 0.0;
+  [[nodiscard]] std::uint64_t rejectedTotal() const;
 };
+
+// The per_episode entry of an episode's result (and one line of the episode log).
+[[nodiscard]] nlohmann::json episodeEntry(const EpisodeResult& result);
 
 class RunReport {
  public:
   RunReport(std::string run_id, std::string scenario_digest, int sensor_count, int state_dim);
 
-  void add(EpisodeResult result);
-  [[nodiscard]] const std::vector<EpisodeResult>& episodes() const { return episodes_; }
+  // An episode entry (episodeEntry, or a line read back from the log).
+  void add(nlohmann::json entry);
+  // Publish-to-fusion latencies, for the run's median and p99 (without them, the summary uses
+  // the median of the episodes' medians).
+  void addLatencies(const std::vector<double>& latencies_s);
+  // Samples refused outside any episode (other runs, malformed schedules, ...), by reason.
+  void countRejected(const std::string& reason, std::uint64_t count = 1);
+  [[nodiscard]] const std::vector<nlohmann::json>& episodes() const { return episodes_; }
   [[nodiscard]] RunSummary summary() const;
-  // rejected_wire: samples refused on the wire (malformed, stale schedules, foreign runs).
-  [[nodiscard]] nlohmann::json toJson(const ScheduleBook& book, const std::string& status,
-                                      std::uint64_t rejected_wire) const;
+  // The whole report. `schedule_versions`: the versions of the run (scheduleVersionsJson);
+  // `faults`: a list of {kind, process, sensor, episode, emulated_time_s, detail}.
+  [[nodiscard]] nlohmann::json toJson(const std::string& status, const nlohmann::json& faults,
+                                      const nlohmann::json& schedule_versions,
+                                      const nlohmann::json& extra = nlohmann::json::object()) const;
 
  private:
   std::string run_id_;
   std::string digest_;
   int sensor_count_;
   int state_dim_;
-  std::vector<EpisodeResult> episodes_;
+  std::vector<nlohmann::json> episodes_;
   std::vector<double> latencies_s_;
+  RejectionCounts rejected_outside_;
 };
+
+[[nodiscard]] nlohmann::json scheduleVersionsJson(const ScheduleBook& book);
+
+// One fault of a run, as the report lists it. Optional parts are null when unknown.
+[[nodiscard]] nlohmann::json faultEntry(const std::string& kind, const std::string& process,
+                                        std::optional<int> sensor, std::optional<std::uint32_t> episode,
+                                        std::optional<double> emulated_time_s,
+                                        const std::string& detail);
+
+// The episode log beside a report: report.json -> report.jsonl (any other name gets ".jsonl"
+// appended).
+[[nodiscard]] std::filesystem::path episodeLogPath(const std::filesystem::path& report_path);
+
+// Appends one JSON document per line and flushes it, so that a crash of the process loses no
+// line it appended. Throws std::runtime_error when the file cannot be opened or written.
+class EpisodeLog {
+ public:
+  explicit EpisodeLog(const std::filesystem::path& path);  // truncates
+  void append(const nlohmann::json& entry);
+
+ private:
+  std::filesystem::path path_;
+  std::ofstream out_;
+};
+
+// The entries of an episode log, in order; a torn last line (a crash mid-write) is skipped.
+[[nodiscard]] std::vector<nlohmann::json> readEpisodeLog(const std::filesystem::path& path);
+
+// A whole report from episode entries (the launcher's rebuild after a fusion center death),
+// with the same keys and statistics as the fusion center's.
+[[nodiscard]] nlohmann::json reportFromEpisodes(const std::string& run_id, int sensor_count,
+                                                const std::vector<nlohmann::json>& per_episode,
+                                                const std::string& status,
+                                                const nlohmann::json& faults);
 
 // The q-quantile (0..1) of values by linear interpolation; 0 when empty.
 [[nodiscard]] double quantile(std::vector<double> values, double q);

@@ -29,6 +29,7 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "emulation_fixture.hpp"
 #include "support/background_process.hpp"
 
 namespace sensornet {
@@ -37,14 +38,9 @@ namespace {
 using namespace std::chrono_literals;
 using testing::BackgroundProcess;
 
-const std::string kCoordinator = SENSORNET_COORDINATOR;
-const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
-const std::string kSensorAgent = SENSORNET_SENSOR_AGENT;
-const std::string kDefaultScenario = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml";
-
-std::string uniqueRunId(const std::string& what) {
-  return "t" + std::to_string(::getpid()) + "-" + what;
-}
+using testing::Emulation;
+using testing::kDefaultScenario;
+using testing::uniqueRunId;
 
 // Upper 1 - α quantile of χ²(df), Wilson-Hilferty, with z the standard normal quantile.
 double chiSquareQuantile(double df, double z) {
@@ -70,64 +66,6 @@ std::pair<double, int> countStatistic(const nlohmann::json& report) {
   }
   return {statistic, df};
 }
-
-// One run's processes, their logs in a scratch directory, all stopped by the destructor.
-class Emulation {
- public:
-  explicit Emulation(std::string run_id) : run_id_(std::move(run_id)) {
-    dir_ = std::filesystem::temp_directory_path() / ("sensornet-" + run_id_);
-    std::filesystem::create_directories(dir_);
-  }
-  ~Emulation() {
-    processes_.clear();  // stops whatever still runs
-    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(dir_);
-  }
-
-  std::string reportPath() const { return (dir_ / "report.json").string(); }
-  const std::string& runId() const { return run_id_; }
-
-  void startFusionCenter(const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> argv = {kFusionCenter, "serve",    "--run-id",
-                                     run_id_,       "--report", reportPath()};
-    argv.insert(argv.end(), extra.begin(), extra.end());
-    start("fusion_center", argv);
-  }
-  void startSensors(const std::string& block, const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> argv = {kSensorAgent, "--run-id", run_id_, "--sensors", block};
-    argv.insert(argv.end(), extra.begin(), extra.end());
-    start("sensors-" + block, argv);
-  }
-  void startCoordinator(const std::vector<std::string>& extra) {
-    std::vector<std::string> argv = {kCoordinator, "serve", "--run-id", run_id_};
-    argv.insert(argv.end(), extra.begin(), extra.end());
-    start("coordinator", argv);
-  }
-
-  // Waits for every process to exit 0 (the coordinator first), then reads the report.
-  nlohmann::json finish(std::chrono::seconds limit) {
-    for (auto& [name, process] : processes_) {
-      const std::optional<int> code = process.waitForExit(limit);
-      EXPECT_TRUE(code.has_value()) << name << " still running:\n" << process.log();
-      if (code) {
-        EXPECT_EQ(*code, 0) << name << " failed:\n" << process.log();
-      }
-    }
-    for (auto& [name, process] : processes_) EXPECT_FALSE(testing::processExists(process.pid()));
-    std::ifstream in(reportPath());
-    EXPECT_TRUE(in.good()) << "no report at " << reportPath();
-    if (!in.good()) return {};
-    return nlohmann::json::parse(in);
-  }
-
- private:
-  void start(const std::string& name, const std::vector<std::string>& argv) {
-    processes_.emplace_back(name, BackgroundProcess(argv, (dir_ / (name + ".log")).string()));
-  }
-
-  std::string run_id_;
-  std::filesystem::path dir_;
-  std::vector<std::pair<std::string, BackgroundProcess>> processes_;
-};
 
 void expectCompleteAndLossless(const nlohmann::json& report, int episodes) {
   ASSERT_FALSE(report.is_null());

@@ -125,6 +125,10 @@ TEST(IdlRoundTrip, EpisodeControlKeepsEveryField) {
   s.time_scale = 12.5;
   s.seed = 42;
   s.schedule_version = 2;
+  s.episodes_planned = 20;
+  s.aborted = true;
+  const std::string detail = "no report of episode 3";
+  s.detail = borrowString(detail);
 
   const OwnedSample<sensornet_EpisodeControl> got = roundTrip(s);
   EXPECT_EQ(viewString(got->run_id), run);
@@ -134,6 +138,9 @@ TEST(IdlRoundTrip, EpisodeControlKeepsEveryField) {
   EXPECT_EQ(got->time_scale, 12.5);
   EXPECT_EQ(got->seed, 42u);
   EXPECT_EQ(got->schedule_version, 2u);
+  EXPECT_EQ(got->episodes_planned, 20u);
+  EXPECT_TRUE(got->aborted);
+  EXPECT_EQ(viewString(got->detail), detail);
 }
 
 TEST(IdlRoundTrip, MeasurementKeepsEveryField) {
@@ -197,7 +204,7 @@ TEST(IdlRoundTrip, ReportKeepsEveryFieldIncludingNestedOnes) {
   const std::vector<std::uint32_t> versions = {1, 2, 5};
   std::vector<sensornet_SensorCounts> counts(3);
   for (std::uint32_t j = 0; j < 3; ++j) {
-    counts[j] = sensornet_SensorCounts{j, 100u + j, 99.5 + j, j, 2u * j};
+    counts[j] = sensornet_SensorCounts{j, 100u + j, 99.5 + j, j, 2u * j, 100u + 2u * j};
   }
   sensornet_Report s{};
   s.run_id = borrowString(run);
@@ -210,7 +217,8 @@ TEST(IdlRoundTrip, ReportKeepsEveryFieldIncludingNestedOnes) {
   borrowSequence(s.counts, counts);
   s.latency_median_s = 0.0003;
   s.latency_p99_s = 0.002;
-  s.summary = sensornet_RunSummary{7, 1.2, 1.1, 1.3, 1.0, 1.5, true, 1.01, 700, 2, 0.0004, 0.003};
+  s.summary = sensornet_RunSummary{7, 1.2, 1.1, 1.3, 1.0, 1.5, true, 1.01, 700, 2, 0.0004, 0.003, 6, 702};
+  s.complete = true;
 
   const OwnedSample<sensornet_Report> got = roundTrip(s);
   EXPECT_EQ(viewString(got->run_id), run);
@@ -228,7 +236,11 @@ TEST(IdlRoundTrip, ReportKeepsEveryFieldIncludingNestedOnes) {
     EXPECT_EQ(got_counts[j].expected, 99.5 + j);
     EXPECT_EQ(got_counts[j].lost, j);
     EXPECT_EQ(got_counts[j].late, 2u * j);
+    EXPECT_EQ(got_counts[j].sent, 100u + 2u * j);
   }
+  EXPECT_TRUE(got->complete);
+  EXPECT_EQ(got->summary.episodes_complete, 6u);
+  EXPECT_EQ(got->summary.sent, 702u);
   EXPECT_EQ(got->latency_median_s, 0.0003);
   EXPECT_EQ(got->latency_p99_s, 0.002);
   const sensornet_RunSummary& summary = got->summary;

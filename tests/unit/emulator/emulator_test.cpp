@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -193,10 +196,15 @@ TEST_F(EpisodeFusionTest, FusesInTimestampOrderWhateverTheArrivalOrder) {
     for (std::size_t i = half; i < shuffled.size(); ++i) EXPECT_FALSE(fusion.add(shuffled[i]));
     std::vector<std::uint64_t> sent(4, 0);
     for (const auto& m : all) ++sent[static_cast<std::size_t>(m.sensor)];
-    for (int j = 0; j < 4; ++j) fusion.finishSensor(j, sent[static_cast<std::size_t>(j)]);
-    EXPECT_TRUE(fusion.allSensorsFinished());
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_FALSE(fusion.settled(j));
+      fusion.setTally(j, sent[static_cast<std::size_t>(j)]);
+    }
+    EXPECT_TRUE(fusion.allSettled());
     const EpisodeResult r = fusion.finish();
-    EXPECT_NEAR(r.realized_cost, inOrderCost(all), 1e-10 * r.realized_cost);
+    // The filter takes exactly the steps of an in-order pass (measurement to measurement, then
+    // to T), so the cost is the same floating-point number, not merely close.
+    EXPECT_EQ(r.realized_cost, inOrderCost(all));
     EXPECT_TRUE(r.complete);
     std::uint64_t received = 0, lost = 0;
     for (const auto& t : r.sensors) {
@@ -227,12 +235,66 @@ TEST_F(EpisodeFusionTest, RejectsMalformedAndDuplicateMeasurementsAndCountsLosse
   EXPECT_TRUE(fusion.add(bad));
   EXPECT_FALSE(fusion.add(all[0]));
   EXPECT_TRUE(fusion.add(all[0]));  // duplicate seq
-  // Sensor all[0].sensor announces one more than it delivered: one lost.
-  fusion.finishSensor(all[0].sensor, 2);
+  // Sensor all[0].sensor says it sent one more than it delivered: one lost, not settled.
+  fusion.setTally(all[0].sensor, 2);
+  EXPECT_FALSE(fusion.settled(all[0].sensor));
   const EpisodeResult r = fusion.finish();
-  EXPECT_EQ(r.rejected, 4u);
-  EXPECT_EQ(r.sensors[static_cast<std::size_t>(all[0].sensor)].lost, 1u);
+  EXPECT_EQ(r.rejected, (RejectionCounts{{"duplicate", 1}, {"malformed", 2}, {"unknown_sensor", 1}}));
+  const SensorTally& t = r.sensors[static_cast<std::size_t>(all[0].sensor)];
+  EXPECT_EQ(t.sent, 2u);
+  EXPECT_EQ(t.received, 1u);
+  EXPECT_EQ(t.lost, 1u);
   EXPECT_FALSE(r.complete);
+}
+
+TEST_F(EpisodeFusionTest, CountsALostTailAndFallsBackToTheBestLowerBoundWithoutATally) {
+  std::vector<FusedMeasurement> all = measurements(1);
+  EpisodeFusion fusion(scenario_, plant_, book_, 1, bracketOf());
+  // Sensor a: tally 7, only seq 0 and 2 arrive: 5 lost, the tail included.
+  // Sensor b: no tally; status said 4 sent, seq 0 arrived: sent 4, lost 3.
+  // Sensor c: no tally, no status; seq 5 arrived: at least 6 sent, lost 5.
+  const auto one = [&](int sensor, std::uint64_t seq) {
+    FusedMeasurement m = all[0];
+    m.sensor = sensor;
+    m.seq = seq;
+    m.z = Eigen::VectorXd::Zero(scenario_.sensors[static_cast<std::size_t>(sensor)].H.rows());
+    return m;
+  };
+  EXPECT_FALSE(fusion.add(one(0, 0)));
+  EXPECT_FALSE(fusion.add(one(0, 2)));
+  fusion.setTally(0, 7);
+  EXPECT_FALSE(fusion.add(one(1, 0)));
+  fusion.noteSentAtLeast(1, 4);
+  EXPECT_FALSE(fusion.add(one(2, 5)));
+  fusion.setTally(3, 0);  // sent nothing: settled
+  EXPECT_EQ(fusion.unsettled(), (std::vector<int>{0, 1, 2}));
+  const EpisodeResult r = fusion.finish();
+  const std::uint64_t sent[] = {7, 4, 6, 0}, received[] = {2, 1, 1, 0};
+  for (std::size_t j = 0; j < 4; ++j) {
+    EXPECT_EQ(r.sensors[j].sent, sent[j]) << j;
+    EXPECT_EQ(r.sensors[j].received, received[j]) << j;
+    EXPECT_EQ(r.sensors[j].sent, r.sensors[j].received + r.sensors[j].lost) << j;
+  }
+  EXPECT_FALSE(r.complete);
+}
+
+TEST_F(EpisodeFusionTest, OnlineWatermarksNeverChangeTheRealizedCost) {
+  std::vector<FusedMeasurement> all = measurements(2);
+  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.time_s < b.time_s; });
+  const auto costWith = [&](const std::vector<double>& watermarks) {
+    EpisodeFusion fusion(scenario_, plant_, book_, 2, bracketOf());
+    std::size_t next = 0;
+    for (const double w : watermarks) {
+      while (next < all.size() && all[next].time_s <= w + 0.2) EXPECT_FALSE(fusion.add(all[next++]));
+      fusion.fuseUpTo(w);
+    }
+    while (next < all.size()) EXPECT_FALSE(fusion.add(all[next++]));
+    return fusion.finish().realized_cost;
+  };
+  const double batch = costWith({});
+  EXPECT_EQ(costWith({0.1, 0.37, 1.0, 1.01, 2.5}), batch);
+  EXPECT_EQ(costWith({0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 2.9}), batch);
+  EXPECT_EQ(batch, inOrderCost(all));
 }
 
 // With a switch at s, the bracket is the realized ∫<W,P> up to s plus the surrogates of the new
@@ -278,31 +340,94 @@ TEST_F(EpisodeFusionTest, BracketsASwitchedEpisodeFromTheFusedCovarianceAtTheSwi
   for (const auto& t : r.sensors) EXPECT_EQ(t.wrong_version, 0u);
 }
 
-TEST(RunReport, SummarizesEpisodesLikeADirectComputation) {
+EpisodeResult episodeWith(std::uint32_t number, double cost, double info, bool complete) {
+  EpisodeResult e;
+  e.episode = number;
+  e.realized_cost = cost;
+  e.bracket = {info, 20.0};
+  e.nees = 3.0;
+  e.complete = complete;
+  e.sensors.resize(2);
+  e.sensors[0].sent = 5;
+  e.sensors[0].received = 4;
+  e.sensors[0].lost = 1;
+  e.sensors[0].expected = 4.5;
+  e.latencies_s = {0.001 * static_cast<double>(number + 1)};
+  return e;
+}
+
+TEST(RunReport, SummarizesCompleteEpisodesWithAStudentTInterval) {
   RunReport report("r", "d", 2, 3);
   const std::vector<double> costs = {3.0, 5.0, 10.0, 2.0};
   for (std::size_t i = 0; i < costs.size(); ++i) {
-    EpisodeResult e;
-    e.episode = static_cast<std::uint32_t>(i);
-    e.realized_cost = costs[i];
-    e.bracket = {1.0 + static_cast<double>(i), 20.0};
-    e.nees = 3.0;
-    e.sensors.resize(2);
-    e.sensors[0].received = 4;
-    e.sensors[0].expected = 4.5;
-    e.latencies_s = {0.001 * static_cast<double>(i + 1)};
-    report.add(e);
+    const EpisodeResult e = episodeWith(static_cast<std::uint32_t>(i), costs[i], 1.0 + static_cast<double>(i), true);
+    report.addLatencies(e.latencies_s);
+    report.add(episodeEntry(e));
   }
+  // An incomplete episode counts in the totals, not in the statistics.
+  report.add(episodeEntry(episodeWith(4, 1000.0, 1.0, false)));
   const RunSummary s = report.summary();
+  EXPECT_EQ(s.episodes, 5u);
+  EXPECT_EQ(s.episodes_complete, 4u);
   EXPECT_DOUBLE_EQ(s.mean, 5.0);
   EXPECT_NEAR(s.std_dev, std::sqrt((4.0 + 0.0 + 25.0 + 9.0) / 3.0), 1e-12);
-  EXPECT_NEAR(s.ci95, 1.96 * s.std_dev / 2.0, 1e-12);
+  // t_{0.975, 3} = 3.18245 (tables), not 1.96.
+  ASSERT_TRUE(s.ci95.has_value());
+  EXPECT_NEAR(*s.ci95, 3.18245 * s.std_dev / 2.0, 1e-4);
   EXPECT_DOUBLE_EQ(s.bracket_mean.info, 2.5);
-  EXPECT_TRUE(s.meets_bracket);
-  EXPECT_EQ(s.received, 16u);
-  EXPECT_DOUBLE_EQ(s.expected, 18.0);
+  EXPECT_EQ(s.meets_bracket, std::optional<bool>(true));
+  EXPECT_EQ(s.sent, 25u);
+  EXPECT_EQ(s.received, 20u);
+  EXPECT_EQ(s.lost, 5u);
+  EXPECT_DOUBLE_EQ(s.expected, 22.5);
   EXPECT_NEAR(s.latency_median_s, 0.0025, 1e-15);
   EXPECT_DOUBLE_EQ(quantile({1.0, 2.0, 3.0, 4.0, 5.0}, 0.99), 4.96);
+}
+
+TEST(RunReport, ClipsTheIntervalAtZeroAndLeavesOneEpisodeUndetermined) {
+  RunReport two("r", "d", 2, 3);
+  two.add(episodeEntry(episodeWith(0, 0.1, 1.0, true)));
+  two.add(episodeEntry(episodeWith(1, 5.0, 1.0, true)));
+  const RunSummary s = two.summary();
+  // Mean 2.55, half-width 12.706 * 3.465 / sqrt(2) ~ 31: the low end would be negative.
+  EXPECT_EQ(s.ci95_low, 0.0);
+  EXPECT_NEAR(s.ci95_high, 2.55 + 12.7062 * std::sqrt(2.0 * 2.45 * 2.45) / std::sqrt(2.0), 1e-3);
+  RunReport one("r", "d", 2, 3);
+  one.add(episodeEntry(episodeWith(0, 3.0, 1.0, true)));
+  EXPECT_FALSE(one.summary().ci95.has_value());
+  EXPECT_FALSE(one.summary().meets_bracket.has_value());
+  EXPECT_TRUE(one.toJson("completed", nlohmann::json::array(), nlohmann::json::array())
+                  .at("summary")
+                  .at("meets_bracket")
+                  .is_null());
+}
+
+TEST(RunReport, RebuildsTheSameReportFromItsEpisodeLog) {
+  char pattern[] = "/tmp/sensornet-report-test-XXXXXX";
+  ASSERT_NE(::mkdtemp(pattern), nullptr);
+  const std::filesystem::path dir = pattern;
+  const std::filesystem::path report_path = dir / "report.json";
+  EXPECT_EQ(episodeLogPath(report_path), dir / "report.jsonl");
+  EXPECT_EQ(episodeLogPath(dir / "out"), dir / "out.jsonl");
+  RunReport report("r", "d", 2, 3);
+  {
+    EpisodeLog log(episodeLogPath(report_path));
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const nlohmann::json entry = episodeEntry(episodeWith(i, 2.0 + i, 1.0, i != 1));
+      log.append(entry);
+      report.add(entry);
+    }
+  }
+  std::ofstream(episodeLogPath(report_path), std::ios::app) << "{\"episode\": 3, \"realiz";  // torn
+  const auto entries = readEpisodeLog(episodeLogPath(report_path));
+  ASSERT_EQ(entries.size(), 3u);
+  const nlohmann::json rebuilt = reportFromEpisodes("r", 2, entries, "failed", nlohmann::json::array());
+  const nlohmann::json original = report.toJson("failed", nlohmann::json::array(), nlohmann::json::array());
+  EXPECT_EQ(rebuilt.at("per_episode"), original.at("per_episode"));
+  EXPECT_EQ(rebuilt.at("summary"), original.at("summary"));
+  EXPECT_EQ(rebuilt.at("sensors"), original.at("sensors"));
+  EXPECT_EQ(rebuilt.at("summary").at("episodes_incomplete"), 1);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
