@@ -399,8 +399,8 @@ class Coordinator {
     const std::string surrogate(describe(surrogate_));
 
     if (given) {
-      emulator::ScheduleVersion v = makeVersion(planned_for, std::move(*given), "file",
-                                                command_id, next_episode, 0.0);
+      emulator::ScheduleVersion v =
+          makeVersion(planned_for, std::move(*given), "file", command_id, next_episode, 0.0);
       return {publish(std::move(v)), "schedule file"};
     }
     const auto requireOptimal = [&](const PlanResult& plan, const std::string& which) {
@@ -408,12 +408,12 @@ class Coordinator {
           plan.status == "not_optimized") {
         return;
       }
-      throw InputError(
-          "command " + std::to_string(command_id), "plan",
-          "a plan the planner reports as optimal, but the " + which + " " + surrogate +
-              " plan ended '" + plan.status + "' (kkt residual " +
-              formatNumber(plan.kkt_residual) + " after " + std::to_string(plan.iterations) +
-              " iterations); nothing was published, the settings are unchanged");
+      throw InputError("command " + std::to_string(command_id), "plan",
+                       "a plan the planner reports as optimal, but the " + which + " " + surrogate +
+                           " plan ended '" + plan.status + "' (kkt residual " +
+                           formatNumber(plan.kkt_residual) + " after " +
+                           std::to_string(plan.iterations) +
+                           " iterations); nothing was published, the settings are unchanged");
     };
     const auto describePlan = [](const PlanResult& plan) {
       return plan.status == "acceptable" ? std::string("acceptable: IPOPT's looser tolerance")
@@ -445,8 +445,8 @@ class Coordinator {
     requireOptimal(plan, "full-horizon");
     std::optional<emulator::ScheduleVersion> tail;
     if (tail_plan) {
-      tail = makeVersion(planned_for, tail_plan->schedule, surrogate, command_id,
-                         current_episode_, at);
+      tail = makeVersion(planned_for, tail_plan->schedule, surrogate, command_id, current_episode_,
+                         at);
     }
     emulator::ScheduleVersion full =
         makeVersion(planned_for, plan.schedule, surrogate, command_id, next_episode, 0.0);
@@ -462,10 +462,9 @@ class Coordinator {
         const double effective = tail->effective_time_s;
         first_version = publish(std::move(*tail));
         summary = "version " + std::to_string(first_version) + " from " +
-                  std::to_string(effective) + " s of episode " +
-                  std::to_string(current_episode_) + " (" + describePlan(*tail_plan) +
-                  ", planned from the fused covariance at " + std::to_string(fused_->time_s) +
-                  " s carried to " + std::to_string(at) + " s); ";
+                  std::to_string(effective) + " s of episode " + std::to_string(current_episode_) +
+                  " (" + describePlan(*tail_plan) + ", planned from the fused covariance at " +
+                  std::to_string(fused_->time_s) + " s carried to " + std::to_string(at) + " s); ";
       } else {
         summary = notInThisEpisode("planning outlasted it");
       }

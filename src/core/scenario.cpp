@@ -3,12 +3,15 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/random.hpp"
+#include "sensornet/core/transition.hpp"
 
 namespace sensornet {
 namespace {
@@ -45,13 +48,16 @@ class MatrixCheck {
   }
   // Positive semidefinite (strict = false) or positive definite (strict = true).
   const MatrixCheck& definite(bool strict) const {
-    const Eigen::MatrixXd sym = 0.5 * (m_ + m_.transpose());
-    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(
-                                sym, Eigen::EigenvaluesOnly)
-                                .eigenvalues()
-                                .minCoeff();
+    // Halves first and decomposed divided by its scale, so that entries near the largest
+    // double overflow neither the sum nor the eigensolver.
+    const Eigen::MatrixXd sym = 0.5 * m_ + 0.5 * m_.transpose();
     const double scale = std::max(1.0, sym.cwiseAbs().maxCoeff());
-    const bool ok = strict ? smallest > 1e-12 * scale : smallest >= -1e-12 * scale;
+    const double smallest_scaled = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(
+                                       sym / scale, Eigen::EigenvaluesOnly)
+                                       .eigenvalues()
+                                       .minCoeff();
+    const double smallest = smallest_scaled * scale;
+    const bool ok = strict ? smallest_scaled > 1e-12 : smallest_scaled >= -1e-12;
     if (!ok) {
       std::ostringstream what;
       what << (strict ? "positive definite" : "positive semidefinite")
@@ -69,6 +75,136 @@ class MatrixCheck {
   std::string field_;
   const Eigen::MatrixXd& m_;
 };
+
+// Numbers in messages: %g, so that 1e308 reads as 1e+308.
+std::string number(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+// The largest eigenvalue of P I for symmetric positive definite P and symmetric I: the largest
+// eigenvalue of L' I L with P = L L'. Infinity when it cannot be computed.
+double largestRelativeEigenvalue(const Eigen::MatrixXd& P, const Eigen::MatrixXd& I) {
+  const Eigen::LLT<Eigen::MatrixXd> llt(P);
+  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  const Eigen::MatrixXd L = llt.matrixL();
+  const Eigen::MatrixXd M = L.transpose() * I * L;
+  if (!M.allFinite()) return std::numeric_limits<double>::infinity();
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (M + M.transpose()),
+                                                                        Eigen::EigenvaluesOnly)
+                             .eigenvalues()
+                             .maxCoeff();
+  return std::isfinite(largest) ? largest : std::numeric_limits<double>::infinity();
+}
+
+// A T, Q T and the open-loop transition over the horizon (no measurements): what every
+// rollout starts from. Returns the open-loop covariance at T.
+Eigen::MatrixXd checkPlantOverHorizon(const Scenario& s, const std::string& source) {
+  const double T = s.horizon_s;
+  const Plant& plant = s.plant;
+  const std::string horizon = ", T = " + number(T) + " s";
+  const double largest_a = plant.A.cwiseAbs().maxCoeff();
+  if (!(plant.A * T).allFinite()) {
+    throw InputError(source, "plant.A",
+                     "entries with |A| T finite, got max |A_ij| = " + number(largest_a) + horizon);
+  }
+  const double span = Eigen::JacobiSVD<Eigen::MatrixXd>(plant.A).singularValues()(0) * T;
+  if (!(span <= kMaxDynamicsSpan)) {
+    throw InputError(source, "plant.A",
+                     "dynamics the rollouts can resolve over the horizon: ||A||_2 T <= " +
+                         number(kMaxDynamicsSpan) + ", got " + number(span));
+  }
+  const double growth =
+      Eigen::EigenSolver<Eigen::MatrixXd>(plant.A, false).eigenvalues().real().maxCoeff() * T;
+  if (!(growth <= kMaxGrowthExponent)) {
+    throw InputError(source, "plant.A",
+                     "max Re eig(A) T <= " + number(kMaxGrowthExponent) +
+                         " (the covariance without measurements grows like exp(2 max Re eig(A) "
+                         "T), which overflows a double beyond exp(709)), got " +
+                         number(growth));
+  }
+  if (!(plant.Q * T).allFinite()) {
+    throw InputError(source, "plant.Q",
+                     "entries with |Q| T finite, got max |Q_ij| = " +
+                         number(plant.Q.cwiseAbs().maxCoeff()) + horizon);
+  }
+  IntervalTransition step;
+  try {
+    step = LtiTransition(plant.A, plant.Q, s.cost.W).over(T);
+  } catch (const std::exception& e) {
+    throw InputError(source, "plant.A",
+                     std::string("a plant whose transition over the horizon can be computed (") +
+                         e.what() + ")");
+  }
+  const std::string overflows = " over the horizon overflows a double";
+  if (!step.Phi.allFinite()) {
+    throw InputError(source, "plant.A", "a finite transition exp(A T), but exp(A T)" + overflows);
+  }
+  if (!step.Qd.allFinite()) {
+    throw InputError(source, "plant.Q",
+                     "finite process noise over the horizon, but the accumulated noise "
+                     "covariance (the integral of exp(A s) Q exp(A s)')" +
+                         overflows);
+  }
+  if (!step.cost_gramian.allFinite() || !std::isfinite(step.noise_cost)) {
+    throw InputError(source, "cost.W", "a finite running cost, but its integral" + overflows);
+  }
+  const Eigen::MatrixXd open_loop = step.Phi * plant.P0 * step.Phi.transpose() + step.Qd;
+  if (!open_loop.allFinite()) {
+    throw InputError(source, "plant.P0",
+                     "a covariance that stays finite without measurements, but exp(A T) P0 "
+                     "exp(A T)' + Qd" +
+                         overflows);
+  }
+  const double running = plant.P0.cwiseProduct(step.cost_gramian).sum() + step.noise_cost;
+  if (!std::isfinite(running)) {
+    throw InputError(source, "cost.W", "a finite running cost, but its integral" + overflows);
+  }
+  if (!std::isfinite(s.cost.WT.cwiseProduct(open_loop).sum())) {
+    throw InputError(source, "cost.WT",
+                     "a finite terminal cost, but <WT, P(T)> without measurements overflows");
+  }
+  return open_loop;
+}
+
+// H_j' R_j^-1 H_j, its size relative to the covariances it updates, and λ̄_j T.
+void checkSensorsOverHorizon(const Scenario& s, const Eigen::MatrixXd& open_loop,
+                             const std::string& source) {
+  const std::vector<Eigen::MatrixXd> information = s.informationIncrements();
+  for (std::size_t j = 0; j < information.size(); ++j) {
+    const std::string field = "sensors[" + std::to_string(j) + "].H";
+    if (!information[j].allFinite()) {
+      throw InputError(source, field,
+                       "entries whose information H' R^-1 H is finite, but it overflows (max "
+                       "|H_ij| = " +
+                           number(s.sensors[j].H.cwiseAbs().maxCoeff()) + ")");
+    }
+    const double relative = std::max(largestRelativeEigenvalue(s.plant.P0, information[j]),
+                                     largestRelativeEigenvalue(open_loop, information[j]));
+    if (!(relative <= kMaxMeasurementInformation)) {
+      throw InputError(
+          source, field,
+          "a measurement at most " + number(kMaxMeasurementInformation) +
+              " times as informative as the prior (largest eigenvalue of P H' R^-1 H for P = P0 "
+              "and the covariance at T without measurements; beyond, the covariance update "
+              "loses every digit), got " +
+              number(relative));
+    }
+  }
+  const Eigen::VectorXd max_rates = s.maxRates();
+  for (Eigen::Index j = 0; j < max_rates.size(); ++j) {
+    const double count = max_rates(j) * s.horizon_s;
+    if (!(count <= kMaxMeasurementsPerHorizon)) {
+      throw InputError(source, "constraints.b",
+                       "budgets that allow at most " + number(kMaxMeasurementsPerHorizon) +
+                           " expected measurements per sensor in one horizon (largest rate "
+                           "min_i b_i / C_ij times T), got sensor " +
+                           std::to_string(j) + ": " + number(max_rates(j)) + " Hz x " +
+                           number(s.horizon_s) + " s = " + number(count));
+    }
+  }
+}
 
 }  // namespace
 
@@ -143,6 +279,9 @@ void validateScenario(const Scenario& s, const std::string& source) {
                        "a number > 0, got " + std::to_string(s.constraints.b(i)));
     }
   }
+
+  const Eigen::MatrixXd open_loop = checkPlantOverHorizon(s, source);
+  checkSensorsOverHorizon(s, open_loop, source);
 }
 
 namespace {
