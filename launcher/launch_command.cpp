@@ -1,6 +1,7 @@
 #include "launch_command.hpp"
 
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,17 +9,23 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "interrupts.hpp"
+#include "output_file.hpp"
 #include "process_group.hpp"
 #include "progress_watcher.hpp"
 #include "run_files.hpp"
+#include "run_lock.hpp"
+#include "run_outcome.hpp"
 #include "run_supervisor.hpp"
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet::launcher {
@@ -30,18 +37,26 @@ using std::chrono::seconds;
 
 constexpr const char* kCoordinator = "coordinator";
 constexpr const char* kFusionCenter = "fusion_center";
+constexpr const char* kLauncher = "sensornet";
 constexpr seconds kStopGrace{3};
+// Stopped last and given longer: on SIGTERM the fusion center closes its open episodes and
+// writes the report.
+constexpr seconds kFusionCenterStopGrace{10};
 // After the coordinator ends the run, the fusion center writes its report and exits; the
 // sensor agents leave on the same RUN_SHUTDOWN.
 constexpr seconds kFusionCenterExitLimit{15};
 constexpr seconds kSensorAgentExitLimit{5};
+// How long a new launch listens for a live run of its id before starting anything: discovery
+// on loopback takes a few milliseconds; this is the price of every launch, so it stays short.
+constexpr milliseconds kLiveRunProbe{500};
 constexpr std::size_t kLogLinesShown = 15;
-constexpr int kExitInterrupted = 130;  // 128 + SIGINT, as shells report Ctrl-C
+constexpr int kMaxSensorsPerProcess = 1'000'000;
 
 struct LaunchOptions {
   std::string scenario_path;
   int episodes = 20;
   double time_scale = 1.0;
+  std::string seed = "1";  // checked by seedNumber(); passed on as written
   std::string report_path;
   int sensors_per_process = 1;
   std::string surrogate = "info";
@@ -56,16 +71,32 @@ struct LaunchOptions {
 struct LaunchPlan {
   std::string run_id;
   fs::path log_dir;
+  bool default_log_dir = false;  // in the scratch folder, which must be private
   fs::path report_path;
+  bool default_report = false;      // in the log folder
   std::vector<ChildSpec> children;  // in start order: fusion center, sensor agents, coordinator
   std::vector<std::string> sensor_agents;
+  std::map<std::string, std::vector<int>> sensors_of;  // sensor agent -> the sensors it hosts
 };
 
-// The shortest text that reads back as `value` ("10", "0.1").
-std::string formatNumber(double value) {
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof text, value);
-  return std::string(text, result.ptr);
+// A run seed as the coordinator takes it: a decimal integer that fits 64 bits unsigned.
+// (CLI11 would read "-1" as 2^64 - 1 and "010" as octal.)
+CLI::Validator seedNumber() {
+  const std::string range = "an integer from 0 to 18446744073709551615";
+  return CLI::Validator(
+      [range](std::string& input) -> std::string {
+        std::uint64_t value = 0;
+        const char* end = input.data() + input.size();
+        const auto [stop, error] = std::from_chars(input.data(), end, value);
+        const bool digits_only =
+            !input.empty() && input.find_first_not_of("0123456789") == std::string::npos;
+        if (!digits_only || error != std::errc() || stop != end) {
+          return "expected " + range + ", got '" + input.substr(0, 40) +
+                 (input.size() > 40 ? "...'" : "'");
+        }
+        return {};
+      },
+      range);
 }
 
 // The flags every child needs to join the run: the launcher's own, resolved.
@@ -96,10 +127,12 @@ LaunchPlan planLaunch(const LaunchOptions& options, int sensor_count,
                       const EmulatorPrograms& programs, const dds::DomainConfig& domain) {
   LaunchPlan plan;
   plan.run_id = options.run.run_id;
+  plan.default_log_dir = options.log_dir.empty();
   plan.log_dir =
-      options.log_dir.empty() ? defaultLogDirectory(plan.run_id) : fs::absolute(options.log_dir);
-  plan.report_path = options.report_path.empty() ? plan.log_dir / "report.json"
-                                                 : fs::absolute(options.report_path);
+      plan.default_log_dir ? defaultLogDirectory(plan.run_id) : fs::absolute(options.log_dir);
+  plan.default_report = options.report_path.empty();
+  plan.report_path =
+      plan.default_report ? plan.log_dir / "report.json" : fs::absolute(options.report_path);
   const std::vector<std::string> flags = runFlags(options, domain);
 
   plan.children.push_back(childSpec(kFusionCenter,
@@ -107,22 +140,77 @@ LaunchPlan planLaunch(const LaunchOptions& options, int sensor_count,
                                     flags, plan.log_dir));
   const int per_process = options.sensors_per_process;
   for (int first = 0; first < sensor_count; first += per_process) {
-    const std::string block = blockSpec(first, std::min(first + per_process, sensor_count) - 1);
+    const int last = std::min(first + per_process, sensor_count) - 1;
+    const std::string block = blockSpec(first, last);
     const std::string name = "sensor_agent-" + block;
     plan.children.push_back(
         childSpec(name, {programs.sensor_agent, "--sensors", block}, flags, plan.log_dir));
     plan.sensor_agents.push_back(name);
+    for (int j = first; j <= last; ++j) plan.sensors_of[name].push_back(j);
   }
-  std::vector<std::string> coordinator = {programs.coordinator, "serve",
-                                          "--scenario",         fs::absolute(options.scenario_path),
-                                          "--surrogate",        options.surrogate,
-                                          "--episodes",         std::to_string(options.episodes),
-                                          "--time-scale",       formatNumber(options.time_scale)};
+  std::vector<std::string> coordinator = {programs.coordinator,
+                                          "serve",
+                                          "--scenario",
+                                          fs::absolute(options.scenario_path),
+                                          "--surrogate",
+                                          options.surrogate,
+                                          "--episodes",
+                                          std::to_string(options.episodes),
+                                          "--time-scale",
+                                          formatNumber(options.time_scale),
+                                          "--seed",
+                                          options.seed};
   if (!options.schedule_path.empty()) {
     coordinator.insert(coordinator.end(), {"--schedule", fs::absolute(options.schedule_path)});
   }
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator), flags, plan.log_dir));
   return plan;
+}
+
+// The report and the episode log beside it must be able to take the run's results.
+void checkReportPaths(const LaunchPlan& plan) {
+  const std::string option = plan.default_report ? "report" : "--report";
+  checkOutputFile(plan.report_path, option);
+  checkOutputFile(emulator::episodeLogPath(plan.report_path), option + " (its episode log)");
+}
+
+// The log folder: made if missing (private when it is the default one, in the scratch folder).
+void makeLogDirectory(const LaunchPlan& plan) {
+  if (plan.default_log_dir) {
+    ensurePrivateDirectory(userScratchDirectory());
+    ensurePrivateDirectory(plan.log_dir);
+    return;
+  }
+  std::error_code error;
+  fs::create_directories(plan.log_dir, error);
+  if (error || !fs::is_directory(plan.log_dir)) {
+    throw InputError("--log-dir " + plan.log_dir.string(), "",
+                     "a folder that exists or can be created" +
+                         (error ? ": " + error.message() : std::string()));
+  }
+}
+
+// Claims the run id before anything starts: a second launch of a live run is refused here,
+// before it creates, removes or truncates anything of that run's. Then makes the log folder,
+// checks what goes in it and removes an earlier run's results. Returns the lock that keeps the
+// run's log folder this launch's own. (A --report given by the user is checked before.)
+std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher& progress,
+                                  const dds::DomainConfig& domain) {
+  if (progress.seesLiveRun(kLiveRunProbe)) {
+    throw InputError("--run-id " + plan.run_id, "",
+                     "a run id not in use on this host: run " + plan.run_id +
+                         " is live (its coordinator or fusion center answers on DDS domain " +
+                         std::to_string(domain.domain_id) + ", partition " + domain.partition +
+                         ")");
+  }
+  makeLogDirectory(plan);
+  auto lock = std::make_unique<RunLock>(plan.log_dir, plan.run_id);
+  if (plan.default_report) checkReportPaths(plan);
+  for (const ChildSpec& child : plan.children) checkOutputFile(child.log_path, "log");
+  // Results of an earlier run of this id must not pass for this run's.
+  removeRegularFile(plan.report_path);
+  removeRegularFile(emulator::episodeLogPath(plan.report_path));
+  return lock;
 }
 
 // Forgets the current-run record when the launch ends, however it ends.
@@ -150,10 +238,12 @@ class CurrentRunRecord {
 void superviseRun(RunSupervisor& supervisor, const LaunchPlan& plan) {
   if (!supervisor.awaitExit(kCoordinator, RunSupervisor::kNoLimit)) return;
   if (!supervisor.awaitExit(kFusionCenter, kFusionCenterExitLimit)) {
-    supervisor.fail({RunFailureKind::ChildFailed, kFusionCenter,
+    supervisor.fail({RunFailureKind::ChildFailed,
+                     kFusionCenter,
                      "did not exit within " + std::to_string(kFusionCenterExitLimit.count()) +
                          " s after the coordinator ended the run",
-                     0});
+                     0,
+                     {}});
     return;
   }
   const auto until = RunSupervisor::Clock::now() + kSensorAgentExitLimit;
@@ -165,8 +255,55 @@ void superviseRun(RunSupervisor& supervisor, const LaunchPlan& plan) {
   }
 }
 
-void reportFailure(const RunFailure& failure, const LaunchPlan& plan, const ProcessGroup& group,
-                   const std::vector<std::string>& still_running) {
+// Stops what still runs: the fusion center last, so that it can write its report.
+void stopRun(ProcessGroup& group) {
+  std::vector<std::string> others = group.runningNames();
+  std::erase(others, std::string(kFusionCenter));
+  (void)group.stop(others, kStopGrace);
+  (void)group.stop({kFusionCenter}, kFusionCenterStopGrace);
+}
+
+std::vector<int> sensorsOf(const LaunchPlan& plan, const std::string& process) {
+  const auto it = plan.sensors_of.find(process);
+  return it == plan.sensors_of.end() ? std::vector<int>{} : it->second;
+}
+
+// The faults the launcher saw: every child that ended badly on its own, and why it stopped the
+// run if nothing of that sort did.
+std::vector<Fault> launcherFaults(const RunSupervisor& supervisor, const LaunchPlan& plan,
+                                  double timeout_s) {
+  std::vector<Fault> faults;
+  for (const ChildFault& f : supervisor.childFaults()) {
+    faults.push_back({f.exit.signal != 0 ? "process_killed" : "process_failed", f.exit.name,
+                      sensorsOf(plan, f.exit.name), f.at, f.exit.describe()});
+  }
+  if (const auto& failure = supervisor.failure()) {
+    switch (failure->kind) {
+      case RunFailureKind::Interrupted:
+        faults.push_back({"interrupted", kLauncher, {}, failure->at, failure->reason});
+        break;
+      case RunFailureKind::TimedOut:
+        faults.push_back(
+            {"timeout",
+             kLauncher,
+             {},
+             failure->at,
+             "the run did not end within --timeout " + formatNumber(timeout_s) + " s"});
+        break;
+      case RunFailureKind::ChildFailed:
+        if (supervisor.childFaults().empty()) {
+          faults.push_back({"process_hung", failure->child, sensorsOf(plan, failure->child),
+                            failure->at, failure->reason});
+        }
+        break;
+    }
+  }
+  return faults;
+}
+
+// What went wrong, on standard error: the cause, what was stopped, the failing child's log.
+void explainFailure(const RunFailure& failure, const LaunchPlan& plan, const ProcessGroup& group,
+                    const std::vector<std::string>& still_running) {
   std::string what = failure.reason;
   if (!failure.child.empty()) what = failure.child + " " + what;
   const char* verb = failure.kind == RunFailureKind::Interrupted ? "stopped" : "failed";
@@ -182,101 +319,7 @@ void reportFailure(const RunFailure& failure, const LaunchPlan& plan, const Proc
                    lastLines(*log, kLogLinesShown).c_str());
     }
   }
-  std::error_code ignored;
-  if (fs::exists(plan.report_path, ignored)) {
-    std::fprintf(stderr, "sensornet: partial report in %s\n", plan.report_path.c_str());
-  }
   std::fprintf(stderr, "sensornet: logs in %s\n", plan.log_dir.c_str());
-}
-
-// The fusion center's final report, or nullopt with what is wrong with it ("wrote no report at
-// ...", completing "fusion_center ...").
-std::optional<nlohmann::json> readReport(const fs::path& path, const std::string& run_id,
-                                         std::string& problem) {
-  std::ifstream in(path);
-  if (!in) {
-    problem = "wrote no report at " + path.string();
-    return std::nullopt;
-  }
-  nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
-  if (!report.is_object() || !report.contains("summary")) {
-    problem = "wrote " + path.string() + ", which is not a sensornet report";
-    return std::nullopt;
-  }
-  if (report.value("run_id", std::string()) != run_id) {
-    problem = "wrote a report of another run in " + path.string();
-    return std::nullopt;
-  }
-  if (const std::string status = report.value("status", std::string("completed"));
-      status != "completed") {
-    problem = "reports the run as " + status + " in " + path.string();
-    return std::nullopt;
-  }
-  return report;
-}
-
-// Received, expected and lost measurements: from the summary, else summed over the sensors.
-nlohmann::json measurementCounts(const nlohmann::json& report) {
-  const nlohmann::json& summary = report["summary"];
-  if (summary.contains("received") && summary.contains("expected") && summary.contains("lost")) {
-    return {{"received", summary["received"]},
-            {"expected", summary["expected"]},
-            {"lost", summary["lost"]}};
-  }
-  double expected = 0.0;
-  std::uint64_t received = 0, lost = 0;
-  for (const nlohmann::json& sensor : report.value("sensors", nlohmann::json::array())) {
-    received += sensor.value("received", std::uint64_t{0});
-    expected += sensor.value("expected", 0.0);
-    lost += sensor.value("lost", std::uint64_t{0});
-  }
-  return {{"received", received}, {"expected", expected}, {"lost", lost}};
-}
-
-void printReport(const nlohmann::json& report, const fs::path& path) {
-  const nlohmann::json& s = report["summary"];
-  const nlohmann::json bracket = s.value("bracket", nlohmann::json::object());
-  const nlohmann::json counts = measurementCounts(report);
-  const nlohmann::json latency = report.value("latency_s", nlohmann::json::object());
-  std::printf("run %s: %s, %d episode(s)\n", report.value("run_id", std::string()).c_str(),
-              report.value("status", std::string("completed")).c_str(),
-              report.value("episodes", s.value("episodes", 0)));
-  std::printf("realized cost: %.6g \u00b1 %.3g (95%%) against the bracket [%.6g, %.6g]: %s\n",
-              s.value("mean", 0.0), s.value("ci95", 0.0), bracket.value("info", 0.0),
-              bracket.value("cov", 0.0),
-              s.value("meets_bracket", false) ? "meets it" : "DOES NOT meet it");
-  std::printf("mean NEES: %.4g\n", s.value("nees_mean", 0.0));
-  std::printf("measurements: %llu received, %.1f expected, %llu lost\n",
-              static_cast<unsigned long long>(counts["received"].get<std::uint64_t>()),
-              counts["expected"].get<double>(),
-              static_cast<unsigned long long>(counts["lost"].get<std::uint64_t>()));
-  std::printf("latency publish-to-fusion: median %.3g ms, p99 %.3g ms\n",
-              1e3 * latency.value("median", 0.0), 1e3 * latency.value("p99", 0.0));
-  std::printf("report: %s\n", path.c_str());
-}
-
-void printReportJson(const nlohmann::json& report, const fs::path& path) {
-  nlohmann::json line = report["summary"];
-  line["run_id"] = report["run_id"];
-  line["status"] = report.value("status", std::string("completed"));
-  line["report"] = path.string();
-  printJson(line);
-}
-
-int failRun(const RunFailure& failure, const LaunchPlan& plan, ProcessGroup& group, bool json) {
-  const std::vector<std::string> still_running = group.runningNames();
-  (void)group.stopAll(kStopGrace);
-  reportFailure(failure, plan, group, still_running);
-  if (json) {
-    std::string reason =
-        failure.child.empty() ? failure.reason : failure.child + " " + failure.reason;
-    printJson({{"run_id", plan.run_id},
-               {"status", "failed"},
-               {"reason", reason},
-               {"logs", plan.log_dir.string()}});
-  }
-  return failure.kind == RunFailureKind::Interrupted && failure.signal == SIGINT ? kExitInterrupted
-                                                                                 : kExitFailure;
 }
 
 int runLaunch(LaunchOptions options) {
@@ -287,10 +330,10 @@ int runLaunch(LaunchOptions options) {
   const dds::DomainConfig domain = options.run.domainConfig();
   const EmulatorPrograms programs = findEmulatorPrograms();
   const LaunchPlan plan = planLaunch(options, scenario.sensorCount(), programs, domain);
-  fs::create_directories(plan.log_dir);
-  fs::create_directories(plan.report_path.parent_path());
-  std::error_code ignored;
-  fs::remove(plan.report_path, ignored);  // a stale report must not pass for this run's
+  if (!plan.default_report) checkReportPaths(plan);
+  if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
+  ProgressWatcher progress(domain, options.episodes, scenario.horizon_s);
+  const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
 
   std::fprintf(stderr,
                "run id: %s; change it live with: sensornet replan --run-id %s --surrogate cov "
@@ -298,7 +341,6 @@ int runLaunch(LaunchOptions options) {
                plan.run_id.c_str(), plan.run_id.c_str());
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   installInterruptHandlers();
-  ProgressWatcher progress(domain, options.episodes);
   ProcessGroup group;
   for (const ChildSpec& child : plan.children) {
     const pid_t pid = group.start(child);
@@ -313,25 +355,46 @@ int runLaunch(LaunchOptions options) {
   RunSupervisor supervisor(group, progress, deadline);
   superviseRun(supervisor, plan);
   if (const auto& failure = supervisor.failure()) {
-    return failRun(*failure, plan, group, options.json);
+    const std::vector<std::string> still_running = group.runningNames();
+    stopRun(group);
+    explainFailure(*failure, plan, group, still_running);
   }
   for (const ChildExit& lingering : group.stopAll(kStopGrace)) {
     spdlog::warn("{} had not left after the run ended; stopped it ({})", lingering.name,
                  lingering.describe());
   }
-  std::string problem;
-  const auto report = readReport(plan.report_path, plan.run_id, problem);
-  if (!report) {
-    return failRun({RunFailureKind::ChildFailed, kFusionCenter, problem, 0}, plan, group,
-                   options.json);
+  const RunEnd end{
+      plan.run_id,
+      plan.report_path,
+      scenario.sensorCount(),
+      options.episodes,
+      launcherFaults(supervisor, plan, options.timeout_s),
+      supervisor.failure() && supervisor.failure()->kind == RunFailureKind::Interrupted};
+  const RunOutcome outcome = settleRun(end);
+  if (outcome.write_problem) {
+    std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
   }
   if (options.json) {
-    printReportJson(*report, plan.report_path);
+    printOutcomeJson(outcome, plan.report_path);
   } else {
-    printReport(*report, plan.report_path);
+    printOutcome(outcome, plan.report_path);
   }
-  return kExitOk;
+  return outcome.exit_code;
 }
+
+constexpr const char* kLaunchFooter =
+    "Exit status (DESIGN.md, \"Run outcome\"; the report's \"status\" says the same):\n"
+    "  0  completed: every episode complete, every sent measurement fused, no process failed\n"
+    "  3  degraded: every episode ran, but something was lost, rejected or re-planned because "
+    "of a fault (the report's \"faults\" say what)\n"
+    "  1  failed or interrupted: the run could not finish (a process died or failed, --timeout, "
+    "or Ctrl-C/SIGTERM/SIGHUP, which exit 1 too, not 130)\n"
+    "  2  bad input, refused before any process starts: a bad option or file, a report path "
+    "that is not a regular file in a writable folder, a run id already in use on this host\n"
+    "Files: <log dir>/<process>.log, the report (--report) and its episode log beside it "
+    "(report.json -> report.jsonl, one line per finished episode). The default log folder "
+    "is /tmp/sensornet-<uid>/<run id>/ ($SENSORNET_SCRATCH_DIR replaces /tmp/sensornet-<uid>), "
+    "private (0700) and refused if it is a symbolic link, another user's, or writable by others.";
 
 }  // namespace
 
@@ -346,20 +409,27 @@ Subcommand addLaunchCommand(CLI::App& app) {
       "see the sensors with `sensornet status` (both find the run by itself). Ctrl-C stops "
       "every process. Example:\n  sensornet launch scenarios/default.yaml --episodes 20 "
       "--time-scale 10 --report report.json");
+  cmd->footer(kLaunchFooter);
   cmd->add_option("scenario", options->scenario_path, "scenario file (YAML)")->required();
   cmd->add_option("--episodes", options->episodes, "episodes to run")
-      ->check(CLI::Range(1, 1'000'000))
+      ->check(integerRange(emulator::kMinEpisodes, emulator::kMaxEpisodes))
       ->capture_default_str();
   cmd->add_option("--time-scale", options->time_scale,
                   "emulated seconds per wall second (10: ten times faster than real time)")
-      ->check(CLI::PositiveNumber)
+      ->check(numberRange(emulator::kMinTimeScale, emulator::kMaxTimeScale))
+      ->capture_default_str();
+  cmd->add_option("--seed", options->seed,
+                  "run seed: keys the plant truth, the arrivals and the sensor noise (the "
+                  "coordinator's --seed); the same seed, scenario and schedule give the same "
+                  "realized costs")
+      ->check(seedNumber())
       ->capture_default_str();
   cmd->add_option("--report", options->report_path,
-                  "where the fusion center writes the final report (JSON); default "
-                  "<log-dir>/report.json");
+                  "where the fusion center writes the final report (JSON): a regular file or a "
+                  "new one in an existing writable folder; default <log-dir>/report.json");
   cmd->add_option("--sensors-per-process", options->sensors_per_process,
                   "sensors hosted by each sensor_agent process")
-      ->check(CLI::Range(1, 1'000'000))
+      ->check(integerRange(1, kMaxSensorsPerProcess))
       ->capture_default_str();
   cmd->add_option("--surrogate", options->surrogate,
                   "how the coordinator plans the schedule: uniform, info (eq. 11) or cov (eq. 15)")
@@ -371,14 +441,17 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->get_option("--run-id")
       ->description(
           "the run's id (default: run-<pid>-<4 random hex digits>); its DDS partition is "
-          "sensornet/ID and its domain id a hash of ID");
+          "sensornet/ID and its domain id a hash of ID. A launch whose id is in use on this "
+          "host (a live run, or a launch holding its log folder) is refused with exit 2");
   cmd->add_option("--log-dir", options->log_dir,
                   "where each process's log goes (default /tmp/sensornet-<uid>/<run id>/)");
   cmd->add_option("--timeout", options->timeout_s,
-                  "stop everything and fail if the run is not over after this many seconds")
-      ->check(CLI::NonNegativeNumber);
+                  "stop everything and fail if the run is not over after this many seconds "
+                  "(0: no limit)")
+      ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--json", options->json,
-                "print one JSON line: the report's summary with \"run_id\" and \"report\"");
+                "print one JSON line at the end: the report's summary with \"run_id\", "
+                "\"status\", \"faults\", \"report\" and \"exit_code\"");
   return {cmd, [options] { return runLaunch(*options); }};
 }
 

@@ -180,22 +180,43 @@ std::optional<std::filesystem::path> ProcessGroup::logOf(const std::string& name
 }
 
 std::vector<ChildExit> ProcessGroup::stopAll(std::chrono::milliseconds grace) {
+  std::vector<ChildExit> ended = stop(runningNames(), grace);
+  for (ChildExit& e : reap()) ended.push_back(e);
+  return ended;
+}
+
+bool ProcessGroup::anyRunning(const std::vector<std::string>& names) const {
+  return std::any_of(names.begin(), names.end(),
+                     [&](const std::string& name) { return isRunning(name); });
+}
+
+std::vector<ChildExit> ProcessGroup::stop(const std::vector<std::string>& names,
+                                          std::chrono::milliseconds grace) {
+  const auto named = [&](const std::string& name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
   for (const Child& child : children_) {
-    if (child.running) signalChild(child.pid, SIGTERM);
+    if (child.running && named(child.spec.name)) signalChild(child.pid, SIGTERM);
   }
   const auto deadline = std::chrono::steady_clock::now() + grace;
   std::vector<ChildExit> ended;
+  std::vector<ChildExit> others;
+  const auto sort = [&](std::vector<ChildExit> exits) {
+    for (ChildExit& e : exits) (named(e.name) ? ended : others).push_back(std::move(e));
+  };
   for (;;) {
-    for (ChildExit& e : reap()) ended.push_back(e);
-    if (runningPids().empty() || std::chrono::steady_clock::now() >= deadline) break;
+    sort(reap());
+    if (!anyRunning(names) || std::chrono::steady_clock::now() >= deadline) break;
     std::this_thread::sleep_for(kPollInterval);
   }
-  for (const pid_t pid : runningPids()) {
-    signalChild(pid, SIGKILL);
+  for (const Child& child : children_) {
+    if (!child.running || !named(child.spec.name)) continue;
+    signalChild(child.pid, SIGKILL);
     int status = 0;
-    if (::waitpid(pid, &status, 0) == pid) collect(pid, status);
+    if (::waitpid(child.pid, &status, 0) == child.pid) collect(child.pid, status);
   }
-  for (ChildExit& e : reap()) ended.push_back(e);
+  sort(reap());
+  pending_.insert(pending_.end(), others.begin(), others.end());
   return ended;
 }
 

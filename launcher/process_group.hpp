@@ -68,8 +68,12 @@ class ProcessGroup {
   [[nodiscard]] std::optional<std::filesystem::path> logOf(const std::string& name) const;
 
   // SIGTERM to every running child, SIGKILL to those still running after `grace`, and reaps
-  // them all. Returns how each ended. Safe to call when nothing runs.
+  // them all. Returns how each ended (also those that ended earlier and were not reaped yet).
+  // Safe to call when nothing runs.
   std::vector<ChildExit> stopAll(std::chrono::milliseconds grace);
+  // The same for the named children only; others that end meanwhile are left for reap().
+  std::vector<ChildExit> stop(const std::vector<std::string>& names,
+                              std::chrono::milliseconds grace);
 
  private:
   struct Child {
@@ -79,6 +83,7 @@ class ProcessGroup {
   };
   // Reaps one pid if it ended (non-blocking); records its exit in pending_.
   void collect(pid_t pid, int status);
+  [[nodiscard]] bool anyRunning(const std::vector<std::string>& names) const;
   std::vector<Child> children_;
   std::vector<ChildExit> pending_;  // ended, not yet returned by reap()
 };

@@ -1,6 +1,7 @@
 #include "progress_watcher.hpp"
 
 #include <cstdio>
+#include <thread>
 
 #include "sensornet/dds/wire.hpp"
 
@@ -8,6 +9,8 @@ namespace sensornet::launcher {
 namespace {
 
 constexpr dds_attach_t kReports = 1;
+constexpr dds_attach_t kControls = 2;
+constexpr std::chrono::milliseconds kProbeStep{20};
 
 }  // namespace
 
@@ -18,9 +21,8 @@ std::string formatProgress(const sensornet_Report& report, int episodes_planned)
   std::snprintf(line, sizeof line,
                 "[%u/%d] episode %u: realized %.4g, running mean %.4g \u00b1 %.2g (95%%), "
                 "bracket [%.4g, %.4g]",
-                s.episodes, episodes_planned, report.episode, report.realized_cost,
-                s.realized_mean, ci95,
-                s.bracket_lower_mean, s.bracket_upper_mean);
+                s.episodes, episodes_planned, report.episode, report.realized_cost, s.realized_mean,
+                ci95, s.bracket_lower_mean, s.bracket_upper_mean);
   std::string text = line;
   const auto versions = dds::viewSequence(report.schedule_versions);
   if (!versions.empty() && (versions.size() > 1 || versions.front() != 1)) {
@@ -32,25 +34,66 @@ std::string formatProgress(const sensornet_Report& report, int episodes_planned)
   return text;
 }
 
-ProgressWatcher::ProgressWatcher(const dds::DomainConfig& config, int episodes_planned)
+ProgressWatcher::ProgressWatcher(const dds::DomainConfig& config, int episodes_planned,
+                                 double horizon_s)
     : domain_(config),
       participant_(domain_),
       topic_(participant_),
+      scenario_topic_(participant_),
+      control_topic_(participant_),
       reader_(participant_, topic_),
+      scenario_reader_(participant_, scenario_topic_),
+      control_reader_(participant_, control_topic_),
       has_data_(reader_),
+      has_control_(control_reader_),
       waitset_(participant_),
-      episodes_planned_(episodes_planned) {
+      episodes_planned_(episodes_planned),
+      horizon_s_(horizon_s) {
   waitset_.attach(has_data_, kReports);
+  waitset_.attach(has_control_, kControls);
+}
+
+bool ProgressWatcher::seesLiveRun(std::chrono::milliseconds wait) const {
+  const auto until = std::chrono::steady_clock::now() + wait;
+  for (;;) {
+    if (scenario_reader_.matchedWriters() > 0 || reader_.matchedWriters() > 0) return true;
+    if (std::chrono::steady_clock::now() >= until) return false;
+    std::this_thread::sleep_for(kProbeStep);
+  }
 }
 
 void ProgressWatcher::poll(std::chrono::milliseconds wait) {
-  if (waitset_.wait(wait).timedOut()) return;
+  const dds::WaitResult result = waitset_.wait(wait);
+  if (result.timedOut()) return;
+  if (result.triggered(kControls)) takeControls();
+  if (!result.triggered(kReports)) return;
   const dds::Batch<sensornet_Report> batch = reader_.take();
   for (const auto& received : batch.samples) {
     const sensornet_Report& report = *received.sample;
     if (!printed_.insert(report.episode).second) continue;
     std::fprintf(stderr, "%s\n", formatProgress(report, episodes_planned_).c_str());
   }
+}
+
+void ProgressWatcher::takeControls() {
+  const dds::Batch<sensornet_EpisodeControl> batch = control_reader_.take();
+  for (const auto& received : batch.samples) {
+    const sensornet_EpisodeControl& c = *received.sample;
+    if (c.command == sensornet_RUN_SHUTDOWN) {
+      shut_down_ = true;
+    } else if (c.command == sensornet_EPISODE_START && (!episode_ || c.episode >= *episode_)) {
+      episode_ = c.episode;
+      clock_ = {c.start_wall_time_ns, c.time_scale};
+    }
+  }
+}
+
+RunPosition ProgressWatcher::positionAt(std::int64_t wall_ns) const {
+  if (!episode_ || shut_down_) return {};
+  RunPosition at{episode_, std::nullopt};
+  const double t = clock_.emulatedAt(wall_ns);
+  if (t >= 0.0 && t <= horizon_s_) at.emulated_time_s = t;
+  return at;
 }
 
 }  // namespace sensornet::launcher

@@ -1,14 +1,19 @@
 #pragma once
-// The launcher's view of a run's progress: its own DDS participant in the run's domain and
-// partition reads the fusion center's Report topic and prints one line per episode on standard
-// error.
+// The launcher's view of a run: its own DDS participant in the run's domain and partition
+// reads the fusion center's Report topic and prints one line per episode on standard error,
+// follows the coordinator's EpisodeControl topic to know where the run is (which episode, what
+// emulated time), and, before the launcher starts anything, tells whether a run with this id
+// is already live (its coordinator or fusion center answers).
 //
-//   ProgressWatcher progress(run.domainConfig(), 20);
+//   ProgressWatcher progress(run.domainConfig(), 20, scenario.horizon_s);
+//   if (progress.seesLiveRun(500ms)) refuse();       // before starting any process
 //   progress.poll(std::chrono::milliseconds(50));   // prints the episodes reported meanwhile
-//   // episode 3/20: realized 12.3, running mean 11.8 ± 0.9 (95%), bracket [10.2, 30.1]
+//   // [3/20] episode 2: realized 12.3, running mean 11.8 ± 0.9 (95%), bracket [10.2, 30.1]
+//   RunPosition at = progress.positionAt(wallNowNs());   // episode 3, emulated time 1.25 s
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <string>
 
@@ -17,29 +22,56 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
+#include "sensornet/emulator/run_inputs.hpp"
 
 namespace sensornet::launcher {
 
 // The progress line of one episode's report.
 [[nodiscard]] std::string formatProgress(const sensornet_Report& report, int episodes_planned);
 
+// Where a run was at some wall time: the episode announced last (nullopt before the first or
+// after shutdown) and the emulated time in it (nullopt outside [0, T]: announced but not begun,
+// or past its end).
+struct RunPosition {
+  std::optional<std::uint32_t> episode;
+  std::optional<double> emulated_time_s;
+};
+
 class ProgressWatcher {
  public:
-  ProgressWatcher(const dds::DomainConfig& config, int episodes_planned);
+  ProgressWatcher(const dds::DomainConfig& config, int episodes_planned, double horizon_s);
 
-  // Waits up to `wait` for reports and prints a line for each episode not printed yet.
+  // True if, within `wait`, a writer of the run's Scenario or Report topic matches: a
+  // coordinator or fusion center of this run id is alive in this domain and partition. Returns
+  // as soon as one matches. Call it before starting the run's own processes.
+  [[nodiscard]] bool seesLiveRun(std::chrono::milliseconds wait) const;
+
+  // Waits up to `wait` for reports and episode controls; prints a line for each episode not
+  // printed yet.
   void poll(std::chrono::milliseconds wait);
   [[nodiscard]] std::size_t episodesSeen() const noexcept { return printed_.size(); }
+  [[nodiscard]] RunPosition positionAt(std::int64_t wall_ns) const;
 
  private:
+  void takeControls();
+
   dds::Domain domain_;
   dds::Participant participant_;
   dds::Topic<sensornet_Report> topic_;
+  dds::Topic<sensornet_Scenario> scenario_topic_;
+  dds::Topic<sensornet_EpisodeControl> control_topic_;
   dds::Reader<sensornet_Report> reader_;
+  dds::Reader<sensornet_Scenario> scenario_reader_;
+  dds::Reader<sensornet_EpisodeControl> control_reader_;
   dds::ReadCondition has_data_;
+  dds::ReadCondition has_control_;
   dds::WaitSet waitset_;
   int episodes_planned_;
+  double horizon_s_;
   std::set<std::uint32_t> printed_;
+  std::optional<std::uint32_t> episode_;  // the latest episode started
+  emulator::EpisodeClock clock_;          // its clock
+  bool shut_down_ = false;
 };
 
 }  // namespace sensornet::launcher

@@ -1,16 +1,20 @@
 #include "run_files.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <stdexcept>
 
+#include "output_file.hpp"
 #include "sensornet/core/input_error.hpp"
 
 namespace sensornet::launcher {
@@ -45,6 +49,9 @@ EmulatorPrograms inBuildTree(const fs::path& launcher_dir) {
 }  // namespace
 
 fs::path userScratchDirectory() {
+  if (const char* dir = std::getenv(kScratchDirVariable); dir != nullptr && *dir != '\0') {
+    return fs::absolute(dir);
+  }
   return fs::path("/tmp") / ("sensornet-" + std::to_string(::getuid()));
 }
 
@@ -57,22 +64,53 @@ fs::path currentRunFile() {
 
 fs::path defaultLogDirectory(const std::string& run_id) { return userScratchDirectory() / run_id; }
 
+std::optional<std::string> privateDirectoryProblem(const fs::path& dir) {
+  struct stat info {};
+  if (::lstat(dir.c_str(), &info) != 0) {
+    return std::string("it cannot be looked at (") + std::strerror(errno) + ")";
+  }
+  if (S_ISLNK(info.st_mode)) return std::string("it is a symbolic link");
+  if (!S_ISDIR(info.st_mode)) return std::string("it is not a directory");
+  if (info.st_uid != ::geteuid()) {
+    return "it is owned by uid " + std::to_string(info.st_uid) + ", not by you (uid " +
+           std::to_string(::geteuid()) + ")";
+  }
+  if ((info.st_mode & (S_IWGRP | S_IWOTH)) != 0) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(info.st_mode & 07777));
+    return std::string("others may write to it (mode ") + mode + ")";
+  }
+  return std::nullopt;
+}
+
+void ensurePrivateDirectory(const fs::path& dir) {
+  if (::mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST) {
+    throw InputError(dir.string(), "",
+                     std::string("a folder that can be created: ") + std::strerror(errno));
+  }
+  if (const auto problem = privateDirectoryProblem(dir)) {
+    throw InputError(dir.string(), "",
+                     "a private folder (a real directory owned by you that others cannot write "
+                     "to), but " +
+                         *problem);
+  }
+}
+
 void recordCurrentRun(const CurrentRun& run) {
   const fs::path file = currentRunFile();
-  fs::create_directories(file.parent_path());
+  ensurePrivateDirectory(file.parent_path());
   nlohmann::json doc = {{"run_id", run.run_id}, {"launcher_pid", run.launcher_pid}};
   if (run.domain_id) doc["domain_id"] = *run.domain_id;
-  const fs::path temporary = file.string() + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::trunc);
-    out << doc.dump() << "\n";
-    if (!out) throw std::runtime_error("cannot write " + temporary.string());
-  }
-  fs::rename(temporary, file);
+  replaceFileAtomically(file, doc.dump() + "\n");
 }
 
 std::optional<CurrentRun> readCurrentRun() {
-  std::ifstream in(currentRunFile());
+  const fs::path file = currentRunFile();
+  // A record in a folder others can change, or behind a link, could name anyone's run.
+  if (privateDirectoryProblem(file.parent_path())) return std::nullopt;
+  struct stat info {};
+  if (::lstat(file.c_str(), &info) != 0 || !S_ISREG(info.st_mode)) return std::nullopt;
+  std::ifstream in(file);
   if (!in) return std::nullopt;
   const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
   if (!doc.is_object() || !doc.contains("run_id") || !doc["run_id"].is_string()) {
@@ -91,10 +129,7 @@ std::optional<CurrentRun> readCurrentRun() {
 
 void forgetCurrentRun(const std::string& run_id) {
   const std::optional<CurrentRun> current = readCurrentRun();
-  if (current && current->run_id == run_id) {
-    std::error_code ignored;
-    fs::remove(currentRunFile(), ignored);
-  }
+  if (current && current->run_id == run_id) removeRegularFile(currentRunFile());
 }
 
 std::string chooseRunId(const std::string& given, std::optional<int>& domain_id) {

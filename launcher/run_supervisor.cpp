@@ -3,6 +3,7 @@
 #include <csignal>
 
 #include "interrupts.hpp"
+#include "sensornet/emulator/messages.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -39,20 +40,24 @@ bool RunSupervisor::awaitExit(const std::string& name, std::chrono::milliseconds
 }
 
 void RunSupervisor::fail(RunFailure failure) {
-  if (!failure_) failure_ = std::move(failure);
+  if (failure_) return;
+  failure.at = progress_.positionAt(emulator::wallNowNs());
+  failure_ = std::move(failure);
 }
 
 void RunSupervisor::step() {
   progress_.poll(kWatchStep);
   for (const ChildExit& exit : group_.reap()) {
     ended_.insert(exit.name);
-    if (!exit.succeeded()) fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0});
+    if (exit.succeeded()) continue;
+    child_faults_.push_back({exit, progress_.positionAt(emulator::wallNowNs())});
+    fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0, {}});
   }
   if (const int signal = pendingInterrupt()) {
-    fail({RunFailureKind::Interrupted, "", "interrupted by " + signalName(signal), signal});
+    fail({RunFailureKind::Interrupted, "", "interrupted by " + signalName(signal), signal, {}});
   }
   if (deadline_ && Clock::now() >= *deadline_) {
-    fail({RunFailureKind::TimedOut, "", "the run did not end within --timeout", 0});
+    fail({RunFailureKind::TimedOut, "", "the run did not end within --timeout", 0, {}});
   }
 }
 

@@ -1,0 +1,137 @@
+#include "output_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "sensornet/core/input_error.hpp"
+
+namespace sensornet::launcher {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string kindOf(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  if (S_ISLNK(mode)) return "a symbolic link";
+  return "not a regular file";
+}
+
+// What is at `path` without following a symbolic link: nullopt if nothing, else its mode.
+// Throws std::runtime_error when it cannot be looked at (a folder in the path is missing is
+// "nothing": the folder check reports it).
+std::optional<mode_t> typeAt(const fs::path& path) {
+  struct stat info {};
+  if (::lstat(path.c_str(), &info) == 0) return info.st_mode;
+  if (errno == ENOENT) return std::nullopt;
+  throw std::runtime_error(path.string() + ": " + std::strerror(errno));
+}
+
+// Closes a file descriptor when the scope ends.
+class Descriptor {
+ public:
+  explicit Descriptor(int fd) noexcept : fd_(fd) {}
+  Descriptor(const Descriptor&) = delete;
+  Descriptor& operator=(const Descriptor&) = delete;
+  ~Descriptor() { close(); }
+  [[nodiscard]] int get() const noexcept { return fd_; }
+  int close() noexcept {
+    const int result = fd_ >= 0 ? ::close(fd_) : 0;
+    fd_ = -1;
+    return result;
+  }
+
+ private:
+  int fd_;
+};
+
+// A fresh, empty temporary file beside `path` (".<name>.XXXXXX"): its descriptor and name.
+std::pair<int, fs::path> temporaryBeside(const fs::path& path) {
+  std::string name = (path.parent_path() / ("." + path.filename().string() + ".XXXXXX")).string();
+  const int fd = ::mkostemp(name.data(), O_CLOEXEC);
+  return {fd, fs::path(name)};
+}
+
+bool writeAll(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<std::string> outputFileProblem(const fs::path& path) {
+  if (path.filename().empty()) return "is not a file name";
+  struct stat target {};
+  if (::lstat(path.c_str(), &target) == 0) {
+    if (!S_ISREG(target.st_mode)) return "is " + kindOf(target.st_mode);
+  } else if (errno != ENOENT) {
+    return std::string("cannot be looked at (") + std::strerror(errno) + ")";
+  }
+  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  struct stat info {};
+  if (::stat(folder.c_str(), &info) != 0) {
+    return "is in " + folder.string() + ", which does not exist (" + std::strerror(errno) + ")";
+  }
+  if (!S_ISDIR(info.st_mode)) return "is in " + folder.string() + ", which is not a directory";
+  // Create (and remove) a file there: the only test that tells for root, /proc and read-only
+  // mounts alike.
+  auto [fd, name] = temporaryBeside(path);
+  if (fd < 0) {
+    return "is in " + folder.string() + ", where no file can be created (" + std::strerror(errno) +
+           ")";
+  }
+  ::close(fd);
+  ::unlink(name.c_str());
+  return std::nullopt;
+}
+
+void checkOutputFile(const fs::path& path, const std::string& option) {
+  if (const auto problem = outputFileProblem(path)) {
+    throw InputError(option + " " + path.string(), "",
+                     "a regular file or a new one in a writable folder; it " + *problem);
+  }
+}
+
+void replaceFileAtomically(const fs::path& path, const std::string& text) {
+  const std::optional<mode_t> existing = typeAt(path);
+  if (existing && !S_ISREG(*existing)) {
+    throw std::runtime_error("will not replace " + path.string() + ": it is " + kindOf(*existing) +
+                             ", not a regular file");
+  }
+  auto [fd, name] = temporaryBeside(path);
+  if (fd < 0) {
+    throw std::runtime_error("cannot create a temporary file beside " + path.string() + ": " +
+                             std::strerror(errno));
+  }
+  Descriptor file(fd);
+  const mode_t mode = existing ? (*existing & 07777) : 0644;
+  const bool written = ::fchmod(file.get(), mode) == 0 && writeAll(file.get(), text) &&
+                       ::fsync(file.get()) == 0 && file.close() == 0;
+  if (!written || ::rename(name.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(name.c_str());
+    throw std::runtime_error("cannot write " + path.string() + ": " + reason);
+  }
+}
+
+void removeRegularFile(const fs::path& path) {
+  struct stat info {};
+  if (::lstat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode)) ::unlink(path.c_str());
+}
+
+}  // namespace sensornet::launcher

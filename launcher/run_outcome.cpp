@@ -1,0 +1,283 @@
+#include "run_outcome.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+
+#include "output_file.hpp"
+#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/io/command_line.hpp"
+
+namespace sensornet::launcher {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr const char* kFusionCenter = "fusion_center";
+
+bool isKnownStatus(const std::string& status) {
+  return status == "completed" || status == "degraded" || status == "failed" ||
+         status == "interrupted";
+}
+
+// The fusion center's report of this run, or nullopt with what is wrong ("wrote no report at
+// ...", completing "fusion_center ...").
+std::optional<json> readReport(const fs::path& path, const std::string& run_id,
+                               std::string& problem) {
+  std::ifstream in(path);
+  if (!in) {
+    problem = "wrote no report at " + path.string();
+    return std::nullopt;
+  }
+  json report = json::parse(in, nullptr, false);
+  if (!report.is_object() || !report.contains("summary") || !report["summary"].is_object()) {
+    problem = "wrote " + path.string() + ", which is not a sensornet report";
+    return std::nullopt;
+  }
+  if (report.value("run_id", std::string()) != run_id) {
+    problem = "wrote a report of another run in " + path.string();
+    return std::nullopt;
+  }
+  return report;
+}
+
+// The report rebuilt from the episode log beside `report_path` (no log: no episode).
+json rebuildReport(const RunEnd& end) {
+  const fs::path log = emulator::episodeLogPath(end.report_path);
+  std::vector<json> entries;
+  std::error_code error;
+  if (fs::exists(log, error)) entries = emulator::readEpisodeLog(log);
+  json report =
+      emulator::reportFromEpisodes(end.run_id, end.sensor_count, entries, "failed", json::array());
+  report["rebuilt_from"] = log.string();
+  if (!report.contains("episodes_planned")) report["episodes_planned"] = end.episodes_planned;
+  return report;
+}
+
+std::uint64_t finishedEpisodes(const json& report) {
+  if (report.contains("episodes") && report["episodes"].is_number_unsigned()) {
+    return report["episodes"].get<std::uint64_t>();
+  }
+  if (report.contains("per_episode") && report["per_episode"].is_array()) {
+    return report["per_episode"].size();
+  }
+  return 0;
+}
+
+// A number as text ("12", "0.0123"); "n/a" when missing or not a number.
+std::string shown(const json& value) {
+  if (value.is_number_integer()) return std::to_string(value.get<std::int64_t>());
+  if (value.is_number()) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value.get<double>());
+    return text;
+  }
+  return "n/a";
+}
+
+json field(const json& object, const char* key) {
+  return object.is_object() && object.contains(key) ? object[key] : json();
+}
+
+// A count that may be given by reason ({"malformed": 2, ...}): its total.
+json total(const json& value) {
+  if (!value.is_object()) return value;
+  std::uint64_t sum = 0;
+  for (const auto& [reason, count] : value.items()) {
+    if (count.is_number_unsigned()) sum += count.get<std::uint64_t>();
+  }
+  return sum;
+}
+
+std::string sensorsText(const json& fault) {
+  const json sensors = field(fault, "sensors");
+  if (sensors.is_array() && !sensors.empty()) {
+    std::string text = sensors.size() == 1 ? "sensor " : "sensors ";
+    for (std::size_t i = 0; i < sensors.size(); ++i) {
+      text += (i == 0 ? "" : ", ") + shown(sensors[i]);
+    }
+    return text;
+  }
+  const json sensor = field(fault, "sensor");
+  return sensor.is_number() ? "sensor " + shown(sensor) : "";
+}
+
+// "process_killed in sensor_agent-0-2 (sensors 0, 1, 2), episode 1 at t = 1.25 s: killed by ..."
+std::string faultLine(const json& fault) {
+  std::string line = field(fault, "kind").is_string() ? field(fault, "kind").get<std::string>()
+                                                      : std::string("fault");
+  if (const json process = field(fault, "process"); process.is_string()) {
+    line += " in " + process.get<std::string>();
+  }
+  if (const std::string sensors = sensorsText(fault); !sensors.empty()) {
+    line += " (" + sensors + ")";
+  }
+  if (const json episode = field(fault, "episode"); episode.is_number()) {
+    line += ", episode " + shown(episode);
+  }
+  if (const json t = field(fault, "emulated_time_s"); t.is_number()) {
+    line += " at t = " + shown(t) + " s";
+  }
+  if (const json detail = field(fault, "detail"); detail.is_string()) {
+    line += ": " + detail.get<std::string>();
+  }
+  return line;
+}
+
+std::uint64_t incompleteEpisodes(const json& report, const json& summary) {
+  if (const json n = field(summary, "episodes_incomplete"); n.is_number_unsigned()) {
+    return n.get<std::uint64_t>();
+  }
+  std::uint64_t count = 0;
+  for (const json& entry : field(report, "per_episode")) {
+    if (field(entry, "complete") == json(false)) ++count;
+  }
+  return count;
+}
+
+std::string meetsText(const json& meets) {
+  if (meets.is_boolean()) return meets.get<bool>() ? "true" : "false";
+  return "undetermined";
+}
+
+}  // namespace
+
+int exitCodeOf(const std::string& status) {
+  if (status == "completed") return kExitOk;
+  if (status == "degraded") return kExitDegraded;
+  return kExitFailure;
+}
+
+json Fault::toJson() const {
+  json entry = {{"kind", kind},
+                {"process", process},
+                {"sensor", sensors.size() == 1 ? json(sensors.front()) : json()},
+                {"episode", at.episode ? json(*at.episode) : json()},
+                {"emulated_time_s", at.emulated_time_s ? json(*at.emulated_time_s) : json()},
+                {"detail", detail}};
+  if (!sensors.empty()) entry["sensors"] = sensors;
+  return entry;
+}
+
+RunOutcome settleRun(const RunEnd& end) {
+  RunOutcome outcome;
+  std::vector<Fault> faults = end.faults;
+  std::string problem;
+  std::optional<json> report = readReport(end.report_path, end.run_id, problem);
+  if (!report) {
+    const bool fusion_center_named = std::any_of(
+        faults.begin(), faults.end(), [](const Fault& f) { return f.process == kFusionCenter; });
+    if (!fusion_center_named) {
+      faults.push_back({"report_missing", kFusionCenter, {}, {}, problem});
+    }
+    report = rebuildReport(end);
+    outcome.rebuilt = true;
+  }
+  const std::string reported = report->value("status", std::string());
+  if (end.interrupted) {
+    outcome.status = "interrupted";
+  } else if (!faults.empty()) {
+    outcome.status = "failed";
+  } else if (!isKnownStatus(reported)) {
+    faults.push_back(
+        {"report_invalid", kFusionCenter, {}, {}, "the report's status is '" + reported + "'"});
+    outcome.status = "failed";
+  } else {
+    outcome.status = reported;
+  }
+  if (outcome.status == "completed" &&
+      finishedEpisodes(*report) < static_cast<std::uint64_t>(end.episodes_planned)) {
+    faults.push_back({"episodes_missing",
+                      kFusionCenter,
+                      {},
+                      {},
+                      "reports " + std::to_string(finishedEpisodes(*report)) + " of " +
+                          std::to_string(end.episodes_planned) + " episodes as finished"});
+    outcome.status = "failed";
+  }
+  outcome.exit_code = exitCodeOf(outcome.status);
+
+  outcome.amended = outcome.rebuilt || outcome.status != reported || !faults.empty();
+  if (outcome.amended) {
+    (*report)["status"] = outcome.status;
+    // The launcher's causes first: what the fusion center saw of them follows.
+    json listed = json::array();
+    for (const Fault& fault : faults) listed.push_back(fault.toJson());
+    if (const json seen = field(*report, "faults"); seen.is_array()) {
+      listed.insert(listed.end(), seen.begin(), seen.end());
+    }
+    (*report)["faults"] = std::move(listed);
+    try {
+      replaceFileAtomically(end.report_path, report->dump(2) + "\n");
+    } catch (const std::exception& e) {
+      outcome.write_problem = e.what();
+    }
+  }
+  outcome.report = std::move(*report);
+  return outcome;
+}
+
+void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
+  const json& report = outcome.report;
+  const json summary = field(report, "summary");
+  const json faults = field(report, "faults").is_array() ? report["faults"] : json::array();
+  std::printf("run %s: %s (%zu fault%s)\n", report.value("run_id", std::string()).c_str(),
+              outcome.status.c_str(), faults.size(), faults.size() == 1 ? "" : "s");
+  for (const json& fault : faults) std::printf("  fault: %s\n", faultLine(fault).c_str());
+
+  json complete = field(summary, "episodes_complete");
+  if (!complete.is_number()) complete = field(summary, "episodes");
+  std::printf("episodes: %s complete, %llu incomplete, of %s planned\n", shown(complete).c_str(),
+              static_cast<unsigned long long>(incompleteEpisodes(report, summary)),
+              shown(field(report, "episodes_planned")).c_str());
+  const json bracket = field(summary, "bracket");
+  std::string interval = "no 95% interval";
+  if (const json ci95 = field(summary, "ci95"); ci95.is_number()) {
+    interval = "\u00b1 " + shown(ci95) + " (95%: [" + shown(field(summary, "ci95_low")) + ", " +
+               shown(field(summary, "ci95_high")) + "])";
+  }
+  std::printf(
+      "realized cost over complete episodes: mean %s %s against the bracket [%s, %s]: "
+      "meets_bracket %s\n",
+      shown(field(summary, "mean")).c_str(), interval.c_str(),
+      shown(field(bracket, "info")).c_str(), shown(field(bracket, "cov")).c_str(),
+      meetsText(field(summary, "meets_bracket")).c_str());
+  std::printf("measurements: %s sent, %s received, %s lost, %s rejected\n",
+              shown(field(summary, "sent")).c_str(), shown(field(summary, "received")).c_str(),
+              shown(field(summary, "lost")).c_str(),
+              shown(total(field(summary, "rejected"))).c_str());
+  const json latency = field(report, "latency_s");
+  const auto ms = [](const json& seconds) {
+    return seconds.is_number() ? json(1e3 * seconds.get<double>()) : seconds;
+  };
+  std::printf("latency publish-to-fusion: median %s ms, p99 %s ms\n",
+              shown(ms(field(latency, "median"))).c_str(),
+              shown(ms(field(latency, "p99"))).c_str());
+  if (outcome.write_problem) {
+    std::printf("report: NOT WRITTEN: %s\n", outcome.write_problem->c_str());
+  } else {
+    std::printf("report: %s%s\n", report_path.c_str(),
+                outcome.rebuilt ? " (rebuilt from the episode log)" : "");
+  }
+  std::printf("exit code %d\n", outcome.exit_code);
+  std::fflush(stdout);
+}
+
+void printOutcomeJson(const RunOutcome& outcome, const fs::path& report_path) {
+  json line = field(outcome.report, "summary");
+  if (!line.is_object()) line = json::object();
+  line["run_id"] = field(outcome.report, "run_id");
+  line["status"] = outcome.status;
+  line["faults"] =
+      field(outcome.report, "faults").is_array() ? outcome.report["faults"] : json::array();
+  line["episodes"] = field(outcome.report, "episodes");
+  line["episodes_planned"] = field(outcome.report, "episodes_planned");
+  line["report"] = report_path.string();
+  if (outcome.rebuilt) line["rebuilt_from"] = field(outcome.report, "rebuilt_from");
+  if (outcome.write_problem) line["report_error"] = *outcome.write_problem;
+  line["exit_code"] = outcome.exit_code;
+  printJson(line);
+}
+
+}  // namespace sensornet::launcher
