@@ -270,14 +270,14 @@ class FusionCenter {
   }
 
   void readTallies() {
+    if (!inputs_.hasScenario()) return;  // kept by the reader (transient local) until then
     for (auto& received : tally_reader_.take(64).samples) {
       const sensornet_EpisodeTally& t = *received.sample;
       if (dds::viewString(t.run_id) != options_.run.run_id) {
         ++rejected_outside_["other_run"];
         continue;
       }
-      if (!inputs_.hasScenario() ||
-          t.sensor_id >= static_cast<std::uint32_t>(inputs_.scenario().sensorCount())) {
+      if (t.sensor_id >= static_cast<std::uint32_t>(inputs_.scenario().sensorCount())) {
         ++rejected_outside_["malformed_tally"];
         continue;
       }
@@ -455,7 +455,7 @@ class FusionCenter {
     if (result.drain_s > options_.keep_up_limit_s) {
       faults_.push_back(emulator::faultEntry(
           "overload", kProcess, std::nullopt, number, std::nullopt,
-          "the fusion center had episode " + std::to_string(number) + " in only " +
+          "the fusion center had all of episode " + std::to_string(number) + " only " +
               formatSeconds(result.drain_s) + " s after its last tally (up to " +
               std::to_string(open.backlog) + " measurements waiting)"));
     }
