@@ -135,8 +135,12 @@ class FusionCenter {
       readStatuses();
       advance();
     }
-    // Finish what is open: an episode still owed measurements is closed incomplete.
-    for (auto& [number, open] : open_) closeUnsettled(number, open, "the run ended");
+    // Finish what is open: an episode still owed measurements is closed incomplete (cut short
+    // when a signal stopped the run: the launcher names the process that caused it).
+    for (auto& [number, open] : open_) {
+      closeUnsettled(number, open, end ? "the run ended" : "the run was stopped",
+                     end ? "stall" : "cut_short");
+    }
     for (auto& [number, open] : open_) finishEpisode(number, open);
     open_.clear();
     const std::string status = decideStatus(end);
@@ -390,7 +394,8 @@ class FusionCenter {
   }
 
   // Names every sensor the episode still waits for in the faults (the episode is incomplete).
-  void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why) {
+  void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why,
+                      const char* silent_kind = "stall") {
     for (const int j : open.fusion->unsettled()) {
       const emulator::SensorTally& t = open.fusion->tally(j);
       std::string detail;
@@ -404,7 +409,7 @@ class FusionCenter {
                  " measurements arrived); the episode was closed when " + why;
         closed_without_.insert({number, j});
       }
-      faults_.push_back(emulator::faultEntry(t.tallied ? "lost" : "stall", kProcess, j, number,
+      faults_.push_back(emulator::faultEntry(t.tallied ? "lost" : silent_kind, kProcess, j, number,
                                              open.fusion->fusedTime(), detail));
       spdlog::warn("episode {}: {}", number, detail);
     }
