@@ -190,8 +190,8 @@ TEST_P(TrustStall, ThreeSecondStallLosesNothingAndChangesNoCost) {
 
 INSTANTIATE_TEST_SUITE_P(OfEachProcess, TrustStall,
                          ::testing::Values("fusion_center", "sensors-0-2", "coordinator"),
-                         [](const auto& info) {
-                           std::string name = info.param;
+                         [](const ::testing::TestParamInfo<const char*>& param) {
+                           std::string name = param.param;
                            std::erase_if(name, [](char c) { return c == '-' || c == '_'; });
                            return name;
                          });

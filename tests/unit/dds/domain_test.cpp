@@ -102,7 +102,7 @@ TEST(LoopbackConfig, NamesLoopbackUnicastAndTheRaisedLimits) {
   EXPECT_NE(xml.find(R"(<Peer Address="127.0.0.1"/>)"), std::string::npos);
   EXPECT_NE(xml.find("<ParticipantIndex>auto</ParticipantIndex>"), std::string::npos);
   EXPECT_NE(xml.find("<MaxAutoParticipantIndex>120</MaxAutoParticipantIndex>"), std::string::npos);
-  EXPECT_NE(xml.find("<LeaseDuration>2 s</LeaseDuration>"), std::string::npos);
+  EXPECT_NE(xml.find("<LeaseDuration>20 s</LeaseDuration>"), std::string::npos);
 }
 
 TEST(Domain, RefusesADomainIdOutsideThePortMapping) {
