@@ -16,13 +16,18 @@ constexpr std::chrono::milliseconds kProbeStep{20};
 
 std::string formatProgress(const sensornet_Report& report, int episodes_planned) {
   const sensornet_RunSummary& s = report.summary;
-  const double ci95 = 0.5 * (s.realized_ci95_high - s.realized_ci95_low);
-  char line[256];
+  char line[320];
+  // The interval needs two complete episodes; it is Student's t, clipped at zero below.
+  char interval[96] = "";
+  if (s.episodes_complete >= 2) {
+    std::snprintf(interval, sizeof interval, " (95%%: [%.4g, %.4g])", s.realized_ci95_low,
+                  s.realized_ci95_high);
+  }
   std::snprintf(line, sizeof line,
-                "[%u/%d] episode %u: realized %.4g, running mean %.4g \u00b1 %.2g (95%%), "
-                "bracket [%.4g, %.4g]",
+                "[%u/%d] episode %u: realized %.4g, mean %.4g over %u complete%s, bracket "
+                "[%.4g, %.4g]",
                 s.episodes, episodes_planned, report.episode, report.realized_cost, s.realized_mean,
-                ci95, s.bracket_lower_mean, s.bracket_upper_mean);
+                s.episodes_complete, interval, s.bracket_lower_mean, s.bracket_upper_mean);
   std::string text = line;
   const auto versions = dds::viewSequence(report.schedule_versions);
   if (!versions.empty() && (versions.size() > 1 || versions.front() != 1)) {
@@ -30,6 +35,15 @@ std::string formatProgress(const sensornet_Report& report, int episodes_planned)
     for (std::size_t i = 0; i < versions.size(); ++i) {
       text += (i == 0 ? "v" : "\u2192v") + std::to_string(versions[i]);
     }
+  }
+  if (!report.complete) {
+    std::uint64_t sent = 0, received = 0;
+    for (const sensornet_SensorCounts& c : dds::viewSequence(report.counts)) {
+      sent += c.sent;
+      received += c.received;
+    }
+    text += "; INCOMPLETE: " + std::to_string(received) + " of " + std::to_string(sent) +
+            " sent measurements received (left out of the statistics)";
   }
   return text;
 }
