@@ -390,7 +390,17 @@ class Coordinator {
   //
   // Both plans are made, and both must be ones the planner reports as optimal ("acceptable"
   // is taken and named in the summary; "not_optimized" is the uniform schedule), before either
-  // is published: otherwise this throws InputError and nothing is published.
+  // is published: otherwise this throws InputError and nothing is published. A projected
+  // quasi-Newton solve that "stalled" (no step decreases the cost in floating point) at a point
+  // whose scale-free KKT residual is at most kStationaryResidual (every planned rate within
+  // 0.1% of its projected-gradient step) is taken too, and named so in the reply: the fused
+  // covariance a mid-episode plan starts from often leaves the cost too flat for the 1e-6
+  // tolerance.
+  static constexpr double kStationaryResidual = 1e-3;
+  static bool stalledAtAStationaryPoint(const PlanResult& plan) {
+    return plan.status == "stalled" && plan.kkt_residual <= kStationaryResidual;
+  }
+
   std::pair<std::uint32_t, std::string> replan(std::uint64_t command_id,
                                                std::optional<RateSchedule> given) {
     Scenario planned_for = run_.scenario;
@@ -405,7 +415,7 @@ class Coordinator {
     }
     const auto requireOptimal = [&](const PlanResult& plan, const std::string& which) {
       if (plan.status == "optimal" || plan.status == "acceptable" ||
-          plan.status == "not_optimized") {
+          plan.status == "not_optimized" || stalledAtAStationaryPoint(plan)) {
         return;
       }
       throw InputError("command " + std::to_string(command_id), "plan",
@@ -416,8 +426,12 @@ class Coordinator {
                            " iterations); nothing was published, the settings are unchanged");
     };
     const auto describePlan = [](const PlanResult& plan) {
-      return plan.status == "acceptable" ? std::string("acceptable: IPOPT's looser tolerance")
-                                         : plan.status;
+      if (plan.status == "acceptable") return std::string("acceptable: IPOPT's looser tolerance");
+      if (stalledAtAStationaryPoint(plan)) {
+        return "stalled, accepted: kkt residual " + formatNumber(plan.kkt_residual) + " <= " +
+               formatNumber(kStationaryResidual);
+      }
+      return plan.status;
     };
     // Mid-episode: the rest of this episode, from the latest fused covariance.
     std::string summary;
