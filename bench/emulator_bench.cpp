@@ -12,24 +12,40 @@
 //               already: the bench checks that on the installed binary (support/ddsperf.hpp).
 //   throughput  100 sensors at 200 Hz each (20,000 measurements/s, n = 5) in real time,
 //               10 processes of 10 sensors: received, lost, late, latency median and p99.
+//   overload    (issue 10) the highest total measurement rate the fusion center keeps up with:
+//               the default scenario (n = 4) with one bandwidth row and constant equal rates,
+//               6 sensors in 2 processes ("0-2", "3-5"), time scale 1, one episode of 3 s, at
+//               rising total rates until one clearly fails. Keeps up = status "completed",
+//               nothing lost, median publish-to-fusion latency < 1 ms. Per rate: sent,
+//               received, lost, status, drain, backlog, latency median and p99, wall time and
+//               the busiest threads (peak share of a core over 1 s, from /proc, as `top -H`,
+//               and their CPU time per measurement received). Wall time runs from the
+//               coordinator's start to the fusion center's exit.
+//               Beside it, in the same run, ddsperf pub/sub throughput of 64-byte samples
+//               (reliable, keep-all, 2 processes) before and after the sweep.
 //
 //   emulator_bench [startup|latency|throughput|all] [latency rounds = 3]
+//   emulator_bench overload [total rates/s, comma-separated = 30000,45000,60000,90000,...]
 
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstdlib>
-#include <memory>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "sensornet/dds/participant.hpp"
@@ -244,13 +260,289 @@ void throughput() {
               1e6 * r["latency_s"]["p99"].get<double>());
 }
 
+// How busy one thread was: its busiest 1-second window (as `top -H` would show it) and its CPU
+// time over the whole run.
+struct ThreadLoad {
+  std::string name;  // process/thread
+  double peak_share = 0.0;
+  double cpu_s = 0.0;
+};
+
+// CPU time of every thread of some processes, sampled while they run: which one saturates, and
+// what each costs per measurement.
+class ThreadCpu {
+ public:
+  // Reads /proc/<pid>/task/*/stat of a process started as `process`.
+  void sample(pid_t pid, const std::string& process) {
+    const double t = secondsSince(start_);
+    std::error_code error;  // a process may end while it is read: what is gone is skipped
+    for (fs::directory_iterator task("/proc/" + std::to_string(pid) + "/task", error);
+         !error && task != fs::directory_iterator(); task.increment(error)) {
+      std::ifstream in(task->path() / "stat");
+      std::string line;
+      if (!std::getline(in, line)) continue;
+      const auto open = line.find('('), close = line.rfind(')');
+      if (open == std::string::npos || close == std::string::npos || close < open) continue;
+      std::istringstream fields(line.substr(close + 2));
+      std::string field;
+      double utime = 0.0, stime = 0.0;
+      for (int i = 0; i < 13 && fields >> field; ++i) {  // state is field 3 of stat(5)
+        if (i == 11) utime = std::atof(field.c_str());   // field 14
+        if (i == 12) stime = std::atof(field.c_str());   // field 15
+      }
+      Series& series = threads_[std::atol(task->path().filename().c_str())];
+      series.name = process + "/" + line.substr(open + 1, close - open - 1);
+      series.points.emplace_back(t, (utime + stime) / ticks_per_s_);
+    }
+  }
+
+  // The `count` threads with the highest peak share of one core over 1-second windows.
+  [[nodiscard]] std::vector<ThreadLoad> busiest(std::size_t count) const {
+    std::vector<ThreadLoad> loads;
+    for (const auto& [tid, series] : threads_) {
+      double peak = 0.0;
+      std::size_t from = 0;
+      for (std::size_t i = 0; i < series.points.size(); ++i) {
+        const auto& [t, cpu] = series.points[i];
+        while (from + 1 < i && t - series.points[from + 1].first >= 1.0) ++from;
+        const double span = t - series.points[from].first;
+        if (span >= 1.0) peak = std::max(peak, (cpu - series.points[from].second) / span);
+      }
+      const double cpu_s = series.points.back().second - series.points.front().second;
+      loads.push_back({series.name, peak, cpu_s});
+    }
+    std::sort(loads.begin(), loads.end(),
+              [](const ThreadLoad& a, const ThreadLoad& b) { return a.peak_share > b.peak_share; });
+    if (loads.size() > count) loads.resize(count);
+    return loads;
+  }
+
+ private:
+  struct Series {
+    std::string name;
+    std::vector<std::pair<double, double>> points;  // (wall s since start, CPU s)
+  };
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  double ticks_per_s_ = static_cast<double>(::sysconf(_SC_CLK_TCK));
+  std::map<long, Series> threads_;
+};
+
+// The default scenario with its two constraint rows replaced by one loose bandwidth row, so that
+// any equal rates are feasible (as Trust.OverloadIsFullyFusedOrReportedNeverCompletedWithLosses).
+fs::path writeOverloadScenario(const fs::path& dir) {
+  std::ifstream in(kSourceDir + "/scenarios/default.yaml");
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const auto at = yaml.find("constraints:");
+  if (at == std::string::npos) {
+    throw std::runtime_error("scenarios/default.yaml: no 'constraints:' to replace");
+  }
+  yaml = yaml.substr(0, at) + "constraints:\n  C: [[1, 1, 1, 1, 1, 1]]\n  b: [1.0e7]\n";
+  const fs::path path = dir / "overload.yaml";
+  std::ofstream(path) << yaml;
+  return path;
+}
+
+// Every sensor at `rate_hz` over the whole horizon (3 s, 30 intervals, as default.yaml).
+fs::path writeConstantSchedule(const fs::path& dir, double rate_hz) {
+  nlohmann::json rates = nlohmann::json::array();
+  for (int i = 0; i < 30; ++i) rates.push_back(std::vector<double>(6, rate_hz));
+  const fs::path path = dir / "constant.json";
+  std::ofstream(path) << nlohmann::json{{"horizon", 3.0}, {"intervals", 30}, {"rates", rates}};
+  return path;
+}
+
+struct OverloadRun {
+  std::string status;
+  std::vector<long long> sent, received, lost;  // per sensor, episode 0
+  long long sent_total = 0, received_total = 0, lost_total = 0, rejected_total = 0;
+  double drain_s = 0.0;
+  long long backlog = 0;
+  double median_us = 0.0, p99_us = 0.0;
+  double wall_s = 0.0;
+  std::string faults;  // kinds and how often ("overload, sensor_lag x6")
+  std::vector<ThreadLoad> busiest;
+
+  [[nodiscard]] bool keepsUp() const {
+    return status == "completed" && lost_total == 0 && median_us < 1000.0;
+  }
+  // Far enough from keeping up that a higher rate is not worth a run.
+  [[nodiscard]] bool clearlyFails() const {
+    return status != "completed" || lost_total > 0 || median_us > 5000.0;
+  }
+};
+
+std::string faultKinds(const nlohmann::json& faults) {
+  std::map<std::string, int> kinds;
+  for (const auto& f : faults) kinds[f.value("kind", std::string("?"))] += 1;
+  std::string text;
+  for (const auto& [kind, count] : kinds) {
+    text += (text.empty() ? "" : ", ") + kind + (count > 1 ? " x" + std::to_string(count) : "");
+  }
+  return text.empty() ? "none" : text;
+}
+
+std::string joined(const std::vector<long long>& values) {
+  std::string text;
+  for (const long long v : values) text += (text.empty() ? "" : ",") + std::to_string(v);
+  return text;
+}
+
+// One episode of the loosened default scenario at `total_rate_hz` shared equally by 6 sensors in
+// two processes; nullopt (after saying why) if the run produced no report.
+std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate_hz) {
+  Processes processes(fs::temp_directory_path() / run);
+  const fs::path scenario = writeOverloadScenario(processes.dir());
+  const fs::path schedule = writeConstantSchedule(processes.dir(), total_rate_hz / 6.0);
+  const fs::path report = processes.dir() / "report.json";
+  std::vector<std::pair<std::string, BackgroundProcess*>> watched;
+  BackgroundProcess& fusion = processes.start(
+      "fusion_center", {kFusionCenter, "serve", "--run-id", run, "--report", report.string()});
+  watched.emplace_back("fusion_center", &fusion);
+  for (const char* block : {"0-2", "3-5"}) {
+    watched.emplace_back(std::string("sensors-") + block,
+                         &processes.start(std::string("sensors-") + block,
+                                          {kSensorAgent, "--run-id", run, "--sensors", block}));
+  }
+  const auto start = std::chrono::steady_clock::now();
+  BackgroundProcess& coordinator = processes.start(
+      "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
+                      "--schedule", schedule.string(), "--episodes", "1", "--time-scale", "1",
+                      "--seed", "1"});
+  // The run ends when the coordinator has the episode's report; the fusion center then writes
+  // the final report and exits. Overload can take long to drain: give it minutes.
+  ThreadCpu cpu;
+  std::optional<int> fusion_code;
+  while (!(fusion_code = fusion.waitForExit(100ms)) && secondsSince(start) < 300.0) {
+    for (const auto& [name, process] : watched) cpu.sample(process->pid(), name);
+  }
+  const double wall = secondsSince(start);
+  const int code = coordinator.waitForExit(10s).value_or(-1);
+  const nlohmann::json r = readReport(report);
+  if (!fusion_code || r.is_null() || !r.contains("per_episode") || r["per_episode"].empty()) {
+    std::printf("  %.0f/s: no report after %.0f s (coordinator %d; see %s)\n", total_rate_hz,
+                wall, code, processes.dir().c_str());
+    return std::nullopt;
+  }
+  OverloadRun o;
+  const auto& e = r["per_episode"][0];
+  o.status = r["status"].get<std::string>();
+  o.sent = e["sent"].get<std::vector<long long>>();
+  o.received = e["received"].get<std::vector<long long>>();
+  o.lost = e["lost"].get<std::vector<long long>>();
+  const auto& s = r["summary"];
+  o.sent_total = s["sent"].get<long long>();
+  o.received_total = s["received"].get<long long>();
+  o.lost_total = s["lost"].get<long long>();
+  o.rejected_total = s["rejected"].get<long long>();
+  o.drain_s = e["drain_s"].get<double>();
+  o.backlog = e["backlog"].get<long long>();
+  o.median_us = 1e6 * r["latency_s"]["median"].get<double>();
+  o.p99_us = 1e6 * r["latency_s"]["p99"].get<double>();
+  o.wall_s = wall;
+  o.faults = faultKinds(r.value("faults", nlohmann::json::array()));
+  o.busiest = cpu.busiest(4);
+  return o;
+}
+
+void printOverloadRun(double total_rate_hz, const OverloadRun& o) {
+  std::printf("  %7.0f/s  %-9s sent %lld, received %lld, lost %lld, rejected %lld; drain %.3f s, "
+              "backlog %lld; latency median %.0f us, p99 %.0f us; wall %.1f s -> %s\n",
+              total_rate_hz, o.status.c_str(), o.sent_total, o.received_total, o.lost_total,
+              o.rejected_total, o.drain_s, o.backlog, o.median_us, o.p99_us, o.wall_s,
+              o.keepsUp() ? "keeps up" : "does not keep up");
+  std::printf("            per sensor: sent [%s], received [%s], lost [%s]; faults: %s\n",
+              joined(o.sent).c_str(), joined(o.received).c_str(), joined(o.lost).c_str(),
+              o.faults.c_str());
+  std::string threads;
+  for (const ThreadLoad& t : o.busiest) {
+    char text[128];
+    std::snprintf(text, sizeof text, "%s%s %.0f%% (%.1f us)", threads.empty() ? "" : ", ",
+                  t.name.c_str(), 100.0 * t.peak_share,
+                  1e6 * t.cpu_s / static_cast<double>(std::max(1LL, o.received_total)));
+    threads += text;
+  }
+  std::printf("            busiest threads, peak %% of a core over 1 s (CPU per measurement): %s\n",
+              threads.c_str());
+  std::fflush(stdout);
+}
+
+// ddsperf pub/sub of 64-byte samples, printed; the median samples/s (0 if it failed).
+double ddsperfThroughputLine(const char* when) {
+  // A domain of its own (ids up to 230 fit the loopback configuration's port mapping), so that
+  // another bench's ddsperf on this host is not counted.
+  const int domain = 200 + static_cast<int>(::getpid() % 30);
+  const auto t = sensornet::bench::ddsperfThroughput(
+      fs::temp_directory_path() / runId("ddsperf-throughput", 0), domain, 64, 6);
+  const double rate = median(t.samples_per_s);
+  std::printf("  ddsperf pub/sub, 64-byte samples, reliable keep-all, %s: %.0f samples/s (median "
+              "of %zu s), lost %ld%s\n",
+              when, rate, t.samples_per_s.size(), t.lost,
+              t.peers == 1 ? "" : " (WARNING: the subscriber did not see exactly one peer)");
+  std::fflush(stdout);
+  return rate;
+}
+
+std::vector<double> parseRates(const char* text) {
+  std::vector<double> rates;
+  std::istringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    const double rate = std::atof(item.c_str());
+    if (rate > 0.0) rates.push_back(rate);
+  }
+  return rates;
+}
+
+void overload(const std::vector<double>& rates) {
+  std::printf(
+      "overload: default scenario (n = 4), 6 sensors in 2 processes, time scale 1, one episode "
+      "of 3 s, constant equal rates; keeps up = completed, 0 lost, median < 1 ms\n");
+  const double ddsperf_before = ddsperfThroughputLine("before the sweep");
+  std::optional<double> highest;
+  for (std::size_t i = 0; i < rates.size(); ++i) {
+    const auto o = overloadRun(runId("overload", static_cast<int>(i)), rates[i]);
+    if (!o) break;
+    printOverloadRun(rates[i], *o);
+    if (o->keepsUp()) highest = std::max(highest.value_or(0.0), rates[i]);
+    if (o->clearlyFails()) {
+      std::printf("  (stopping: %.0f/s clearly fails)\n", rates[i]);
+      break;
+    }
+  }
+  const double ddsperf_after = ddsperfThroughputLine("after the sweep");
+  const double ddsperf_rate = ddsperf_before > 0.0 && ddsperf_after > 0.0
+                                  ? 0.5 * (ddsperf_before + ddsperf_after)
+                                  : std::max(ddsperf_before, ddsperf_after);  // one failed
+  if (!highest) {
+    std::printf("overload: no rate kept up; ddsperf %.0f samples/s\n", ddsperf_rate);
+    return;
+  }
+  std::printf("overload: highest rate that keeps up: %.0f measurements/s (target 250,000/s); "
+              "ddsperf %.0f samples/s (mean of before and after); ratio %.3f\n",
+              *highest, ddsperf_rate, ddsperf_rate > 0.0 ? *highest / ddsperf_rate : 0.0);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
-  if (what != "all" && what != "startup" && what != "latency" && what != "throughput") {
-    std::fprintf(stderr, "usage: emulator_bench [startup|latency|throughput|all] [rounds]\n");
+  if (what != "all" && what != "startup" && what != "latency" && what != "throughput" &&
+      what != "overload") {
+    std::fprintf(stderr,
+                 "usage: emulator_bench [startup|latency|throughput|all] [rounds]\n"
+                 "       emulator_bench overload [total rates/s, comma-separated]\n");
     return 2;
+  }
+  if (what == "overload") {
+    const std::vector<double> rates =
+        parseRates(argc > 2 ? argv[2] : "30000,45000,60000,90000,120000,180000,250000,500000");
+    if (rates.empty()) {
+      std::fprintf(stderr, "emulator_bench overload: expected rates such as 30000,60000\n");
+      return 2;
+    }
+    overload(rates);
+    return 0;
   }
   if (what == "all" || what == "startup") {
     std::printf("startup: 30 sensor processes\n");

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -27,16 +28,39 @@ bool numberAfter(const std::string& line, const std::string& key, double& value)
   return true;
 }
 
+// The samples per second of a `ddsperf sub` line ("... size 64 total 780328 lost 0 delta 527364
+// lost 0 rate 526.60 kS/s 269.62 Mb/s ..."), or nullopt for any other line.
+std::optional<double> subscriberRate(const std::string& line) {
+  double rate = 0.0;
+  if (line.find(" size ") == std::string::npos || !numberAfter(line, " rate ", rate)) {
+    return std::nullopt;
+  }
+  const auto unit = line.find(' ', line.find(" rate ") + 6);
+  const char prefix = unit + 1 < line.size() ? line[unit + 1] : ' ';
+  return rate * (prefix == 'M' ? 1e6 : prefix == 'k' ? 1e3 : 1.0);
+}
+
+// Points ddsperf at sensornet's loopback configuration while it lives. ddsperf reads its
+// configuration from the environment (the bench's own domains are created explicitly, so the
+// variable does not touch them).
+class LoopbackEnvironment {
+ public:
+  explicit LoopbackEnvironment(const fs::path& dir) {
+    fs::create_directories(dir);
+    const fs::path config = dir / "cyclonedds-loopback.xml";
+    std::ofstream(config) << dds::loopbackConfigXml();
+    ::setenv("CYCLONEDDS_URI", ("file://" + config.string()).c_str(), 1);
+  }
+  ~LoopbackEnvironment() { ::unsetenv("CYCLONEDDS_URI"); }
+  LoopbackEnvironment(const LoopbackEnvironment&) = delete;
+  LoopbackEnvironment& operator=(const LoopbackEnvironment&) = delete;
+};
+
 }  // namespace
 
 std::vector<DdsperfSecond> runDdsperf(const fs::path& dir, int domain_id, int rate_hz,
                                       int seconds) {
-  fs::create_directories(dir);
-  const fs::path config = dir / "cyclonedds-loopback.xml";
-  std::ofstream(config) << dds::loopbackConfigXml();
-  // ddsperf reads its configuration from the environment (the bench's own domains are created
-  // explicitly, so the variable does not touch them).
-  ::setenv("CYCLONEDDS_URI", ("file://" + config.string()).c_str(), 1);
+  const LoopbackEnvironment environment(dir);
   const std::string domain = std::to_string(domain_id);
   fs::remove(dir / "ddsperf-pong.log");  // the logs are appended to: start afresh
   fs::remove(dir / "ddsperf-ping.log");
@@ -49,7 +73,6 @@ std::vector<DdsperfSecond> runDdsperf(const fs::path& dir, int domain_id, int ra
   if (rate_hz > 0) ping_argv.push_back(std::to_string(rate_hz) + "Hz");
   testing::BackgroundProcess ping(ping_argv, (dir / "ddsperf-ping.log").string());
   (void)ping.waitForExit(std::chrono::seconds(seconds + 10));
-  ::unsetenv("CYCLONEDDS_URI");
 
   std::vector<DdsperfSecond> result;
   std::istringstream log(ping.log());
@@ -77,6 +100,44 @@ double checkHalving(const fs::path& dir, int domain_id) {
     filled.push_back(2.0 * s.mean_us * 1e-6 * static_cast<double>(s.round_trips));
   }
   return median(filled);
+}
+
+DdsperfThroughput ddsperfThroughput(const fs::path& dir, int domain_id, int sample_bytes,
+                                    int seconds) {
+  const LoopbackEnvironment environment(dir);
+  const std::string domain = std::to_string(domain_id);
+  fs::remove(dir / "ddsperf-sub.log");  // the logs are appended to: start afresh
+  fs::remove(dir / "ddsperf-pub.log");
+  // Reliable (ddsperf's default) and keep-all, as the Measurement topic (dds/topics.hpp).
+  testing::BackgroundProcess sub(
+      {"/usr/bin/ddsperf", "-i", domain, "-k", "all", "-D", std::to_string(seconds + 2), "sub"},
+      (dir / "ddsperf-sub.log").string());
+  std::this_thread::sleep_for(500ms);
+  testing::BackgroundProcess pub(
+      {"/usr/bin/ddsperf", "-i", domain, "-k", "all", "-D", std::to_string(seconds), "pub", "size",
+       std::to_string(sample_bytes)},
+      (dir / "ddsperf-pub.log").string());
+  (void)pub.waitForExit(std::chrono::seconds(seconds + 10));
+  (void)sub.waitForExit(std::chrono::seconds(10));
+
+  DdsperfThroughput result;
+  std::istringstream log(sub.log());
+  for (std::string line; std::getline(log, line);) {
+    if (line.find(" participant ") != std::string::npos &&
+        line.find(": new") != std::string::npos && line.find("(self)") == std::string::npos) {
+      ++result.peers;
+    }
+    if (const auto rate = subscriberRate(line)) {
+      result.samples_per_s.push_back(*rate);
+      double lost = 0.0;
+      if (numberAfter(line, " lost ", lost)) result.lost = static_cast<long>(lost);  // running
+    }
+  }
+  // The first second holds discovery, the last one is cut short.
+  if (result.samples_per_s.size() <= 2) return {{}, result.lost, result.peers};
+  result.samples_per_s.erase(result.samples_per_s.begin());
+  result.samples_per_s.pop_back();
+  return result;
 }
 
 }  // namespace sensornet::bench

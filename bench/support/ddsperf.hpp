@@ -1,5 +1,6 @@
 #pragma once
-// Cyclone's own `ddsperf` ping/pong on loopback, as the yardstick of the latency benchmarks.
+// Cyclone's own `ddsperf` on loopback, as the yardstick of the emulator's benchmarks: ping/pong
+// for latency, pub/sub for throughput.
 //
 // What ddsperf prints: for each second, the round trips of that second, each already HALVED
 // (ddsperf records (t_pong_received - t_ping_written) / 2; see update_roundtrip() in its source).
@@ -31,5 +32,18 @@ struct DdsperfSecond {
 // Back-to-back pinging: the median over seconds of 2 x mean x round trips / 1 s. About 1 if the
 // printed latencies are round trip / 2 (about 0.5 if they were whole round trips).
 [[nodiscard]] double checkHalving(const std::filesystem::path& dir, int domain_id);
+
+// What `ddsperf sub` received from one `ddsperf pub` publishing as fast as it can.
+struct DdsperfThroughput {
+  std::vector<double> samples_per_s;  // per whole second, the first and the last left out
+  long lost = 0;                      // gaps in the sequence numbers, as ddsperf counts them
+  int peers = 0;                      // participants the subscriber saw besides itself (1 if alone)
+};
+
+// Runs `ddsperf sub` and `ddsperf pub size <sample_bytes>` for `seconds` on domain `domain_id`
+// with sensornet's loopback configuration, reliable and keep-all as sensornet's Measurement
+// topic. Logs go to `dir`. Empty samples_per_s if ddsperf failed.
+[[nodiscard]] DdsperfThroughput ddsperfThroughput(const std::filesystem::path& dir, int domain_id,
+                                                  int sample_bytes, int seconds);
 
 }  // namespace sensornet::bench
