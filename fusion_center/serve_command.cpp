@@ -348,12 +348,12 @@ class FusionCenter {
 
   void advance() {
     const std::int64_t now = wallNowNs();
-    backlog_ = std::max(backlog_, waiting_);
-    waiting_ = 0;
+    // Measurements handled in this loop turn: how many were waiting for the main loop.
+    const std::uint64_t waiting = std::exchange(waiting_, 0);
     for (auto it = open_.begin(); it != open_.end();) {
       const std::uint32_t number = it->first;
       OpenEpisode& open = it->second;
-      open.backlog = std::max(open.backlog, backlog_);
+      open.backlog = std::max(open.backlog, waiting);
       const double horizon = inputs_.scenario().horizon_s;
       const double watermark = open.clock.emulatedAt(now - toNs(options_.lag_s));
       if (watermark > 0.0) open.fusion->fuseUpTo(std::min(watermark, horizon));
@@ -374,7 +374,6 @@ class FusionCenter {
       if (now >= next_state_ns_) publishState(number, open);
       ++it;
     }
-    backlog_ = 0;
   }
 
   static std::string formatSeconds(double seconds) {
@@ -608,7 +607,6 @@ class FusionCenter {
   emulator::StallWatch stall_watch_;
   std::uint32_t episodes_planned_ = 0;
   std::uint64_t waiting_ = 0;  // measurements taken off the inbox in this loop turn
-  std::uint64_t backlog_ = 0;
   std::int64_t next_state_ns_ = 0;
 };
 

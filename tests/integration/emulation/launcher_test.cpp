@@ -36,6 +36,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
+using sensornet::testing::RunningProgram;
 using sensornet::testing::LeftoverGuard;
 using sensornet::testing::processesMentioning;
 using namespace std::chrono_literals;
@@ -76,28 +77,6 @@ bool isAliveWith(pid_t pid, const std::string& token) {
   for (char& c : cmdline) c = c == '\0' ? ' ' : c;
   return cmdline.find(token) != std::string::npos;
 }
-
-// A program running on a thread of its own (runProcess with a time limit), for the tests that
-// act on a run while it goes on.
-class RunningProgram {
- public:
-  RunningProgram(std::vector<std::string> argv, std::chrono::milliseconds limit)
-      : thread_([this, argv = std::move(argv), limit] {
-          result_ = runProcess(argv, limit);
-          done_ = true;
-        }) {}
-  // Blocks until the program ended.
-  const ProcessResult& result() {
-    if (thread_.joinable()) thread_.join();
-    return result_;
-  }
-  [[nodiscard]] bool done() const { return done_; }
-
- private:
-  ProcessResult result_;
-  std::atomic<bool> done_{false};
-  std::jthread thread_;
-};
 
 class Launcher : public ::testing::Test {
  protected:

@@ -45,6 +45,7 @@ using sensornet::testing::LeftoverGuard;
 using sensornet::testing::processesMentioning;
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
+using sensornet::testing::RunningProgram;
 using namespace std::chrono_literals;
 
 const std::string kLauncher = SENSORNET_LAUNCHER;
@@ -111,27 +112,6 @@ std::vector<double> realizedCosts(const json& report) {
   for (const json& e : report["per_episode"]) costs.push_back(e["realized_cost"].get<double>());
   return costs;
 }
-
-// A program running on a thread of its own (runProcess with a time limit), for the tests that
-// act on a run while it goes on.
-class RunningProgram {
- public:
-  RunningProgram(std::vector<std::string> argv, std::chrono::milliseconds limit)
-      : thread_([this, argv = std::move(argv), limit] {
-          result_ = runProcess(argv, limit);
-          done_ = true;
-        }) {}
-  const ProcessResult& result() {
-    if (thread_.joinable()) thread_.join();
-    return result_;
-  }
-  [[nodiscard]] bool done() const { return done_; }
-
- private:
-  ProcessResult result_;
-  std::atomic<bool> done_{false};
-  std::jthread thread_;
-};
 
 class LauncherTrust : public ::testing::Test {
  protected:
