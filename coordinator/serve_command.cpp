@@ -315,6 +315,8 @@ class Coordinator {
       case sensornet_COMMAND_STATUS:
         return {0, "running episode " + std::to_string(current_episode_) + ", schedule v" +
                        std::to_string(book_.latest().version)};
+      case sensornet_COMMAND_SENSORS_FAILED:
+        throw InputError(source, "kind", "a command kind this coordinator handles");
       case sensornet_COMMAND_SHUTDOWN:
         stopping_ = true;
         return {0, "the run ends after the current episode"};

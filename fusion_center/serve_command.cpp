@@ -486,7 +486,7 @@ class FusionCenter {
     for (std::size_t j = 0; j < e.sensors.size(); ++j) {
       const emulator::SensorTally& t = e.sensors[j];
       counts.push_back(
-          {static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late, t.sent});
+          {static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late, t.sent, 0});
     }
     sensornet_Report r{};
     r.run_id = dds::borrowString(options_.run.run_id);

@@ -84,10 +84,25 @@ void RunInputs::readControls(Update& update) {
       case sensornet_EPISODE_STOP:
         update.stops.push_back(c.episode);
         break;
-      case sensornet_EPISODE_START:
+      case sensornet_EPISODE_START: {
+        std::set<int> failed;
+        for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
+          failed.insert(static_cast<int>(id));
+        }
         held_starts_.push_back(
-            {{c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned}, c.seed});
+            {{c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned, failed},
+             c.seed});
         break;
+      }
+      case sensornet_EPISODE_SENSORS_FAILED: {
+        SensorFailure failure{c.episode, c.failed_at_s, {}, std::string(dds::viewString(c.detail))};
+        for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
+          failure.sensors.insert(static_cast<int>(id));
+          failed_sensors_.insert(static_cast<int>(id));
+        }
+        update.failures.push_back(std::move(failure));
+        break;
+      }
     }
   }
   // A start waits for the scenario and the schedule in force at the episode's start.
@@ -101,6 +116,7 @@ void RunInputs::readControls(Update& update) {
     }
     if (!last_started_ || s.episode > *last_started_) {
       last_started_ = s.episode;
+      failed_sensors_.insert(s.failed_sensors.begin(), s.failed_sensors.end());
       update.starts.push_back(s);
     }
     return true;

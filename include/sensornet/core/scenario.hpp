@@ -8,8 +8,11 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "sensornet/core/network_spec.hpp"
 
 namespace sensornet {
 
@@ -42,6 +45,8 @@ struct Scenario {
   std::vector<SensorModel> sensors;
   CostWeights cost;
   ResourceConstraints constraints;
+  std::optional<NetworkSpec> network;  // the emulated network, when the scenario has one
+  std::vector<CrashFault> faults;      // scripted faults (network.hpp)
 
   [[nodiscard]] int stateDim() const { return static_cast<int>(plant.A.rows()); }
   [[nodiscard]] int sensorCount() const { return static_cast<int>(sensors.size()); }

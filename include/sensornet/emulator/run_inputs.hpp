@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,16 @@ struct EpisodeStart {
   std::uint32_t episode = 0;
   EpisodeClock clock;
   std::uint32_t episodes_planned = 0;  // how many episodes the run has
+  std::set<int> failed_sensors;        // dead before this episode (publish nothing, no tally)
+};
+
+// The coordinator's word that sensors died (EPISODE_SENSORS_FAILED): `sensors` (all that died
+// so far in the run) publish nothing from emulated time `at_s` of `episode` on.
+struct SensorFailure {
+  std::uint32_t episode = 0;
+  double at_s = 0.0;
+  std::set<int> sensors;
+  std::string detail;
 };
 
 // How the coordinator ended the run (RUN_SHUTDOWN).
@@ -63,6 +74,7 @@ class RunInputs {
     std::size_t new_versions = 0;  // the last new_versions entries of book().versions()
     std::vector<EpisodeStart> starts;
     std::vector<std::uint32_t> stops;
+    std::vector<SensorFailure> failures;
     bool shutdown = false;
     RunEnd end;  // when shutdown
   };
@@ -83,6 +95,8 @@ class RunInputs {
   [[nodiscard]] const ScheduleBook& book() const { return book_; }
   // The last episode handed out in Update::starts.
   [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return last_started_; }
+  // Every sensor the coordinator has said is dead (from starts and failure notices).
+  [[nodiscard]] const std::set<int>& failedSensors() const { return failed_sensors_; }
   // Samples refused, by reason: malformed scenario or schedule, stale schedule, bad episode
   // control.
   [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const { return rejected_; }
@@ -112,6 +126,7 @@ class RunInputs {
   void reject(const char* reason) { ++rejected_[reason]; }
   std::vector<HeldStart> held_starts_;
   std::optional<std::uint32_t> last_started_;
+  std::set<int> failed_sensors_;
   std::map<std::string, std::uint64_t> rejected_;
 };
 

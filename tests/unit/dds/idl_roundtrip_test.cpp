@@ -204,7 +204,7 @@ TEST(IdlRoundTrip, ReportKeepsEveryFieldIncludingNestedOnes) {
   const std::vector<std::uint32_t> versions = {1, 2, 5};
   std::vector<sensornet_SensorCounts> counts(3);
   for (std::uint32_t j = 0; j < 3; ++j) {
-    counts[j] = sensornet_SensorCounts{j, 100u + j, 99.5 + j, j, 2u * j, 100u + 2u * j};
+    counts[j] = sensornet_SensorCounts{j, 100u + j, 99.5 + j, j, 2u * j, 100u + 2u * j + 3u, 3u};
   }
   sensornet_Report s{};
   s.run_id = borrowString(run);
@@ -217,7 +217,8 @@ TEST(IdlRoundTrip, ReportKeepsEveryFieldIncludingNestedOnes) {
   borrowSequence(s.counts, counts);
   s.latency_median_s = 0.0003;
   s.latency_p99_s = 0.002;
-  s.summary = sensornet_RunSummary{7, 1.2, 1.1, 1.3, 1.0, 1.5, true, 1.01, 700, 2, 0.0004, 0.003, 6, 702};
+  s.summary = sensornet_RunSummary{7,    1.2,  1.1, 1.3, 1.0, 1.5,  true, 1.01, 700,  2,
+                                   0.0004, 0.003, 6, 711, 9,  1.25, 0.9, 1.4,  false};
   s.complete = true;
 
   const OwnedSample<sensornet_Report> got = roundTrip(s);
@@ -236,11 +237,17 @@ TEST(IdlRoundTrip, ReportKeepsEveryFieldIncludingNestedOnes) {
     EXPECT_EQ(got_counts[j].expected, 99.5 + j);
     EXPECT_EQ(got_counts[j].lost, j);
     EXPECT_EQ(got_counts[j].late, 2u * j);
-    EXPECT_EQ(got_counts[j].sent, 100u + 2u * j);
+    EXPECT_EQ(got_counts[j].sent, 100u + 2u * j + 3u);
+    EXPECT_EQ(got_counts[j].dropped_by_network, 3u);
   }
   EXPECT_TRUE(got->complete);
   EXPECT_EQ(got->summary.episodes_complete, 6u);
-  EXPECT_EQ(got->summary.sent, 702u);
+  EXPECT_EQ(got->summary.sent, 711u);
+  EXPECT_EQ(got->summary.dropped_by_network, 9u);
+  EXPECT_EQ(got->summary.realtime_mean, 1.25);
+  EXPECT_EQ(got->summary.delivered_lower_mean, 0.9);
+  EXPECT_EQ(got->summary.delivered_upper_mean, 1.4);
+  EXPECT_FALSE(got->summary.meets_delivered_bracket);
   EXPECT_EQ(got->latency_median_s, 0.0003);
   EXPECT_EQ(got->latency_p99_s, 0.002);
   const sensornet_RunSummary& summary = got->summary;
