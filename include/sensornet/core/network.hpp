@@ -29,6 +29,11 @@ namespace sensornet {
 [[nodiscard]] RateSchedule deliveredSchedule(const RateSchedule& schedule,
                                              const NetworkSpec& network, std::uint32_t episode);
 
+// What a network-aware plan (PlanRequest::delivery) assumes the network delivers of each planned
+// rate, N x M: (1 - loss_j) times the fraction of interval k outside the outages of sensor j
+// that apply to every episode (outages of listed episodes only are left out of planning).
+[[nodiscard]] Eigen::MatrixXd deliveryFactors(const Scenario& scenario);
+
 // Outage edges must fall on the schedule's grid refined by at most this factor.
 inline constexpr int kMaxOutageRefinement = 1000;
 

@@ -66,6 +66,10 @@ struct PlanRequest {
   double start_time = 0.0;
   std::optional<Eigen::MatrixXd> start_covariance;
   std::vector<int> excluded_sensors;  // forced to rate 0 in the planned intervals
+  // Network-aware planning: the surrogate sees the delivered rates delivery(k, j) * λ_kj (N x M,
+  // entries in [0, 1]; deliveryFactors() in network.hpp) while C λ <= b binds the planned ones.
+  // Absent: every factor is 1.
+  std::optional<Eigen::MatrixXd> delivery;
   std::optional<RateSchedule> warm_start;  // initial guess (projected onto the admissible set)
   // Stop when kkt_residual (below) <= tolerance; for IPOPT, its scaled KKT tolerance.
   double tolerance = 1e-6;
