@@ -173,8 +173,9 @@ std::vector<pid_t> ProcessGroup::runningPids() const {
 }
 
 std::optional<std::filesystem::path> ProcessGroup::logOf(const std::string& name) const {
-  for (const Child& child : children_) {
-    if (child.spec.name == name) return child.spec.log_path;
+  // The latest child of that name: a restarted process logs to a file of its own.
+  for (auto child = children_.rbegin(); child != children_.rend(); ++child) {
+    if (child->spec.name == name) return child->spec.log_path;
   }
   return std::nullopt;
 }

@@ -65,6 +65,7 @@ class ProcessGroup {
   [[nodiscard]] bool isRunning(const std::string& name) const;
   [[nodiscard]] std::vector<std::string> runningNames() const;
   [[nodiscard]] std::vector<pid_t> runningPids() const;
+  // The log of the latest child started under `name`.
   [[nodiscard]] std::optional<std::filesystem::path> logOf(const std::string& name) const;
 
   // SIGTERM to every running child, SIGKILL to those still running after `grace`, and reaps

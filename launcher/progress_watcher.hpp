@@ -51,6 +51,8 @@ class ProgressWatcher {
   void poll(std::chrono::milliseconds wait);
   [[nodiscard]] std::size_t episodesSeen() const noexcept { return printed_.size(); }
   [[nodiscard]] RunPosition positionAt(std::int64_t wall_ns) const;
+  // Its participant in the run's domain and partition, for other launcher entities of the run.
+  [[nodiscard]] const dds::Participant& participant() const noexcept { return participant_; }
 
  private:
   void takeControls();

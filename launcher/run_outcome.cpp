@@ -157,6 +157,8 @@ json Fault::toJson() const {
                 {"emulated_time_s", at.emulated_time_s ? json(*at.emulated_time_s) : json()},
                 {"detail", detail}};
   if (!sensors.empty()) entry["sensors"] = sensors;
+  entry["survived"] = survived;
+  if (schedule_version) entry["schedule_version"] = *schedule_version;
   return entry;
 }
 
@@ -177,8 +179,11 @@ RunOutcome settleRun(const RunEnd& end) {
   const std::string reported = report->value("status", std::string());
   if (end.interrupted) {
     outcome.status = "interrupted";
-  } else if (!faults.empty()) {
+  } else if (std::any_of(faults.begin(), faults.end(),
+                         [](const Fault& f) { return !f.survived; })) {
     outcome.status = "failed";
+  } else if (!faults.empty() && reported == "completed") {
+    outcome.status = "degraded";  // the run survived what the launcher saw
   } else if (!isKnownStatus(reported)) {
     faults.push_back(
         {"report_invalid", kFusionCenter, {}, {}, "the report's status is '" + reported + "'"});

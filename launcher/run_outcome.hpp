@@ -17,6 +17,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,14 +35,26 @@ inline constexpr int kExitDegraded = 3;  // every episode ran, but a fault cost 
 
 // A fault the launcher saw itself.
 struct Fault {
+  Fault() = default;
+  Fault(std::string kind_, std::string process_, std::vector<int> sensors_, RunPosition at_,
+        std::string detail_)
+      : kind(std::move(kind_)),
+        process(std::move(process_)),
+        sensors(std::move(sensors_)),
+        at(at_),
+        detail(std::move(detail_)) {}
+
   std::string kind;          // process_killed, process_failed, process_hung, interrupted,
                              // timeout, report_missing, episodes_missing
   std::string process;       // "fusion_center", "sensor_agent-0-2", "coordinator", "sensornet"
   std::vector<int> sensors;  // the sensors the process hosted (sensor agents)
   RunPosition at;            // where the run was
   std::string detail;        // one line: "killed by signal 9 (Killed)"
+  bool survived = false;     // the run went on (restarted, or a sensor lost and the policy
+                             // applied): it degrades the run instead of failing it
+  std::optional<std::uint32_t> schedule_version;  // the version the failure policy published
   // {"kind", "process", "sensor" (its one sensor, else null), "sensors" (when it hosted any),
-  //  "episode", "emulated_time_s", "detail"}
+  //  "episode", "emulated_time_s", "detail", "survived", "schedule_version" when one followed}
   [[nodiscard]] nlohmann::json toJson() const;
 };
 

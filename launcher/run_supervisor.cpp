@@ -47,11 +47,18 @@ void RunSupervisor::fail(RunFailure failure) {
 
 void RunSupervisor::step() {
   progress_.poll(kWatchStep);
+  if (every_step_) every_step_();
   for (const ChildExit& exit : group_.reap()) {
-    ended_.insert(exit.name);
-    if (exit.succeeded()) continue;
-    child_faults_.push_back({exit, progress_.positionAt(emulator::wallNowNs())});
-    fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0, {}});
+    if (exit.succeeded()) {
+      ended_.insert(exit.name);
+      continue;
+    }
+    const RunPosition at = progress_.positionAt(emulator::wallNowNs());
+    const bool survived = !failure_ && response_ && response_(exit, at);
+    child_faults_.push_back({exit, at, survived});
+    // A restarted child runs again under its name: the run still waits for it to end.
+    if (!group_.isRunning(exit.name)) ended_.insert(exit.name);
+    if (!survived) fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0, {}});
   }
   if (const int signal = pendingInterrupt()) {
     fail({RunFailureKind::Interrupted, "", "interrupted by " + signalName(signal), signal, {}});

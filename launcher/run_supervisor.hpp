@@ -10,6 +10,7 @@
 //   for (const ChildFault& f : supervisor.childFaults()) ...;   // "sensor_agent-3 killed by ..."
 
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <set>
 #include <string>
@@ -34,7 +35,12 @@ struct RunFailure {
 struct ChildFault {
   ChildExit exit;
   RunPosition at;  // where the run was when the launcher saw it end
+  bool survived = false;  // the response to it let the run go on (see ChildEndResponse)
 };
+
+// What the caller makes of a child that ended badly: return true when the run goes on (the
+// child was restarted under the same name, or its loss is survivable), false when the run fails.
+using ChildEndResponse = std::function<bool(const ChildExit&, const RunPosition&)>;
 
 class RunSupervisor {
  public:
@@ -44,6 +50,11 @@ class RunSupervisor {
   // `deadline`: when the whole run must be over (--timeout), if ever.
   RunSupervisor(ProcessGroup& group, ProgressWatcher& progress,
                 std::optional<Clock::time_point> deadline);
+
+  // Without a response every child that ends badly fails the run.
+  void respondWith(ChildEndResponse response) { response_ = std::move(response); }
+  // Called once per watch step (every 50 ms or so), e.g. to read answers to commands.
+  void onEveryStep(std::function<void()> hook) { every_step_ = std::move(hook); }
 
   // Watches until `name` has ended successfully (true), or until the run fails or `limit`
   // passes (false; failure() tells which, and stays empty when only `limit` passed).
@@ -65,6 +76,8 @@ class RunSupervisor {
   std::set<std::string> ended_;
   std::optional<RunFailure> failure_;
   std::vector<ChildFault> child_faults_;
+  ChildEndResponse response_;
+  std::function<void()> every_step_;
 };
 
 }  // namespace sensornet::launcher
