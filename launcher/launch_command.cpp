@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "failure_notices.hpp"
 #include "interrupts.hpp"
 #include "output_file.hpp"
 #include "process_group.hpp"
@@ -50,6 +51,8 @@ constexpr seconds kSensorAgentExitLimit{5};
 // on loopback takes a few milliseconds; this is the price of every launch, so it stays short.
 constexpr milliseconds kLiveRunProbe{500};
 constexpr std::size_t kLogLinesShown = 15;
+// A coordinator or fusion center killed more often than this in one run is not restarted again.
+constexpr int kMaxRestarts = 3;
 constexpr int kMaxSensorsPerProcess = 1'000'000;
 
 struct LaunchOptions {
@@ -65,6 +68,8 @@ struct LaunchOptions {
   std::string log_dir;
   double timeout_s = 0.0;  // 0: no limit
   bool json = false;
+  std::string on_sensor_failure = "replan";
+  std::string network_aware = "auto";  // auto: when the scenario has a network: section
 };
 
 // What one launch starts, decided before anything starts.
@@ -77,6 +82,7 @@ struct LaunchPlan {
   std::vector<ChildSpec> children;  // in start order: fusion center, sensor agents, coordinator
   std::vector<std::string> sensor_agents;
   std::map<std::string, std::vector<int>> sensors_of;  // sensor agent -> the sensors it hosts
+  fs::path coordinator_state;  // the coordinator's journal, what a restarted one resumes from
 };
 
 // A run seed as the coordinator takes it: a decimal integer that fits 64 bits unsigned.
@@ -123,8 +129,9 @@ ChildSpec childSpec(const std::string& name, std::vector<std::string> argv,
   return {name, std::move(argv), log_dir / (name + ".log")};
 }
 
-LaunchPlan planLaunch(const LaunchOptions& options, int sensor_count,
+LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
                       const EmulatorPrograms& programs, const dds::DomainConfig& domain) {
+  const int sensor_count = scenario.sensorCount();
   LaunchPlan plan;
   plan.run_id = options.run.run_id;
   plan.default_log_dir = options.log_dir.empty();
@@ -162,6 +169,13 @@ LaunchPlan planLaunch(const LaunchOptions& options, int sensor_count,
                                           options.seed};
   if (!options.schedule_path.empty()) {
     coordinator.insert(coordinator.end(), {"--schedule", fs::absolute(options.schedule_path)});
+  }
+  plan.coordinator_state = plan.log_dir / "coordinator-state.json";
+  coordinator.insert(coordinator.end(), {"--on-sensor-failure", options.on_sensor_failure,
+                                         "--state", plan.coordinator_state});
+  if (options.network_aware == "yes" ||
+      (options.network_aware == "auto" && scenario.network.has_value())) {
+    coordinator.emplace_back("--network-aware");
   }
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator), flags, plan.log_dir));
   return plan;
@@ -210,6 +224,7 @@ std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher&
   // Results of an earlier run of this id must not pass for this run's.
   removeRegularFile(plan.report_path);
   removeRegularFile(emulator::episodeLogPath(plan.report_path));
+  removeRegularFile(plan.coordinator_state);
   return lock;
 }
 
@@ -268,14 +283,103 @@ std::vector<int> sensorsOf(const LaunchPlan& plan, const std::string& process) {
   return it == plan.sensors_of.end() ? std::vector<int>{} : it->second;
 }
 
-// The faults the launcher saw: every child that ended badly on its own, and why it stopped the
-// run if nothing of that sort did.
+// How the run answers a child that ended badly while it runs (issue 11, "process deaths are
+// survived"): a dead sensor agent's sensors are reported to the coordinator, which applies the
+// --on-sensor-failure policy; a killed fusion center or coordinator is started again with
+// --resume (at most kMaxRestarts times each). Anything else fails the run.
+class FaultResponse {
+ public:
+  FaultResponse(ProcessGroup& group, const LaunchPlan& plan, const Scenario& scenario,
+                FailureNotices& notices)
+      : group_(group), plan_(plan), scenario_(scenario), notices_(notices) {}
+
+  bool operator()(const ChildExit& exit, const RunPosition& at) {
+    if (exit.name == kCoordinator) return restart(exit, at);
+    if (!group_.isRunning(kCoordinator)) return false;  // the run is over or ending
+    if (exit.name == kFusionCenter) return restart(exit, at);
+    const std::vector<int> sensors = sensorsOf(plan_, exit.name);
+    if (sensors.empty()) return false;
+    std::fprintf(stderr, "sensornet: %s (sensor%s %s) %s; the coordinator applies the failure "
+                 "policy\n", exit.name.c_str(), sensors.size() == 1 ? "" : "s",
+                 listed(sensors).c_str(), exit.describe().c_str());
+    notices_.send(exit.name, sensors, exit.describe());
+    return true;
+  }
+
+  [[nodiscard]] bool scripted(const ChildExit& exit) const {
+    const std::vector<int> sensors = sensorsOf(plan_, exit.name);
+    return exit.signal == SIGKILL &&
+           std::any_of(scenario_.faults.begin(), scenario_.faults.end(), [&](const CrashFault& f) {
+             return std::find(sensors.begin(), sensors.end(), f.sensor) != sensors.end();
+           });
+  }
+  [[nodiscard]] std::string restartOf(pid_t dead) const {
+    const auto it = restarted_.find(dead);
+    return it == restarted_.end() ? std::string() : it->second;
+  }
+
+ private:
+  static std::string listed(const std::vector<int>& sensors) {
+    std::string text;
+    for (const int j : sensors) text += (text.empty() ? "" : ", ") + std::to_string(j);
+    return text;
+  }
+
+  // Only a killed process is restarted: one that exited on its own decided to end the run.
+  bool restart(const ChildExit& exit, const RunPosition&) {
+    if (exit.signal == 0 || restarts_[exit.name] >= kMaxRestarts) return false;
+    const int attempt = ++restarts_[exit.name];
+    const auto spec = std::find_if(plan_.children.begin(), plan_.children.end(),
+                                   [&](const ChildSpec& c) { return c.name == exit.name; });
+    ChildSpec again = *spec;
+    again.argv.emplace_back("--resume");
+    again.log_path = plan_.log_dir / (exit.name + ".restart-" + std::to_string(attempt) + ".log");
+    try {
+      const pid_t pid = group_.start(again);
+      restarted_[exit.pid] = "restarted with --resume (pid " + std::to_string(pid) + ", log " +
+                             again.log_path.filename().string() + ")";
+      std::fprintf(stderr, "sensornet: %s %s; %s\n", exit.name.c_str(), exit.describe().c_str(),
+                   restarted_[exit.pid].c_str());
+      return true;
+    } catch (const std::exception& e) {
+      spdlog::error("cannot restart {}: {}", exit.name, e.what());
+      return false;
+    }
+  }
+
+  ProcessGroup& group_;
+  const LaunchPlan& plan_;
+  const Scenario& scenario_;
+  FailureNotices& notices_;
+  std::map<std::string, int> restarts_;
+  std::map<pid_t, std::string> restarted_;  // dead pid -> how it was restarted
+};
+
+// The faults the launcher saw: every child that ended badly on its own (and what the run did
+// about it), and why it stopped the run if nothing of that sort did.
 std::vector<Fault> launcherFaults(const RunSupervisor& supervisor, const LaunchPlan& plan,
-                                  double timeout_s) {
+                                  double timeout_s, const FaultResponse& response,
+                                  const FailureNotices& notices) {
   std::vector<Fault> faults;
   for (const ChildFault& f : supervisor.childFaults()) {
-    faults.push_back({f.exit.signal != 0 ? "process_killed" : "process_failed", f.exit.name,
-                      sensorsOf(plan, f.exit.name), f.at, f.exit.describe()});
+    Fault fault{f.exit.signal != 0 ? "process_killed" : "process_failed", f.exit.name,
+                sensorsOf(plan, f.exit.name), f.at, f.exit.describe()};
+    fault.survived = f.survived;
+    if (response.scripted(f.exit)) {
+      fault.kind = "crash";
+      fault.detail = "scripted crash (the scenario's faults:), " + fault.detail;
+    }
+    if (const std::string how = response.restartOf(f.exit.pid); !how.empty()) {
+      fault.detail += "; " + how;
+    } else if (f.survived) {
+      if (const FailureReply* reply = notices.replyTo(f.exit.name)) {
+        fault.detail += "; " + reply->reason;
+        if (reply->schedule_version != 0) fault.schedule_version = reply->schedule_version;
+      } else {
+        fault.detail += "; the coordinator did not answer the failure notice";
+      }
+    }
+    faults.push_back(std::move(fault));
   }
   if (const auto& failure = supervisor.failure()) {
     switch (failure->kind) {
@@ -291,7 +395,8 @@ std::vector<Fault> launcherFaults(const RunSupervisor& supervisor, const LaunchP
              "the run did not end within --timeout " + formatNumber(timeout_s) + " s"});
         break;
       case RunFailureKind::ChildFailed:
-        if (supervisor.childFaults().empty()) {
+        if (std::none_of(supervisor.childFaults().begin(), supervisor.childFaults().end(),
+                         [](const ChildFault& f) { return !f.survived; })) {
           faults.push_back({"process_hung", failure->child, sensorsOf(plan, failure->child),
                             failure->at, failure->reason});
         }
@@ -329,7 +434,11 @@ int runLaunch(LaunchOptions options) {
   if (options.run.run_id.empty()) options.run.run_id = generateRunId();
   const dds::DomainConfig domain = options.run.domainConfig();
   const EmulatorPrograms programs = findEmulatorPrograms();
-  const LaunchPlan plan = planLaunch(options, scenario.sensorCount(), programs, domain);
+  if (options.network_aware == "yes" && !scenario.network) {
+    throw InputError(options.scenario_path, "network",
+                     "a network: section for --network-aware yes (the scenario has none)");
+  }
+  const LaunchPlan plan = planLaunch(options, scenario, programs, domain);
   if (!plan.default_report) checkReportPaths(plan);
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s);
@@ -353,6 +462,10 @@ int runLaunch(LaunchOptions options) {
                                           std::chrono::duration<double>(options.timeout_s));
   }
   RunSupervisor supervisor(group, progress, deadline);
+  FailureNotices notices(progress.participant(), plan.run_id);
+  FaultResponse response(group, plan, scenario, notices);
+  supervisor.respondWith(std::ref(response));
+  supervisor.onEveryStep([&notices] { notices.poll(); });
   superviseRun(supervisor, plan);
   if (const auto& failure = supervisor.failure()) {
     const std::vector<std::string> still_running = group.runningNames();
@@ -368,7 +481,7 @@ int runLaunch(LaunchOptions options) {
       plan.report_path,
       scenario.sensorCount(),
       options.episodes,
-      launcherFaults(supervisor, plan, options.timeout_s),
+      launcherFaults(supervisor, plan, options.timeout_s, response, notices),
       supervisor.failure() && supervisor.failure()->kind == RunFailureKind::Interrupted};
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
@@ -386,7 +499,9 @@ constexpr const char* kLaunchFooter =
     "Exit status (DESIGN.md, \"Run outcome\"; the report's \"status\" says the same):\n"
     "  0  completed: every episode complete, every sent measurement fused, no process failed\n"
     "  3  degraded: every episode ran, but something was lost, rejected or re-planned because "
-    "of a fault (the report's \"faults\" say what)\n"
+    "of a fault, or a process died and the run survived it (a sensor agent: the "
+    "--on-sensor-failure policy; the fusion center or the coordinator: restarted with --resume); "
+    "the report's \"faults\" say what\n"
     "  1  failed or interrupted: the run could not finish (a process died or failed, --timeout, "
     "or Ctrl-C/SIGTERM/SIGHUP, which exit 1 too, not 130)\n"
     "  2  bad input, refused before any process starts: a bad option or file, a report path "
@@ -449,6 +564,20 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")
       ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
+  cmd->add_option("--on-sensor-failure", options->on_sensor_failure,
+                  "what the run does when a sensor agent dies (killed, crashed, or a scripted "
+                  "crash of the scenario's faults:): replan = the coordinator re-plans the rest "
+                  "of the horizon among the survivors (the dead sensors get rate zero from the "
+                  "switch on) and the run ends degraded; continue = keep the schedule, so the "
+                  "bracket shows the damage (degraded); stop = end the run as failed")
+      ->check(CLI::IsMember({"replan", "continue", "stop"}))
+      ->capture_default_str();
+  cmd->add_option("--network-aware", options->network_aware,
+                  "plan for the rates the scenario's emulated network delivers (loss thins them, "
+                  "outages zero them): yes, no, or auto = yes when the scenario has a network: "
+                  "section")
+      ->check(CLI::IsMember({"auto", "yes", "no"}))
+      ->capture_default_str();
   cmd->add_flag("--json", options->json,
                 "print one JSON line at the end: the report's summary with \"run_id\", "
                 "\"status\", \"faults\", \"report\" and \"exit_code\"");

@@ -6,12 +6,10 @@
 //   by others; out-of-range options and bad seeds;
 // - one run per id: a second launch of a live run is refused at once, and the first run's
 //   results are those of a clean run with the same seed;
-// - a process killed mid-run fails the run (exit 1) with a fault naming it, and every episode
-//   finished before a killed fusion center is in the report, rebuilt from the episode log.
+// (Process deaths, which a run survives, are tested in faults_test.cpp.)
 //
-// Every test uses its own run id and temporary folder, with the launcher's scratch folder
-// ($SENSORNET_SCRATCH_DIR) and current-run record ($XDG_RUNTIME_DIR) inside it, never the
-// user's; LeftoverGuard kills whatever still carries the run id when a test ends.
+// Every test uses its own run id and temporary folder (LaunchTest, launch_fixture.hpp);
+// LeftoverGuard kills whatever still carries the run id when a test ends.
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -34,78 +32,27 @@
 #include <thread>
 #include <vector>
 
-#include "support/background_process.hpp"
-#include "support/process.hpp"
+#include "launch_fixture.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using sensornet::testing::kLauncher;
 using sensornet::testing::LeftoverGuard;
+using sensornet::testing::readJson;
+using sensornet::testing::readJsonLines;
+using sensornet::testing::readText;
+using sensornet::testing::waitUntil;
 using sensornet::testing::processesMentioning;
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
 using sensornet::testing::RunningProgram;
 using namespace std::chrono_literals;
 
-const std::string kLauncher = SENSORNET_LAUNCHER;
-const std::string kScenario = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml";
-constexpr int kDefaultSensors = 6;
+const std::string kScenario = sensornet::testing::kDefaultScenario;
 constexpr int kExitFailed = 1;
 constexpr int kExitBadInput = 2;
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-json readJson(const fs::path& path) { return json::parse(readText(path), nullptr, false); }
-
-// The whole lines of a JSON Lines file, parsed (a torn last line is left out).
-std::vector<json> readJsonLines(const fs::path& path) {
-  std::vector<json> lines;
-  const std::string text = readText(path);
-  std::size_t start = 0;
-  for (std::size_t end = text.find('\n'); end != std::string::npos;
-       start = end + 1, end = text.find('\n', start)) {
-    json line = json::parse(text.substr(start, end - start), nullptr, false);
-    if (line.is_object()) lines.push_back(std::move(line));
-  }
-  return lines;
-}
-
-// The process of the run whose command line starts with `program` and contains `token`.
-std::optional<pid_t> processOf(const std::string& run_id, const std::string& program,
-                               const std::string& token = "") {
-  for (const pid_t pid : processesMentioning(run_id)) {
-    std::string cmdline = readText("/proc/" + std::to_string(pid) + "/cmdline");
-    for (char& c : cmdline) c = c == '\0' ? ' ' : c;
-    if (cmdline.starts_with(program + ' ') && cmdline.find(token) != std::string::npos) {
-      return pid;
-    }
-  }
-  return std::nullopt;
-}
-
-// Waits until `done()` or `limit` passes; returns done().
-template <class Done>
-bool waitUntil(Done done, std::chrono::milliseconds limit) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  while (!done() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(50ms);
-  return done();
-}
-
-// The episode numbers of the progress lines ("[2/20] episode 1: realized ...") in `err`.
-std::set<int> progressEpisodes(const std::string& err) {
-  std::set<int> episodes;
-  const std::string marker = "] episode ";
-  for (std::size_t at = err.find(marker); at != std::string::npos; at = err.find(marker, at + 1)) {
-    episodes.insert(std::stoi(err.substr(at + marker.size())));
-  }
-  return episodes;
-}
 
 std::vector<double> realizedCosts(const json& report) {
   std::vector<double> costs;
@@ -113,43 +60,8 @@ std::vector<double> realizedCosts(const json& report) {
   return costs;
 }
 
-class LauncherTrust : public ::testing::Test {
+class LauncherTrust : public sensornet::testing::LaunchTest {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/sensornet-trust-test-XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-    ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
-    ::setenv("SENSORNET_SCRATCH_DIR", (dir_ / "scratch").c_str(), 1);
-    ::unsetenv("SENSORNET_CYCLONE_CONFIG");
-    ::unsetenv("SENSORNET_BIN_DIR");
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    run_id_ = "tr-" + std::to_string(::getpid()) + "-" + std::string(info->name()).substr(0, 24);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    // Undo what a test made unremovable or another user's before removing the folder.
-    fs::permissions(dir_, fs::perms::owner_all, ignored);
-    fs::remove_all(dir_, ignored);
-  }
-
-  // A launch of the default scenario with this test's run id; logs in dir_/logs unless
-  // `log_dir` is empty (then the default folder, in the scratch folder).
-  [[nodiscard]] std::vector<std::string> launchArgs(int episodes, const std::string& time_scale,
-                                                    const fs::path& report,
-                                                    const fs::path& log_dir) const {
-    std::vector<std::string> argv = {
-        kLauncher,      "launch",   kScenario,  "--episodes", std::to_string(episodes),
-        "--time-scale", time_scale, "--run-id", run_id_};
-    if (!report.empty()) argv.insert(argv.end(), {"--report", report.string()});
-    if (!log_dir.empty()) argv.insert(argv.end(), {"--log-dir", log_dir.string()});
-    return argv;
-  }
-  [[nodiscard]] std::vector<std::string> launchArgs(int episodes,
-                                                    const std::string& time_scale) const {
-    return launchArgs(episodes, time_scale, dir_ / "report.json", dir_ / "logs");
-  }
-
   // A launch refused before anything started: exit 2 within a few seconds, one line naming
   // `named`, no log folder, no process of the run.
   void expectRefusedAtOnce(const std::vector<std::string>& argv, const std::string& named,
@@ -359,87 +271,6 @@ TEST_F(LauncherTrust, DuplicateRunIdIsRefusedWhileTheFirstRunGoesOnUnaffected) {
   for (std::size_t k = 0; k < costs.size(); ++k) {
     EXPECT_NEAR(costs[k], clean_costs[k], 1e-12 * std::abs(clean_costs[k])) << "episode " << k;
   }
-}
-
-TEST_F(LauncherTrust, KilledFusionCenterFailsTheRunAndKeepsEveryFinishedEpisode) {
-  const LeftoverGuard guard(run_id_);
-  RunningProgram launcher(launchArgs(40, "10"), 90s);
-  const fs::path log = dir_ / "report.jsonl";
-  ASSERT_TRUE(waitUntil([&] { return readJsonLines(log).size() >= 2; }, 40s))
-      << "no episode log with two episodes at " << log;
-  const std::optional<pid_t> fusion = processOf(run_id_, SENSORNET_FUSION_CENTER);
-  ASSERT_TRUE(fusion.has_value());
-  ASSERT_EQ(::kill(*fusion, SIGKILL), 0);
-  const ProcessResult& r = launcher.result();
-  EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
-
-  // The episode log as the dead fusion center left it: every episode it finished.
-  const std::vector<json> logged = readJsonLines(log);
-  ASSERT_GE(logged.size(), 2u);
-  const json report = readJson(dir_ / "report.json");
-  ASSERT_TRUE(report.is_object()) << "no report rebuilt at " << dir_ / "report.json";
-  EXPECT_EQ(report["run_id"], run_id_);
-  EXPECT_EQ(report["status"], "failed");
-  ASSERT_EQ(report["per_episode"].size(), logged.size());
-  for (std::size_t k = 0; k < logged.size(); ++k) {
-    EXPECT_EQ(report["per_episode"][k]["episode"], logged[k]["episode"]);
-    EXPECT_EQ(report["per_episode"][k]["realized_cost"], logged[k]["realized_cost"]);
-  }
-  // Every episode whose progress line was printed is in the report.
-  std::set<int> reported;
-  for (const json& e : report["per_episode"]) reported.insert(e["episode"].get<int>());
-  for (const int episode : progressEpisodes(r.err)) {
-    EXPECT_TRUE(reported.contains(episode)) << "episode " << episode << " was printed";
-  }
-  bool named = false;
-  for (const json& fault : report["faults"]) {
-    if (fault["process"] == "fusion_center" && fault["kind"] == "process_killed") {
-      named = true;
-      EXPECT_NE(fault["detail"].get<std::string>().find("signal 9"), std::string::npos);
-      EXPECT_TRUE(fault["episode"].is_number()) << fault.dump();
-    }
-  }
-  EXPECT_TRUE(named) << report["faults"].dump();
-  // The last lines say the same.
-  EXPECT_NE(r.out.find("run " + run_id_ + ": failed"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("fault: process_killed in fusion_center"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("exit code 1"), std::string::npos) << r.out;
-  EXPECT_TRUE(processesMentioning(run_id_).empty());
-}
-
-TEST_F(LauncherTrust, KilledSensorAgentFailsTheRunAndNamesItsSensors) {
-  const LeftoverGuard guard(run_id_);
-  std::vector<std::string> argv = launchArgs(40, "10");
-  argv.insert(argv.end(), {"--sensors-per-process", "3", "--json"});
-  RunningProgram launcher(argv, 90s);
-  // Mid-run: the fusion center has reported an episode.
-  ASSERT_TRUE(waitUntil([&] { return !readJsonLines(dir_ / "report.jsonl").empty(); }, 40s));
-  const std::optional<pid_t> agent = processOf(run_id_, SENSORNET_SENSOR_AGENT, "--sensors 0-2");
-  ASSERT_TRUE(agent.has_value());
-  ASSERT_EQ(::kill(*agent, SIGKILL), 0);
-  const ProcessResult& r = launcher.result();
-  EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
-
-  const json report = readJson(dir_ / "report.json");
-  ASSERT_TRUE(report.is_object());
-  EXPECT_EQ(report["status"], "failed");
-  bool named = false;
-  for (const json& fault : report["faults"]) {
-    if (fault["process"] != "sensor_agent-0-2") continue;
-    named = true;
-    EXPECT_EQ(fault["kind"], "process_killed");
-    EXPECT_EQ(fault["sensors"], json({0, 1, 2}));
-    EXPECT_TRUE(fault["episode"].is_number()) << fault.dump();
-    EXPECT_NE(fault["detail"].get<std::string>().find("killed by signal 9"), std::string::npos);
-  }
-  EXPECT_TRUE(named) << report["faults"].dump();
-  // --json: one line that says the same as the report.
-  const json line = json::parse(r.out, nullptr, false);
-  ASSERT_TRUE(line.is_object()) << r.out;
-  EXPECT_EQ(line["status"], "failed");
-  EXPECT_EQ(line["exit_code"], kExitFailed);
-  EXPECT_EQ(line["faults"], report["faults"]);
-  EXPECT_TRUE(processesMentioning(run_id_).empty());
 }
 
 }  // namespace

@@ -1,0 +1,117 @@
+#pragma once
+// `sensornet launch` runs for the integration tests: a fixture with a private temporary folder
+// (the launcher's scratch folder and current-run record inside it, never the user's), a run id
+// of its own per test, and helpers to read what a run leaves behind and to find its processes.
+//
+//   class MyTest : public sensornet::testing::LaunchTest {};
+//   TEST_F(MyTest, X) {
+//     const LeftoverGuard guard(run_id_);
+//     RunningProgram launcher(launchArgs(6, "3"), 90s);
+//     ASSERT_TRUE(waitUntil([&] { return readJsonLines(dir_ / "report.jsonl").size() >= 1; }, 30s));
+//     ::kill(*processOf(run_id_, SENSORNET_FUSION_CENTER), SIGKILL);
+//     const ProcessResult& r = launcher.result();
+//   }
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "emulation_fixture.hpp"
+#include "support/background_process.hpp"
+#include "support/process.hpp"
+
+namespace sensornet::testing {
+
+inline const std::string kLauncher = SENSORNET_LAUNCHER;
+
+inline nlohmann::json readJson(const std::filesystem::path& path) {
+  return nlohmann::json::parse(readText(path), nullptr, false);
+}
+
+// The whole lines of a JSON Lines file, parsed (a torn last line is left out).
+inline std::vector<nlohmann::json> readJsonLines(const std::filesystem::path& path) {
+  std::vector<nlohmann::json> lines;
+  const std::string text = readText(path);
+  std::size_t start = 0;
+  for (std::size_t end = text.find('\n'); end != std::string::npos;
+       start = end + 1, end = text.find('\n', start)) {
+    nlohmann::json line = nlohmann::json::parse(text.substr(start, end - start), nullptr, false);
+    if (line.is_object()) lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
+// The process of the run whose command line starts with `program` and contains `token`.
+inline std::optional<pid_t> processOf(const std::string& run_id, const std::string& program,
+                                      const std::string& token = "") {
+  for (const pid_t pid : processesMentioning(run_id)) {
+    std::string cmdline = readText("/proc/" + std::to_string(pid) + "/cmdline");
+    for (char& c : cmdline) c = c == '\0' ? ' ' : c;
+    if (cmdline.starts_with(program + ' ') && cmdline.find(token) != std::string::npos) {
+      return pid;
+    }
+  }
+  return std::nullopt;
+}
+
+// Waits until `done()` or `limit` passes; returns done().
+template <class Done>
+bool waitUntil(Done done, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!done() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return done();
+}
+
+class LaunchTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/sensornet-launch-test-XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
+    ::setenv("SENSORNET_SCRATCH_DIR", (dir_ / "scratch").c_str(), 1);
+    ::unsetenv("SENSORNET_CYCLONE_CONFIG");
+    ::unsetenv("SENSORNET_BIN_DIR");
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    run_id_ = "tr-" + std::to_string(::getpid()) + "-" + std::string(info->name()).substr(0, 24);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    // Undo what a test made unremovable or another user's before removing the folder.
+    std::filesystem::permissions(dir_, std::filesystem::perms::owner_all, ignored);
+    if (!HasFailure()) std::filesystem::remove_all(dir_, ignored);
+  }
+
+  // A launch of `scenario` with this test's run id; logs in dir_/logs unless `log_dir` is empty
+  // (then the default folder, in the scratch folder).
+  [[nodiscard]] std::vector<std::string> launchArgs(int episodes, const std::string& time_scale,
+                                                    const std::filesystem::path& report,
+                                                    const std::filesystem::path& log_dir,
+                                                    const std::string& scenario = kDefaultScenario) const {
+    std::vector<std::string> argv = {
+        kLauncher,      "launch",   scenario,   "--episodes", std::to_string(episodes),
+        "--time-scale", time_scale, "--run-id", run_id_};
+    if (!report.empty()) argv.insert(argv.end(), {"--report", report.string()});
+    if (!log_dir.empty()) argv.insert(argv.end(), {"--log-dir", log_dir.string()});
+    return argv;
+  }
+  [[nodiscard]] std::vector<std::string> launchArgs(int episodes,
+                                                    const std::string& time_scale) const {
+    return launchArgs(episodes, time_scale, dir_ / "report.json", dir_ / "logs");
+  }
+
+  std::filesystem::path dir_;
+  std::string run_id_;
+};
+
+}  // namespace sensornet::testing
