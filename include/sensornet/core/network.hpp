@@ -17,6 +17,10 @@
 // λ (1 - p); an outage sets the delivered rate to zero on its window. deliveredSchedule() is
 // that thinned schedule, on a grid fine enough to hold every outage edge.
 
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
 #include "sensornet/core/network_spec.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 
@@ -36,5 +40,10 @@ namespace sensornet {
 
 // Outage edges must fall on the schedule's grid refined by at most this factor.
 inline constexpr int kMaxOutageRefinement = 1000;
+
+// The smallest factor f in [1, kMaxOutageRefinement] that puts both edges of every outage on the
+// grid of step T / (N f) (to 1e-6 of a step), or 0 when there is none.
+[[nodiscard]] int outageRefinement(double horizon_s, int intervals,
+                                   const std::vector<Outage>& outages);
 
 }  // namespace sensornet

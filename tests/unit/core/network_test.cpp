@@ -1,0 +1,130 @@
+#include "sensornet/core/network.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace sensornet {
+namespace {
+
+// T = 3, N = 30, two sensors: λ_0 = 1 + 0.1 k and λ_1 = 2 + 0.1 k on interval k.
+RateSchedule rampSchedule() {
+  Eigen::MatrixXd rates(30, 2);
+  for (int k = 0; k < 30; ++k) {
+    rates(k, 0) = 1.0 + 0.1 * k;
+    rates(k, 1) = 2.0 + 0.1 * k;
+  }
+  return RateSchedule(3.0, rates);
+}
+
+NetworkSpec lossEverywhere(double loss, int sensors) {
+  NetworkSpec network;
+  network.links.assign(static_cast<std::size_t>(sensors), LinkSpec{});
+  for (LinkSpec& link : network.links) link.loss = loss;
+  return network;
+}
+
+Outage outage(int sensor, double from_s, double to_s, std::vector<std::uint32_t> episodes = {}) {
+  Outage o;
+  o.sensor = sensor;
+  o.from_s = from_s;
+  o.to_s = to_s;
+  o.episodes = std::move(episodes);
+  return o;
+}
+
+TEST(DeliveredSchedule, ExpectedCountsAreThinnedByLossAndCutByTheOutage) {
+  NetworkSpec network = lossEverywhere(0.3, 2);
+  network.outages.push_back(outage(0, 0.5, 1.2));
+  const RateSchedule delivered = deliveredSchedule(rampSchedule(), network, 0);
+  const Eigen::VectorXd counts = delivered.expectedCounts(0.0, 3.0);
+  // By hand: ∫λ_0 = 0.1 Σ_{k<30} (1 + 0.1 k) = 0.1 (30 + 43.5) = 7.35; the outage covers
+  // intervals 5..11, 0.1 (7 + 0.1 (5 + ... + 11)) = 0.1 (7 + 5.6) = 1.26; so 0.7 (7.35 - 1.26).
+  EXPECT_NEAR(counts(0), 0.7 * 6.09, 1e-12);
+  // ∫λ_1 = 0.1 (60 + 43.5) = 10.35, no outage.
+  EXPECT_NEAR(counts(1), 0.7 * 10.35, 1e-12);
+  EXPECT_NEAR(delivered.expectedCounts(0.5, 1.2)(0), 0.0, 1e-15);
+  // Just before the outage the rate is the thinned one: 0.7 (1 + 0.1 * 4) on [0.4, 0.5).
+  EXPECT_NEAR(delivered.expectedCounts(0.4, 0.5)(0), 0.7 * 1.4 * 0.1, 1e-12);
+  EXPECT_EQ(delivered.intervals(), 30);
+  EXPECT_DOUBLE_EQ(delivered.horizon(), 3.0);
+}
+
+TEST(DeliveredSchedule, WithoutNetworkItIsTheScheduleItself) {
+  const RateSchedule schedule = rampSchedule();
+  const RateSchedule delivered = deliveredSchedule(schedule, NetworkSpec{}, 4);
+  EXPECT_EQ(delivered.rates(), schedule.rates());
+}
+
+TEST(DeliveredSchedule, RefinesTheGridSoThatEveryOutageEdgeIsOnIt) {
+  const RateSchedule schedule(1.0, Eigen::MatrixXd::Constant(10, 1, 4.0));
+  NetworkSpec network;
+  network.outages.push_back(outage(0, 0.25, 0.75));  // 0.25 on a 0.1 grid: factor 2
+  const RateSchedule delivered = deliveredSchedule(schedule, network, 0);
+  EXPECT_EQ(delivered.intervals(), 20);
+  // 4 Hz over the half of [0, 1] outside the outage.
+  EXPECT_NEAR(delivered.expectedCounts(0.0, 1.0)(0), 2.0, 1e-12);
+  EXPECT_NEAR(delivered.expectedCounts(0.2, 0.3)(0), 4.0 * 0.05, 1e-12);
+}
+
+TEST(OutageRefinement, IsTheSmallestFactorPuttingEveryEdgeOnTheGrid) {
+  EXPECT_EQ(outageRefinement(3.0, 30, {outage(0, 0.5, 1.2)}), 1);
+  EXPECT_EQ(outageRefinement(1.0, 10, {outage(0, 0.25, 0.5)}), 2);
+  EXPECT_EQ(outageRefinement(1.0, 10, {outage(0, 0.25, 0.5), outage(1, 0.0, 1.0 / 3.0)}), 6);
+  EXPECT_EQ(outageRefinement(1.0, 10, {outage(0, 0.1233, 0.5)}), 1000);
+  EXPECT_EQ(outageRefinement(1.0, 10, {outage(0, 0.1234, 0.5)}), 500);
+  EXPECT_EQ(outageRefinement(1.0, 10, {outage(0, std::sqrt(2.0) / 10.0, 0.5)}), 0);
+  EXPECT_EQ(outageRefinement(1.0, 10, {}), 1);
+}
+
+TEST(DeliveredSchedule, OutageOfOtherEpisodesHasNoEffect) {
+  NetworkSpec network = lossEverywhere(0.3, 2);
+  network.outages.push_back(outage(0, 0.5, 1.2, {1, 2}));
+  const RateSchedule in_episode_0 = deliveredSchedule(rampSchedule(), network, 0);
+  EXPECT_NEAR(in_episode_0.expectedCounts(0.0, 3.0)(0), 0.7 * 7.35, 1e-12);
+  const RateSchedule in_episode_2 = deliveredSchedule(rampSchedule(), network, 2);
+  EXPECT_NEAR(in_episode_2.expectedCounts(0.0, 3.0)(0), 0.7 * 6.09, 1e-12);
+}
+
+TEST(Outage, AppliesToItsEpisodesOrToAllWhenNoneAreListed) {
+  EXPECT_TRUE(outage(0, 0, 1).appliesTo(7));
+  const Outage listed = outage(0, 0, 1, {1, 3});
+  EXPECT_TRUE(listed.appliesTo(3));
+  EXPECT_FALSE(listed.appliesTo(2));
+}
+
+Scenario tenIntervalScenario() {
+  RandomPlantSpec spec;
+  spec.state_dim = 2;
+  spec.sensor_count = 2;
+  spec.intervals = 10;
+  spec.horizon_s = 1.0;
+  return generateRandomScenario(spec);
+}
+
+TEST(DeliveryFactors, AreOneWithoutNetwork) {
+  const Scenario s = tenIntervalScenario();
+  EXPECT_EQ(deliveryFactors(s), Eigen::MatrixXd::Ones(10, 2));
+}
+
+TEST(DeliveryFactors, AreTheDeliveredFractionOfEachInterval) {
+  Scenario s = tenIntervalScenario();
+  NetworkSpec network = lossEverywhere(0.0, 2);
+  network.links[0].loss = 0.2;
+  network.outages.push_back(outage(0, 0.25, 0.75));
+  network.outages.push_back(outage(0, 0.3, 0.5));         // overlaps the first: counted once
+  network.outages.push_back(outage(1, 0.0, 0.5, {0}));    // one episode only: not planned for
+  s.network = network;
+  const Eigen::MatrixXd f = deliveryFactors(s);
+  ASSERT_EQ(f.rows(), 10);
+  ASSERT_EQ(f.cols(), 2);
+  EXPECT_NEAR(f(0, 0), 0.8, 1e-12);
+  EXPECT_NEAR(f(2, 0), 0.8 * 0.5, 1e-12);  // [0.2, 0.3): half of it down
+  EXPECT_NEAR(f(3, 0), 0.0, 1e-12);
+  EXPECT_NEAR(f(7, 0), 0.8 * 0.5, 1e-12);
+  EXPECT_NEAR(f(8, 0), 0.8, 1e-12);
+  EXPECT_EQ(f.col(1), Eigen::VectorXd::Ones(10));
+}
+
+}  // namespace
+}  // namespace sensornet
