@@ -239,6 +239,24 @@ class FusionCenter {
     return a;
   }
 
+  // The scenario's emulated network writes some of this sensor's measurements twice.
+  [[nodiscard]] bool duplicatesLink(int sensor) const {
+    const auto& network = inputs_.scenario().network;
+    return network && sensor >= 0 && static_cast<std::size_t>(sensor) < network->links.size() &&
+           network->links[static_cast<std::size_t>(sensor)].duplicate > 0.0;
+  }
+
+  // A copy the emulated network made of a measurement of an episode already closed (the copy
+  // can trail the tally, which travels on another topic): counted as the network's, not as a
+  // sample of a finished episode, while the sensor's tally leaves copies unaccounted for.
+  bool networkCopyAfterClose(std::uint32_t episode, int sensor) {
+    const auto left = copies_left_.find({episode, sensor});
+    if (left == copies_left_.end()) return false;
+    ++rejected_outside_[emulator::kNetworkDuplicate];
+    if (--left->second == 0) copies_left_.erase(left);
+    return true;
+  }
+
   void rejectOutside(const char* reason, const std::string& detail) {
     ++rejected_outside_[reason];
     spdlog::warn("rejected a measurement: {}", detail);
@@ -253,6 +271,7 @@ class FusionCenter {
     const std::uint32_t episode = arrival.episode;
     auto open = open_.find(episode);
     if (open == open_.end()) {
+      if (networkCopyAfterClose(episode, arrival.measurement.sensor)) return;
       if (inputs_.lastStarted() && episode <= *inputs_.lastStarted()) {
         rejectOutside("finished_episode", "of finished episode " + std::to_string(episode) +
                                               " (sensor " +
@@ -268,8 +287,12 @@ class FusionCenter {
   void route(OpenEpisode& open, emulator::FusedMeasurement m) {
     const int sensor = m.sensor;
     if (auto rejection = open.fusion->add(std::move(m))) {
-      spdlog::warn("rejected a measurement of episode {}: {}", open.fusion->episode(),
-                   rejection->detail);
+      // The emulated network's copies are expected; finish() tells them from other duplicates.
+      const auto level = rejection->reason == "duplicate" && duplicatesLink(sensor)
+                             ? spdlog::level::debug
+                             : spdlog::level::warn;
+      spdlog::log(level, "rejected a measurement of episode {}: {}", open.fusion->episode(),
+                  rejection->detail);
       return;
     }
     open.last_heard_ns[static_cast<std::size_t>(sensor)] = wallNowNs();
@@ -301,7 +324,8 @@ class FusionCenter {
     const auto j = static_cast<std::size_t>(t.sensor_id);
     open.tallies[j] = t;
     open.tallies[j].run_id = nullptr;  // borrowed from the sample; not kept
-    open.fusion->setTally(static_cast<int>(t.sensor_id), t.sent);
+    open.fusion->setTally(static_cast<int>(t.sensor_id),
+                          {t.sent, t.dropped_by_network, t.duplicated_by_network});
     open.last_heard_ns[j] = wallNowNs();
     open.last_tally_ns = std::max(open.last_tally_ns, t.wall_time_ns);
   }
@@ -435,6 +459,12 @@ class FusionCenter {
   void finishEpisode(std::uint32_t number, OpenEpisode& open) {
     emulator::EpisodeResult result = open.fusion->finish();
     result.backlog = open.backlog;
+    for (std::size_t j = 0; j < result.sensors.size(); ++j) {
+      const emulator::SensorTally& t = result.sensors[j];
+      if (t.duplicated_by_network > t.duplicates) {
+        copies_left_[{number, static_cast<int>(j)}] = t.duplicated_by_network - t.duplicates;
+      }
+    }
     checkKeepingUp(number, open, result);
     report_->addLatencies(result.latencies_s);
     const json entry = emulator::episodeEntry(result);
@@ -485,8 +515,8 @@ class FusionCenter {
     std::vector<sensornet_SensorCounts> counts;
     for (std::size_t j = 0; j < e.sensors.size(); ++j) {
       const emulator::SensorTally& t = e.sensors[j];
-      counts.push_back(
-          {static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late, t.sent, 0});
+      counts.push_back({static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late,
+                        t.sent, t.dropped_by_network});
     }
     sensornet_Report r{};
     r.run_id = dds::borrowString(options_.run.run_id);
@@ -511,6 +541,7 @@ class FusionCenter {
     r.summary.sent = s.sent;
     r.summary.received = s.received;
     r.summary.lost = s.lost;
+    r.summary.dropped_by_network = s.dropped_by_network;
     r.summary.latency_median_s = s.latency_median_s;
     r.summary.latency_p99_s = s.latency_p99_s;
     r.complete = e.complete;
@@ -542,9 +573,10 @@ class FusionCenter {
           "the coordinator ran " + std::to_string(end->episodes_run) + " episodes, " +
               std::to_string(s.episodes) + " were fused"));
     }
-    if (s.rejectedTotal() > 0) {
+    if (emulator::faultyRejections(s.rejected) > 0) {
       std::string reasons;
       for (const auto& [reason, count] : s.rejected) {
+        if (reason == emulator::kNetworkDuplicate) continue;  // scripted, not a fault
         reasons += (reasons.empty() ? "" : ", ") + std::to_string(count) + " " + reason;
       }
       faults_.push_back(emulator::faultEntry("rejected", kProcess, std::nullopt, std::nullopt,
@@ -601,6 +633,8 @@ class FusionCenter {
   std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
   std::map<std::uint32_t, std::vector<sensornet_EpisodeTally>> early_tallies_;
   std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
+  // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
+  std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
   emulator::RejectionCounts rejected_outside_;  // samples refused before reaching an episode
   json faults_ = json::array();
   json stalls_ = json::array();  // stalls absorbed (own and the sensors'), for the report

@@ -6,6 +6,14 @@
 
 namespace sensornet::emulator {
 
+std::uint64_t faultyRejections(const RejectionCounts& rejected) {
+  std::uint64_t total = 0;
+  for (const auto& [reason, count] : rejected) {
+    if (reason != kNetworkDuplicate) total += count;
+  }
+  return total;
+}
+
 EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plant,
                              const ScheduleBook& book, std::uint32_t episode,
                              BracketOf bracket_of)
@@ -50,10 +58,13 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   if (!(m.time_s >= 0.0 && m.time_s <= scenario_.horizon_s)) {
     return reject("malformed", who + ": time outside [0, T]");
   }
-  if (!seen_.insert({m.sensor, m.seq}).second) {
-    return reject("duplicate", who + ": duplicate seq " + std::to_string(m.seq));
-  }
   SensorTally& tally = tallies_[j];
+  if (!seen_.insert({m.sensor, m.seq}).second) {
+    // Counted by finish(): the network's copies and the rest apart, once the tally says how many
+    // copies the network made.
+    ++tally.duplicates;
+    return Rejection{"duplicate", who + ": duplicate seq " + std::to_string(m.seq)};
+  }
   ++tally.received;
   sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
   const std::size_t index = all_.size();
@@ -68,11 +79,13 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   return std::nullopt;
 }
 
-void EpisodeFusion::setTally(int sensor, std::uint64_t sent) {
+void EpisodeFusion::setTally(int sensor, const EpisodeCount& count) {
   if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
   SensorTally& tally = tallies_[static_cast<std::size_t>(sensor)];
   tally.tallied = true;
-  tally.sent = sent;
+  tally.sent = count.sent;
+  tally.dropped_by_network = count.dropped_by_network;
+  tally.duplicated_by_network = count.duplicated_by_network;
 }
 
 void EpisodeFusion::noteSentAtLeast(int sensor, std::uint64_t sent) {
@@ -83,7 +96,7 @@ void EpisodeFusion::noteSentAtLeast(int sensor, std::uint64_t sent) {
 
 bool EpisodeFusion::settled(int sensor) const {
   const SensorTally& t = tallies_[static_cast<std::size_t>(sensor)];
-  return t.tallied && t.received >= t.sent;
+  return t.tallied && t.received + t.dropped_by_network >= t.sent;
 }
 
 bool EpisodeFusion::allSettled() const { return unsettled().empty(); }
@@ -171,16 +184,20 @@ EpisodeResult EpisodeFusion::finish() {
       }
     }
   }
+  result.rejected = rejected_;
   for (std::size_t j = 0; j < tallies.size(); ++j) {
     SensorTally tally = tallies[j];
     if (!tally.tallied) tally.sent = sent_at_least_[j];
-    tally.lost = tally.sent > tally.received ? tally.sent - tally.received : 0;
+    const std::uint64_t accounted = tally.received + tally.dropped_by_network;
+    tally.lost = tally.sent > accounted ? tally.sent - accounted : 0;
+    const std::uint64_t by_network = std::min(tally.duplicates, tally.duplicated_by_network);
+    if (by_network > 0) result.rejected[kNetworkDuplicate] += by_network;
+    if (tally.duplicates > by_network) result.rejected["duplicate"] += tally.duplicates - by_network;
     result.sensors.push_back(tally);
   }
   for (const FusedMeasurement& m : all_) {
     result.latencies_s.push_back(1e-9 * static_cast<double>(m.receive_wall_ns - m.publish_wall_ns));
   }
-  result.rejected = rejected_;
   return result;
 }
 

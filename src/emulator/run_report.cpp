@@ -58,6 +58,8 @@ json episodeEntry(const EpisodeResult& r) {
           {"sent", perSensor(r, [](const SensorTally& t) { return t.sent; })},
           {"received", perSensor(r, [](const SensorTally& t) { return t.received; })},
           {"lost", perSensor(r, [](const SensorTally& t) { return t.lost; })},
+          {"dropped_by_network",
+           perSensor(r, [](const SensorTally& t) { return t.dropped_by_network; })},
           {"late", perSensor(r, [](const SensorTally& t) { return t.late; })},
           {"expected", perSensor(r, [](const SensorTally& t) { return t.expected; })},
           {"wrong_version", perSensor(r, [](const SensorTally& t) { return t.wrong_version; })},
@@ -95,6 +97,7 @@ RunSummary RunReport::summary() const {
     s.sent += sumOf(e.at("sent"));
     s.received += sumOf(e.at("received"));
     s.lost += sumOf(e.at("lost"));
+    s.dropped_by_network += sumOf(e.value("dropped_by_network", json::array()));
     s.late += sumOf(e.value("late", json::array()));
     for (const json& x : e.value("expected", json::array())) s.expected += x.get<double>();
     if (const auto rejected = e.find("rejected"); rejected != e.end() && rejected->is_object()) {
@@ -155,8 +158,8 @@ json RunReport::toJson(const std::string& status, const json& faults,
                        const json& schedule_versions, const json& extra) const {
   const RunSummary s = summary();
   const auto sensors = static_cast<std::size_t>(sensor_count_);
-  std::vector<std::uint64_t> sent(sensors), received(sensors), lost(sensors), late(sensors),
-      wrong(sensors);
+  std::vector<std::uint64_t> sent(sensors), received(sensors), lost(sensors), dropped(sensors),
+      late(sensors), wrong(sensors);
   std::vector<double> expected(sensors);
   const auto add = [](auto& totals, const json& values) {
     for (std::size_t j = 0; j < values.size() && j < totals.size(); ++j) {
@@ -167,6 +170,7 @@ json RunReport::toJson(const std::string& status, const json& faults,
     add(sent, e.at("sent"));
     add(received, e.at("received"));
     add(lost, e.at("lost"));
+    add(dropped, e.value("dropped_by_network", json::array()));
     add(late, e.value("late", json::array()));
     add(wrong, e.value("wrong_version", json::array()));
     add(expected, e.value("expected", json::array()));
@@ -177,6 +181,7 @@ json RunReport::toJson(const std::string& status, const json& faults,
                           {"sent", sent[j]},
                           {"received", received[j]},
                           {"lost", lost[j]},
+                          {"dropped_by_network", dropped[j]},
                           {"late", late[j]},
                           {"expected", expected[j]},
                           {"wrong_version", wrong[j]}});
@@ -205,6 +210,7 @@ json RunReport::toJson(const std::string& status, const json& faults,
         {"received", s.received},
         {"expected", s.expected},
         {"lost", s.lost},
+        {"dropped_by_network", s.dropped_by_network},
         {"late", s.late},
         {"rejected", s.rejectedTotal()},
         {"rejected_by_reason", s.rejected}}},

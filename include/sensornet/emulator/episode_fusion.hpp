@@ -6,7 +6,7 @@
 //   EpisodeFusion fusion(scenario, plant, book, episode, bracketOf);
 //   fusion.add(measurement);           // any order; returns the rejection when it refuses one
 //   fusion.fuseUpTo(watermark_s);      // online: fuse what can no longer be overtaken
-//   fusion.setTally(j, sent);          // sensor j says it published `sent` in the episode
+//   fusion.setTally(j, {sent, dropped, duplicated});  // sensor j's end-of-episode tally
 //   if (fusion.allSettled()) ...;      // every tally in, and every sent measurement received
 //   EpisodeResult r = fusion.finish(); // fuse the rest, propagate to T, bracket, account
 //
@@ -17,10 +17,14 @@
 // the realized cost is the same floating-point number whatever the arrival order and timing:
 // a run with a stall fuses exactly what a run without one does.
 //
-// Accounting, per sensor (DESIGN.md): sent = received + lost. `sent` is the sensor's own
-// end-of-episode tally; without one, the best lower bound known (its last status, the highest
-// seq received + 1), and the episode is incomplete. Rejected samples are counted by reason and
-// never fused nor received.
+// Accounting, per sensor (DESIGN.md): sent = received + lost + dropped_by_network. `sent` is the
+// sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
+// the highest seq received + 1), and the episode is incomplete. The emulated network (the
+// scenario's `network:`) drops some measurements before they are written and writes some twice:
+// the tally says how many. Dropped ones are not lost (the episode can still be complete); of the
+// copies refused as "duplicate", up to the tally's duplicated_by_network are counted as
+// "network_duplicate" instead: a scripted impairment, not a fault. Rejected samples are counted
+// by reason and never fused nor received.
 //
 // The bracket in force: with one schedule version over the episode, [J(P_info), J(P_cov)] of
 // that version from P0 (Corollary 1 of the first paper). When versions switched during the
@@ -57,10 +61,20 @@ struct FusedMeasurement {
   std::int64_t receive_wall_ns = 0;
 };
 
+// What a sensor says of one episode at its end (the EpisodeTally topic).
+struct EpisodeCount {
+  std::uint64_t sent = 0;                   // seq 0 .. sent-1
+  std::uint64_t dropped_by_network = 0;     // of those, never written (the emulated network)
+  std::uint64_t duplicated_by_network = 0;  // written twice by the emulated network
+};
+
 struct SensorTally {
   std::uint64_t sent = 0;           // the sensor's tally, else the best lower bound (see above)
   std::uint64_t received = 0;
-  std::uint64_t lost = 0;           // sent - received
+  std::uint64_t lost = 0;           // sent - received - dropped_by_network
+  std::uint64_t dropped_by_network = 0;     // from the tally
+  std::uint64_t duplicated_by_network = 0;  // from the tally
+  std::uint64_t duplicates = 0;     // copies of a received seq refused (network's or not)
   double expected = 0.0;            // ∫ λ_j dt under the versions in force
   std::uint64_t late = 0;           // arrived after the filter had passed their time
   std::uint64_t wrong_version = 0;  // drawn under another version than the one in force
@@ -69,6 +83,11 @@ struct SensorTally {
 
 // Rejected samples by reason ("malformed", "duplicate", "other_run", "finished_episode", ...).
 using RejectionCounts = std::map<std::string, std::uint64_t>;
+
+// The rejection reason of a copy the emulated network made on purpose: counted, never a fault.
+inline constexpr const char* kNetworkDuplicate = "network_duplicate";
+// The rejected samples that are faults: every reason but kNetworkDuplicate.
+[[nodiscard]] std::uint64_t faultyRejections(const RejectionCounts& rejected);
 
 // Why a sample was refused: a short key for the counts, and one line for the log.
 struct Rejection {
@@ -111,11 +130,12 @@ class EpisodeFusion {
   std::optional<Rejection> add(FusedMeasurement m);
   // Counts a sample of this episode refused before it got here.
   void countRejected(const std::string& reason) { ++rejected_[reason]; }
-  // The end-of-episode tally of `sensor`: it published `sent` measurements (seq 0..sent-1).
-  void setTally(int sensor, std::uint64_t sent);
+  // The end-of-episode tally of `sensor`: it published `count.sent` measurements (seq
+  // 0..sent-1), of which the emulated network dropped and duplicated the given numbers.
+  void setTally(int sensor, const EpisodeCount& count);
   // A lower bound of what `sensor` published, from its status (used when no tally comes).
   void noteSentAtLeast(int sensor, std::uint64_t sent);
-  // Its tally is in and every measurement it sent was received.
+  // Its tally is in and every measurement it sent was received or dropped by the network.
   [[nodiscard]] bool settled(int sensor) const;
   [[nodiscard]] bool allSettled() const;
   [[nodiscard]] std::vector<int> unsettled() const;

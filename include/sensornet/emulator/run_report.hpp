@@ -15,7 +15,7 @@
 // mean bracket are over complete episodes only. The interval is Student's t with K - 1 degrees
 // of freedom, clipped below at zero (a cost is never negative); with fewer than 2 complete
 // episodes there is no interval and `meets_bracket` is undetermined (null in JSON). Counts
-// (sent, received, lost, late, rejected) are over every episode.
+// (sent, received, lost, dropped_by_network, late, rejected) are over every episode.
 
 #include <cstdint>
 #include <filesystem>
@@ -46,6 +46,7 @@ struct RunSummary {
   std::uint64_t received = 0;
   double expected = 0.0;
   std::uint64_t lost = 0;
+  std::uint64_t dropped_by_network = 0;   // by the emulated network: neither received nor lost
   std::uint64_t late = 0;
   RejectionCounts rejected;               // by reason, over episodes and the run's wire
   double latency_median_s = 0.0;

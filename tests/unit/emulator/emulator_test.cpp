@@ -198,7 +198,7 @@ TEST_F(EpisodeFusionTest, FusesInTimestampOrderWhateverTheArrivalOrder) {
     for (const auto& m : all) ++sent[static_cast<std::size_t>(m.sensor)];
     for (int j = 0; j < 4; ++j) {
       EXPECT_FALSE(fusion.settled(j));
-      fusion.setTally(j, sent[static_cast<std::size_t>(j)]);
+      fusion.setTally(j, {sent[static_cast<std::size_t>(j)]});
     }
     EXPECT_TRUE(fusion.allSettled());
     const EpisodeResult r = fusion.finish();
@@ -236,7 +236,7 @@ TEST_F(EpisodeFusionTest, RejectsMalformedAndDuplicateMeasurementsAndCountsLosse
   EXPECT_FALSE(fusion.add(all[0]));
   EXPECT_TRUE(fusion.add(all[0]));  // duplicate seq
   // Sensor all[0].sensor says it sent one more than it delivered: one lost, not settled.
-  fusion.setTally(all[0].sensor, 2);
+  fusion.setTally(all[0].sensor, {2});
   EXPECT_FALSE(fusion.settled(all[0].sensor));
   const EpisodeResult r = fusion.finish();
   EXPECT_EQ(r.rejected, (RejectionCounts{{"duplicate", 1}, {"malformed", 2}, {"unknown_sensor", 1}}));
@@ -262,11 +262,11 @@ TEST_F(EpisodeFusionTest, CountsALostTailAndFallsBackToTheBestLowerBoundWithoutA
   };
   EXPECT_FALSE(fusion.add(one(0, 0)));
   EXPECT_FALSE(fusion.add(one(0, 2)));
-  fusion.setTally(0, 7);
+  fusion.setTally(0, {7});
   EXPECT_FALSE(fusion.add(one(1, 0)));
   fusion.noteSentAtLeast(1, 4);
   EXPECT_FALSE(fusion.add(one(2, 5)));
-  fusion.setTally(3, 0);  // sent nothing: settled
+  fusion.setTally(3, {0});  // sent nothing: settled
   EXPECT_EQ(fusion.unsettled(), (std::vector<int>{0, 1, 2}));
   const EpisodeResult r = fusion.finish();
   const std::uint64_t sent[] = {7, 4, 6, 0}, received[] = {2, 1, 1, 0};
@@ -276,6 +276,62 @@ TEST_F(EpisodeFusionTest, CountsALostTailAndFallsBackToTheBestLowerBoundWithoutA
     EXPECT_EQ(r.sensors[j].sent, r.sensors[j].received + r.sensors[j].lost) << j;
   }
   EXPECT_FALSE(r.complete);
+}
+
+// The emulated network dropped two of sensor a's measurements and wrote three twice: the drops
+// are neither received nor lost (the episode is complete), the three copies are the network's
+// and a fourth copy is a real duplicate. Sensor b: one dropped and one more missing: lost 1.
+TEST_F(EpisodeFusionTest, NetworkDropsAreNotLossesAndItsCopiesAreNoFault) {
+  const std::vector<FusedMeasurement> all = measurements(3);
+  std::vector<std::vector<FusedMeasurement>> by_sensor(4);
+  for (const auto& m : all) by_sensor[static_cast<std::size_t>(m.sensor)].push_back(m);
+  const auto& a = by_sensor[0];
+  const auto& b = by_sensor[1];
+  ASSERT_GE(a.size(), 5u);
+  ASSERT_GE(b.size(), 3u);
+  EpisodeFusion fusion(scenario_, plant_, book_, 3, bracketOf());
+  std::vector<FusedMeasurement> delivered;
+  for (std::size_t i = 2; i < a.size(); ++i) delivered.push_back(a[i]);  // seq 0, 1 dropped
+  for (std::size_t i = 2; i < b.size(); ++i) delivered.push_back(b[i]);  // seq 0 dropped, 1 lost
+  for (std::size_t j = 2; j < 4; ++j) {
+    for (const auto& m : by_sensor[j]) delivered.push_back(m);
+  }
+  for (const auto& m : delivered) EXPECT_FALSE(fusion.add(m));
+  for (int copy = 0; copy < 4; ++copy) {
+    const auto rejection = fusion.add(a[2 + static_cast<std::size_t>(copy % 2)]);
+    ASSERT_TRUE(rejection);
+    EXPECT_EQ(rejection->reason, "duplicate");
+  }
+  fusion.setTally(0, {a.size(), 2, 3});
+  EXPECT_TRUE(fusion.settled(0));
+  fusion.setTally(1, {b.size(), 1, 0});
+  EXPECT_FALSE(fusion.settled(1));
+  for (int j = 2; j < 4; ++j) fusion.setTally(j, {by_sensor[static_cast<std::size_t>(j)].size()});
+  EXPECT_EQ(fusion.unsettled(), std::vector<int>{1});
+  const EpisodeResult r = fusion.finish();
+  EXPECT_EQ(r.rejected, (RejectionCounts{{"duplicate", 1}, {kNetworkDuplicate, 3}}));
+  EXPECT_EQ(faultyRejections(r.rejected), 1u);
+  EXPECT_EQ(r.sensors[0].received, a.size() - 2);
+  EXPECT_EQ(r.sensors[0].dropped_by_network, 2u);
+  EXPECT_EQ(r.sensors[0].lost, 0u);
+  EXPECT_EQ(r.sensors[1].received, b.size() - 2);
+  EXPECT_EQ(r.sensors[1].dropped_by_network, 1u);
+  EXPECT_EQ(r.sensors[1].lost, 1u);
+  for (const SensorTally& t : r.sensors) {
+    EXPECT_EQ(t.sent, t.received + t.lost + t.dropped_by_network);
+  }
+  EXPECT_FALSE(r.complete);  // sensor b lost one
+  EXPECT_EQ(r.realized_cost, inOrderCost(delivered));
+
+  // Without the lost one, the same drops leave the episode complete.
+  EpisodeFusion whole(scenario_, plant_, book_, 3, bracketOf());
+  for (const auto& m : delivered) EXPECT_FALSE(whole.add(m));
+  EXPECT_FALSE(whole.add(b[1]));
+  whole.setTally(0, {a.size(), 2, 0});
+  whole.setTally(1, {b.size(), 1, 0});
+  for (int j = 2; j < 4; ++j) whole.setTally(j, {by_sensor[static_cast<std::size_t>(j)].size()});
+  EXPECT_TRUE(whole.allSettled());
+  EXPECT_TRUE(whole.finish().complete);
 }
 
 TEST_F(EpisodeFusionTest, OnlineWatermarksNeverChangeTheRealizedCost) {
@@ -382,6 +438,28 @@ TEST(RunReport, SummarizesCompleteEpisodesWithAStudentTInterval) {
   EXPECT_DOUBLE_EQ(s.expected, 22.5);
   EXPECT_NEAR(s.latency_median_s, 0.0025, 1e-15);
   EXPECT_DOUBLE_EQ(quantile({1.0, 2.0, 3.0, 4.0, 5.0}, 0.99), 4.96);
+}
+
+TEST(RunReport, CountsWhatTheNetworkDroppedPerEpisodePerSensorAndInTotal) {
+  RunReport report("r", "d", 2, 3);
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    EpisodeResult e = episodeWith(i, 2.0, 1.0, true);
+    e.sensors[1].sent = 10 + i;
+    e.sensors[1].received = 7;
+    e.sensors[1].dropped_by_network = 3 + i;
+    e.rejected[kNetworkDuplicate] = 2;
+    report.add(episodeEntry(e));
+  }
+  const nlohmann::json doc = report.toJson("completed", nlohmann::json::array(), nlohmann::json::array());
+  EXPECT_EQ(doc.at("per_episode").at(2).at("dropped_by_network"), nlohmann::json({0, 5}));
+  EXPECT_EQ(doc.at("sensors").at(0).at("dropped_by_network"), 0);
+  EXPECT_EQ(doc.at("sensors").at(1).at("dropped_by_network"), 12);
+  EXPECT_EQ(doc.at("sensors").at(1).at("sent"), 33);
+  EXPECT_EQ(doc.at("summary").at("dropped_by_network"), 12);
+  EXPECT_EQ(doc.at("summary").at("rejected_by_reason").at(kNetworkDuplicate), 6);
+  const RunSummary s = report.summary();
+  EXPECT_EQ(s.sent, s.received + s.lost + s.dropped_by_network);
+  EXPECT_EQ(faultyRejections(s.rejected), 0u);
 }
 
 TEST(RunReport, ClipsTheIntervalAtZeroAndLeavesOneEpisodeUndetermined) {
