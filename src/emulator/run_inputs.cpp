@@ -56,7 +56,9 @@ void RunInputs::readSchedules(Update& update) {
     try {
       ScheduleVersion v = scheduleFromWire(*received.sample, run_->scenario, run_->digest);
       const auto number = v.version;
-      if (book_.add(std::move(v)) == ScheduleBook::Outcome::Stale) {
+      const ScheduleBook::Outcome outcome = book_.add(std::move(v));
+      if (outcome == ScheduleBook::Outcome::Duplicate) continue;  // a restarted coordinator's
+      if (outcome == ScheduleBook::Outcome::Stale) {
         reject("stale_schedule");
         spdlog::warn("refused stale schedule version {} (have {})", number,
                      book_.latest().version);

@@ -12,8 +12,23 @@ bool atOrBefore(const ScheduleVersion& v, std::uint32_t episode, double t) {
 
 }  // namespace
 
+bool identical(const ScheduleVersion& a, const ScheduleVersion& b) {
+  const RateSchedule& x = a.schedule;
+  const RateSchedule& y = b.schedule;
+  return a.version == b.version && a.effective_episode == b.effective_episode &&
+         a.effective_time_s == b.effective_time_s && x.horizon() == y.horizon() &&
+         x.rates().rows() == y.rates().rows() && x.rates().cols() == y.rates().cols() &&
+         x.rates() == y.rates() && a.surrogate == b.surrogate &&
+         a.bracket.info == b.bracket.info && a.bracket.cov == b.bracket.cov &&
+         a.command_id == b.command_id;
+}
+
 ScheduleBook::Outcome ScheduleBook::add(ScheduleVersion v) {
-  if (!versions_.empty() && v.version <= versions_.back().version) return Outcome::Stale;
+  if (!versions_.empty() && v.version <= versions_.back().version) {
+    const auto held = std::find_if(versions_.begin(), versions_.end(),
+                                   [&](const ScheduleVersion& h) { return h.version == v.version; });
+    return held != versions_.end() && identical(*held, v) ? Outcome::Duplicate : Outcome::Stale;
+  }
   versions_.push_back(std::move(v));
   return Outcome::Accepted;
 }

@@ -1,7 +1,9 @@
 #pragma once
 // The schedule versions of a run, as every process keeps them. Version v is in force from its
 // effective point (episode, emulated time) until a higher version's effective point; versions
-// only increase, so a stale one (not above the highest seen) is refused.
+// only increase, so a stale one (not above the highest seen) is refused. A version the book
+// already holds with identical content (a restarted coordinator republishes its versions) is a
+// duplicate: nothing changes, and it is no error.
 //
 //   ScheduleBook book;
 //   book.add(initial);                                    // version 1 from (0, 0)
@@ -28,6 +30,9 @@ struct ScheduleVersion {
   std::uint64_t command_id = 0;
 };
 
+// Same number, effective point, rates (bit for bit), surrogate, bracket and command id.
+[[nodiscard]] bool identical(const ScheduleVersion& a, const ScheduleVersion& b);
+
 // A stretch [from_s, to_s) of one episode under one version.
 struct ScheduleSegment {
   double from_s = 0.0;
@@ -37,9 +42,11 @@ struct ScheduleSegment {
 
 class ScheduleBook {
  public:
-  enum class Outcome { Accepted, Stale };
+  enum class Outcome { Accepted, Duplicate, Stale };
 
-  // Accepted when v.version is above every version seen; Stale otherwise (nothing changes).
+  // Accepted when v.version is above every version seen; Duplicate when the book holds a
+  // version of that number with identical content; Stale otherwise (nothing changes but on
+  // Accepted).
   Outcome add(ScheduleVersion v);
 
   [[nodiscard]] bool empty() const { return versions_.empty(); }

@@ -1,0 +1,296 @@
+#include "sensornet/emulator/replanner.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cmath>
+#include <utility>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/io/command_line.hpp"
+#include "sensornet/io/scenario_file.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+std::string sourceOf(std::uint64_t command_id) {
+  return "command " + std::to_string(command_id);
+}
+
+bool stalledAtAStationaryPoint(const PlanResult& plan) {
+  return plan.status == "stalled" && plan.kkt_residual <= Replanner::kStationaryResidual;
+}
+
+// Throws unless the planner reports the plan as one to publish (see the header).
+void requireOptimal(const PlanResult& plan, const std::string& which,
+                    const std::string& surrogate, std::uint64_t command_id) {
+  if (plan.status == "optimal" || plan.status == "acceptable" ||
+      plan.status == "not_optimized" || stalledAtAStationaryPoint(plan)) {
+    return;
+  }
+  throw InputError(sourceOf(command_id), "plan",
+                   "a plan the planner reports as optimal, but the " + which + " " + surrogate +
+                       " plan ended '" + plan.status + "' (kkt residual " +
+                       formatNumber(plan.kkt_residual) + " after " +
+                       std::to_string(plan.iterations) +
+                       " iterations); nothing was published, the settings are unchanged");
+}
+
+std::string describePlan(const PlanResult& plan) {
+  if (plan.status == "acceptable") return "acceptable: IPOPT's looser tolerance";
+  if (stalledAtAStationaryPoint(plan)) {
+    return "stalled, accepted: kkt residual " + formatNumber(plan.kkt_residual) + " <= " +
+           formatNumber(Replanner::kStationaryResidual);
+  }
+  return plan.status;
+}
+
+std::set<int> checkedSensorIds(std::span<const std::uint32_t> ids, int sensor_count,
+                               std::uint64_t command_id) {
+  std::set<int> sensors;
+  for (const std::uint32_t id : ids) {
+    if (id >= static_cast<std::uint32_t>(sensor_count)) {
+      throw InputError(sourceOf(command_id), "sensor_ids",
+                       "ids below M = " + std::to_string(sensor_count));
+    }
+    sensors.insert(static_cast<int>(id));
+  }
+  return sensors;
+}
+
+// Four significant digits: effective times fall on ticks of T / 2^20 and would read 1.2499990463.
+std::string shortSeconds(double seconds) {
+  std::array<char, 32> text{};
+  const int length = std::snprintf(text.data(), text.size(), "%.4g", seconds);
+  return std::string(text.data(), static_cast<std::size_t>(std::max(length, 0)));
+}
+
+}  // namespace
+
+std::set<int> ReplanSettings::outOfService() const {
+  std::set<int> out = excluded;
+  out.insert(failed.begin(), failed.end());
+  return out;
+}
+
+bool ReplanSettings::operator==(const ReplanSettings& other) const {
+  return surrogate == other.surrogate && excluded == other.excluded && failed == other.failed &&
+         budget.size() == other.budget.size() && budget == other.budget;
+}
+
+ReplanSettings initialSettings(const Scenario& scenario, PlanSurrogate surrogate) {
+  ReplanSettings settings;
+  settings.surrogate = surrogate;
+  settings.budget = scenario.constraints.b;
+  return settings;
+}
+
+std::string Replan::versionsInBrief() const {
+  std::string text;
+  for (const ScheduleVersion& v : versions) {
+    if (!text.empty()) text += "; ";
+    text += "version " + std::to_string(v.version) + " from ";
+    if (v.effective_time_s > 0.0) text += shortSeconds(v.effective_time_s) + " s of ";
+    text += "episode " + std::to_string(v.effective_episode);
+  }
+  return text;
+}
+
+Replanner::Replanner(Scenario scenario, const EmulatedPlant& plant, ReplanSettings settings,
+                     ReplannerOptions options)
+    : scenario_(std::move(scenario)),
+      plant_(plant),
+      settings_(std::move(settings)),
+      options_(std::move(options)) {}
+
+void Replanner::noteFailed(std::span<const std::uint32_t> sensors, std::uint64_t command_id) {
+  const std::set<int> failed = checkedSensorIds(sensors, scenario_.sensorCount(), command_id);
+  settings_.failed.insert(failed.begin(), failed.end());
+}
+
+Replan Replanner::changeSurrogate(std::string_view surrogate, const ScheduleBook& book,
+                                  const RunMoment& now, std::uint64_t command_id) const {
+  ReplanSettings settings = settings_;
+  if (surrogate == "info") {
+    settings.surrogate = PlanSurrogate::Information;
+  } else if (surrogate == "cov") {
+    settings.surrogate = PlanSurrogate::Covariance;
+  } else if (surrogate == "uniform") {
+    settings.surrogate = PlanSurrogate::Uniform;
+  } else {
+    throw InputError(sourceOf(command_id), "surrogate",
+                     "info, cov or uniform, got '" + std::string(surrogate) + "'");
+  }
+  return plan(std::move(settings), book, now, command_id);
+}
+
+Replan Replanner::exclude(std::span<const std::uint32_t> sensors, const ScheduleBook& book,
+                          const RunMoment& now, std::uint64_t command_id) const {
+  ReplanSettings settings = settings_;
+  const std::set<int> excluded = checkedSensorIds(sensors, scenario_.sensorCount(), command_id);
+  settings.excluded.insert(excluded.begin(), excluded.end());
+  if (static_cast<int>(settings.outOfService().size()) == scenario_.sensorCount()) {
+    throw InputError(sourceOf(command_id), "sensor_ids", "at least one sensor left in service");
+  }
+  return plan(std::move(settings), book, now, command_id);
+}
+
+Replan Replanner::setBudget(std::span<const double> budget, const ScheduleBook& book,
+                            const RunMoment& now, std::uint64_t command_id) const {
+  const std::string source = sourceOf(command_id);
+  if (budget.size() != static_cast<std::size_t>(settings_.budget.size())) {
+    throw InputError(source, "budget",
+                     std::to_string(settings_.budget.size()) + " values (one per row of C)");
+  }
+  for (const double value : budget) {
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      throw InputError(source, "budget", "finite values > 0, got " + formatNumber(value));
+    }
+  }
+  ReplanSettings settings = settings_;
+  settings.budget = Eigen::Map<const Eigen::VectorXd>(budget.data(), settings_.budget.size());
+  // The rules of a scenario file hold for a live budget too (at most
+  // kMaxMeasurementsPerHorizon expected measurements per sensor and horizon, ...).
+  try {
+    validateScenario(plannedFor(settings), source);
+  } catch (const InputError& e) {
+    throw InputError(source, "budget", e.expected());
+  }
+  return plan(std::move(settings), book, now, command_id);
+}
+
+Replan Replanner::adoptScheduleFile(const std::string& schedule_json, const ScheduleBook& book,
+                                    const RunMoment& now, std::uint64_t command_id) const {
+  const std::string source = sourceOf(command_id);
+  RateSchedule schedule = parseScheduleJson(schedule_json, source);
+  const Scenario planned_for = plannedFor(settings_);
+  const Feasibility feasibility = checkFeasibility(schedule, planned_for, 1e-9);
+  if (!feasibility.feasible) throw InputError(source, "rates", feasibility.reason);
+  Replan r;
+  r.versions.push_back(makeVersion(planned_for, std::move(schedule), "file", command_id,
+                                   now.nextEpisode(), 0.0));
+  r.versions.back().version = book.latest().version + 1;
+  r.summary = "schedule file";
+  r.settings = settings_;
+  return r;
+}
+
+Replan Replanner::replanAsIs(const ScheduleBook& book, const RunMoment& now,
+                             std::uint64_t command_id) const {
+  if (static_cast<int>(settings_.outOfService().size()) == scenario_.sensorCount()) {
+    throw InputError(sourceOf(command_id), "sensor_ids", "at least one sensor left in service");
+  }
+  return plan(settings_, book, now, command_id);
+}
+
+// The mid-episode version (when one is possible) and the full-horizon one; see the header.
+Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const RunMoment& now,
+                       std::uint64_t command_id) const {
+  const Scenario planned_for = plannedFor(settings);
+  const std::string surrogate(describe(settings.surrogate));
+  const auto notInThisEpisode = [&now](const char* why) {
+    return "not in episode " + std::to_string(now.episode) + ": " + why + "; ";
+  };
+  std::string summary;
+  std::optional<PlanResult> tail_plan;
+  double at = 0.0;
+  if (now.running && !(now.fused && now.fused->episode == now.episode)) {
+    summary = notInThisEpisode("no fused covariance of it yet");
+  } else if (now.running) {
+    at = plant_.timeOf(plant_.tickAt(emulatedNow(now) + marginEmulated()));
+    if (at >= scenario_.horizon_s) {
+      summary = notInThisEpisode("it ends within the switch margin");
+    } else {
+      PlanRequest request = planRequest(settings, book);
+      request.start_time = at;
+      request.start_covariance = covarianceExpectedAt(settings, book, now, at);
+      tail_plan = planSchedule(planned_for, request);
+      requireOptimal(*tail_plan, "mid-episode", surrogate, command_id);
+    }
+  }
+  const PlanResult full_plan = planSchedule(planned_for, planRequest(settings, book));
+  requireOptimal(full_plan, "full-horizon", surrogate, command_id);
+
+  Replan r;
+  std::uint32_t number = book.latest().version;
+  if (tail_plan) {
+    // Planning took time: every process must still hear of the version before it takes effect.
+    const double earliest =
+        plant_.timeOf(plant_.tickAt(emulatedNow(now) + 0.5 * marginEmulated()) + 1);
+    const double effective = std::max(at, earliest);
+    if (effective < scenario_.horizon_s) {
+      r.versions.push_back(makeVersion(planned_for, tail_plan->schedule, surrogate, command_id,
+                                       now.episode, effective));
+      r.versions.back().version = ++number;
+      summary = "version " + std::to_string(number) + " from " + std::to_string(effective) +
+                " s of episode " + std::to_string(now.episode) + " (" +
+                describePlan(*tail_plan) + ", planned from the fused covariance at " +
+                std::to_string(now.fused->time_s) + " s carried to " + std::to_string(at) +
+                " s); ";
+    } else {
+      summary = notInThisEpisode("planning outlasted it");
+    }
+  }
+  r.versions.push_back(makeVersion(planned_for, full_plan.schedule, surrogate, command_id,
+                                   now.nextEpisode(), 0.0));
+  r.versions.back().version = ++number;
+  r.summary = summary + "version " + std::to_string(number) + " from episode " +
+              std::to_string(now.nextEpisode()) + " (" + surrogate + ", " +
+              describePlan(full_plan) + ")";
+  r.settings = std::move(settings);
+  return r;
+}
+
+PlanRequest Replanner::planRequest(const ReplanSettings& settings,
+                                   const ScheduleBook& book) const {
+  PlanRequest request;
+  request.surrogate = settings.surrogate;
+  const std::set<int> out = settings.outOfService();
+  request.excluded_sensors.assign(out.begin(), out.end());
+  request.warm_start = book.latest().schedule;
+  request.max_seconds = options_.max_plan_seconds;
+  request.delivery = options_.delivery;
+  return request;
+}
+
+// The latest fused covariance carried forward to `at` by the surrogate of the plan's form
+// under the version in force: the plan of the rest of the episode starts from the covariance
+// expected when it takes effect.
+Eigen::MatrixXd Replanner::covarianceExpectedAt(const ReplanSettings& settings,
+                                                const ScheduleBook& book, const RunMoment& now,
+                                                double at) const {
+  const FusedCovariance& fused = *now.fused;
+  const ScheduleVersion* v = book.inForce(now.episode, fused.time_s);
+  if (v == nullptr || !(fused.time_s < at)) return fused.covariance;
+  RolloutOptions carry;
+  carry.start_time = fused.time_s;
+  carry.end_time = at;
+  carry.start_covariance = fused.covariance;
+  return rollout(formOf(settings.surrogate), scenario_, v->schedule, carry).covariances.back();
+}
+
+Scenario Replanner::plannedFor(const ReplanSettings& settings) const {
+  Scenario planned_for = scenario_;
+  planned_for.constraints.b = settings.budget;
+  return planned_for;
+}
+
+ScheduleVersion Replanner::makeVersion(const Scenario& planned_for, RateSchedule schedule,
+                                       std::string surrogate, std::uint64_t command_id,
+                                       std::uint32_t episode, double at) const {
+  ScheduleVersion v;
+  v.effective_episode = episode;
+  v.effective_time_s = at;
+  v.bracket = computeBracket(planned_for, schedule);
+  v.schedule = std::move(schedule);
+  v.surrogate = std::move(surrogate);
+  v.command_id = command_id;
+  return v;
+}
+
+double Replanner::emulatedNow(const RunMoment& now) const {
+  return std::max(0.0, now.emulated_now());
+}
+
+}  // namespace sensornet::emulator

@@ -1,0 +1,315 @@
+// The coordinator's live re-planning without DDS (emulator::Replanner): refusals, the switch
+// tick, the versions of a change in and between episodes, the budget rules, and the covariance a
+// mid-episode plan starts from, each checked against a direct computation with the math core
+// (the tick grid, validateScenario, a rollout and a plan made here).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/planner.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/emulator/replanner.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+// n = 3, M = 4, N = 6 intervals of 0.5 s: plans take milliseconds.
+Scenario smallScenario() {
+  RandomPlantSpec spec;
+  spec.state_dim = 3;
+  spec.sensor_count = 4;
+  spec.seed = 9;
+  spec.intervals = 6;
+  spec.budget = 8.0;
+  return generateRandomScenario(spec);
+}
+
+class Replanning : public ::testing::Test {
+ protected:
+  Replanning() : scenario_(smallScenario()), plant_(scenario_, 1) {
+    PlanRequest request;
+    request.surrogate = PlanSurrogate::Information;
+    ScheduleVersion v1;
+    v1.version = 1;
+    v1.schedule = planSchedule(scenario_, request).schedule;
+    v1.surrogate = "info";
+    v1.bracket = computeBracket(scenario_, v1.schedule);
+    book_.add(v1);
+  }
+
+  Replanner replanner(ReplannerOptions options = {}) const {
+    return Replanner(scenario_, plant_, initialSettings(scenario_, PlanSurrogate::Information),
+                     options);
+  }
+
+  // Episode 2 runs, `now_s` into it (a clock that stands still), with a fused covariance of
+  // it at 0.9 s.
+  RunMoment running(double now_s) const {
+    RunMoment now;
+    now.running = true;
+    now.episode = 2;
+    now.fused = FusedCovariance{2, 0.9, fusedP()};
+    now.emulated_now = [now_s] { return now_s; };
+    return now;
+  }
+  Eigen::MatrixXd fusedP() const { return 0.3 * scenario_.plant.P0; }
+  bool onTick(double t) const { return plant_.timeOf(plant_.tickAt(t)) == t; }
+
+  Scenario scenario_;
+  EmulatedPlant plant_;
+  ScheduleBook book_;
+};
+
+TEST_F(Replanning, RefusalsLeaveTheSettingsUnchanged) {
+  Replanner r = replanner();
+  const ReplanSettings before = r.settings();
+  const RunMoment now = running(1.0);
+  const std::vector<std::uint32_t> unknown = {7};
+  const std::vector<std::uint32_t> all = {0, 1, 2, 3};
+  const std::vector<double> two = {4.0, 4.0};
+  const std::vector<double> negative = {-1.0};
+  const std::vector<double> not_a_number = {std::nan("")};
+  EXPECT_THROW((void)r.changeSurrogate("newton", book_, now, 1), InputError);
+  EXPECT_THROW((void)r.exclude(unknown, book_, now, 2), InputError);
+  EXPECT_THROW((void)r.exclude(all, book_, now, 3), InputError);
+  EXPECT_THROW((void)r.setBudget(two, book_, now, 4), InputError);
+  EXPECT_THROW((void)r.setBudget(negative, book_, now, 5), InputError);
+  EXPECT_THROW((void)r.setBudget(not_a_number, book_, now, 6), InputError);
+  EXPECT_THROW((void)r.adoptScheduleFile("{\"horizon\": 3", book_, now, 7), InputError);
+  // Twice the budget on every sensor: infeasible under C λ <= b.
+  const Eigen::MatrixXd doubled = 2.0 * book_.latest().schedule.rates();
+  std::string json = "{\"horizon\": 3, \"intervals\": 6, \"rates\": [";
+  for (int k = 0; k < 6; ++k) {
+    json += k == 0 ? "[" : ",[";
+    for (int j = 0; j < 4; ++j) json += (j == 0 ? "" : ",") + std::to_string(doubled(k, j));
+    json += "]";
+  }
+  json += "]}";
+  EXPECT_THROW((void)r.adoptScheduleFile(json, book_, now, 8), InputError);
+  EXPECT_EQ(r.settings(), before);
+}
+
+TEST_F(Replanning, APlanThatIsNotOptimalIsRefusedAndChangesNothing) {
+  ReplannerOptions options;
+  options.max_plan_seconds = 1e-9;  // the solve stops at once: "time_limit"
+  Replanner r = replanner(options);
+  const ReplanSettings before = r.settings();
+  try {
+    const std::vector<std::uint32_t> sensor1 = {1};  // version 1 is no longer optimal
+    (void)r.exclude(sensor1, book_, running(1.0), 11);
+    FAIL() << "a time-limited plan was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "plan");
+    EXPECT_NE(std::string(e.what()).find("plan ended 'time_limit'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nothing was published"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(r.settings(), before);
+}
+
+TEST_F(Replanning, AnExclusionGivesZeroRatesFromTheSwitchOnAndTheFullVersionFromTheNextEpisode) {
+  Replanner r = replanner();
+  const std::vector<std::uint32_t> sensor1 = {1};
+  const Replan plan = r.exclude(sensor1, book_, running(1.0), 42);
+  ASSERT_EQ(plan.versions.size(), 2u) << plan.summary;
+  const ScheduleVersion& tail = plan.versions[0];
+  const ScheduleVersion& full = plan.versions[1];
+  EXPECT_EQ(tail.version, 2u);
+  EXPECT_EQ(full.version, 3u);
+  EXPECT_EQ(plan.replyVersion(), 2u);
+  EXPECT_EQ(tail.effective_episode, 2u);
+  EXPECT_EQ(full.effective_episode, 3u);
+  EXPECT_EQ(full.effective_time_s, 0.0);
+  EXPECT_EQ(tail.command_id, 42u);
+  // From the interval of the switch on, sensor 1 has no rate; before it, version 1's rates.
+  const int k0 = tail.schedule.intervalAt(tail.effective_time_s);
+  for (int k = 0; k < scenario_.intervals; ++k) {
+    if (k >= k0) {
+      EXPECT_EQ(tail.schedule.rate(k, 1), 0.0) << "interval " << k;
+    } else {
+      EXPECT_EQ(tail.schedule.rates().row(k), book_.latest().schedule.rates().row(k));
+    }
+    EXPECT_EQ(full.schedule.rate(k, 1), 0.0) << "interval " << k;
+  }
+  EXPECT_GT(full.schedule.rates().col(0).sum(), 0.0);
+  for (const ScheduleVersion& v : plan.versions) {
+    EXPECT_TRUE(checkFeasibility(v.schedule, scenario_).feasible);
+    const CostBracket bracket = computeBracket(scenario_, v.schedule);
+    EXPECT_EQ(v.bracket.info, bracket.info);
+    EXPECT_EQ(v.bracket.cov, bracket.cov);
+  }
+  EXPECT_NE(plan.summary.find("version 2 from "), std::string::npos) << plan.summary;
+  EXPECT_NE(plan.summary.find("version 3 from episode 3 (info, "), std::string::npos)
+      << plan.summary;
+  EXPECT_EQ(plan.versionsInBrief().substr(0, 17), "version 2 from 1.");
+  EXPECT_NE(plan.versionsInBrief().find(" s of episode 2; version 3 from episode 3"),
+            std::string::npos)
+      << plan.versionsInBrief();
+  // The settings hold once adopted, not before.
+  EXPECT_TRUE(r.settings().excluded.empty());
+  r.adopt(plan);
+  EXPECT_EQ(r.settings().excluded, std::set<int>{1});
+}
+
+TEST_F(Replanning, TheSwitchFallsOnATickAMarginAheadOfNow) {
+  ReplannerOptions options;
+  options.switch_margin_s = 0.3;
+  options.time_scale = 2.0;  // 0.6 emulated seconds of margin
+  const Replan plan = replanner(options).changeSurrogate("info", book_, running(1.0), 1);
+  ASSERT_EQ(plan.versions.size(), 2u) << plan.summary;
+  const double at = plan.versions[0].effective_time_s;
+  EXPECT_TRUE(onTick(at)) << at;
+  // The last tick at or before now + margin: within one tick below 1.6.
+  EXPECT_LE(at, 1.6);
+  EXPECT_GT(at, 1.6 - plant_.tickSeconds());
+}
+
+TEST_F(Replanning, PlanningThatTakesTimeMovesTheSwitchToHalfAMarginAfterIt) {
+  // The clock reads 1.0 s before planning and 1.5 s after it: less than half of the 0.3 s
+  // margin is left before 1.3 s, so the switch is the first tick after 1.5 + 0.15 s.
+  int reads = 0;
+  RunMoment now = running(0.0);
+  now.emulated_now = [&reads] { return ++reads == 1 ? 1.0 : 1.5; };
+  const Replan plan = replanner().changeSurrogate("info", book_, now, 1);
+  ASSERT_EQ(plan.versions.size(), 2u) << plan.summary;
+  const double at = plan.versions[0].effective_time_s;
+  EXPECT_TRUE(onTick(at)) << at;
+  EXPECT_GE(at, 1.5 + 0.15);
+  EXPECT_LE(at, 1.65 + plant_.tickSeconds());
+}
+
+TEST_F(Replanning, PlanningThatOutlastsTheEpisodeLeavesOnlyTheNextEpisodesVersion) {
+  int reads = 0;
+  RunMoment now = running(0.0);
+  now.emulated_now = [&reads] { return ++reads == 1 ? 1.0 : 2.95; };
+  const Replan plan = replanner().changeSurrogate("info", book_, now, 1);
+  ASSERT_EQ(plan.versions.size(), 1u);
+  EXPECT_EQ(plan.versions[0].version, 2u);
+  EXPECT_EQ(plan.versions[0].effective_episode, 3u);
+  EXPECT_NE(plan.summary.find("not in episode 2: planning outlasted it"), std::string::npos)
+      << plan.summary;
+}
+
+TEST_F(Replanning, NoMidEpisodeVersionWithoutAFusedCovarianceOfTheEpisodeOrTimeLeft) {
+  RunMoment stale = running(1.0);
+  stale.fused->episode = 1;
+  const Replan without_p = replanner().changeSurrogate("info", book_, stale, 1);
+  ASSERT_EQ(without_p.versions.size(), 1u);
+  EXPECT_EQ(without_p.versions[0].effective_episode, 3u);
+  EXPECT_NE(without_p.summary.find("no fused covariance of it yet"), std::string::npos);
+
+  const Replan at_end = replanner().changeSurrogate("info", book_, running(2.8), 1);
+  ASSERT_EQ(at_end.versions.size(), 1u);
+  EXPECT_NE(at_end.summary.find("it ends within the switch margin"), std::string::npos);
+}
+
+TEST_F(Replanning, AChangeBetweenEpisodesYieldsOneVersionFromTheNextEpisode) {
+  RunMoment between;
+  between.running = false;
+  between.episode = 4;  // the next to start
+  const std::vector<std::uint32_t> sensor3 = {3};
+  const Replan plan = replanner().exclude(sensor3, book_, between, 5);
+  ASSERT_EQ(plan.versions.size(), 1u);
+  EXPECT_EQ(plan.versions[0].version, 2u);
+  EXPECT_EQ(plan.versions[0].effective_episode, 4u);
+  EXPECT_EQ(plan.versions[0].effective_time_s, 0.0);
+  EXPECT_EQ(plan.versions[0].schedule.rates().col(3).norm(), 0.0);
+  EXPECT_EQ(plan.versionsInBrief(), "version 2 from episode 4");
+}
+
+TEST_F(Replanning, ABudgetChangeFollowsTheScenarioRules) {
+  Replanner r = replanner();
+  // 1e9 per second over 3 s is beyond kMaxMeasurementsPerHorizon: validateScenario refuses it.
+  Scenario too_much = scenario_;
+  too_much.constraints.b.setConstant(1e9);
+  std::string expected;
+  try {
+    validateScenario(too_much, "check");
+  } catch (const InputError& e) {
+    expected = e.expected();
+  }
+  ASSERT_FALSE(expected.empty()) << "validateScenario took b = 1e9";
+  const std::vector<double> huge = {1e9};
+  try {
+    (void)r.setBudget(huge, book_, running(1.0), 3);
+    FAIL() << "b = 1e9 was taken";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "budget");
+    EXPECT_EQ(e.expected(), expected);
+  }
+  // Half the budget: both versions fit it where they plan (the tail from the interval of its
+  // switch on; before it, what ran under version 1).
+  const std::vector<double> half = {4.0};
+  const Replan plan = r.setBudget(half, book_, running(1.0), 4);
+  Scenario halved = scenario_;
+  halved.constraints.b.setConstant(4.0);
+  ASSERT_EQ(plan.versions.size(), 2u);
+  const RateSchedule& tail = plan.versions[0].schedule;
+  const int k0 = tail.intervalAt(plan.versions[0].effective_time_s);
+  const Eigen::MatrixXd tail_use = halved.constraints.C * tail.rates().transpose();
+  EXPECT_LE(tail_use.rightCols(scenario_.intervals - k0).maxCoeff(), 4.0 + 1e-9);
+  EXPECT_GT(tail_use.leftCols(k0).maxCoeff(), 4.0 + 1e-3) << "version 1 used the budget of 8";
+  EXPECT_TRUE(checkFeasibility(plan.versions[1].schedule, halved).feasible);
+  // ... and the full-horizon plan spends it (the cost falls with every rate).
+  const Eigen::MatrixXd used = halved.constraints.C * plan.versions[1].schedule.rates().transpose();
+  EXPECT_NEAR(used.maxCoeff(), 4.0, 1e-6);
+  EXPECT_EQ(plan.settings.budget(0), 4.0);
+}
+
+// The plan of the rest of the episode starts from the fused covariance carried to the switch
+// under the version in force: the same plan made here from an independent rollout.
+TEST_F(Replanning, TheTailPlanStartsFromTheFusedCovarianceCarriedForward) {
+  const Replan plan = replanner().changeSurrogate("info", book_, running(1.0), 9);
+  ASSERT_EQ(plan.versions.size(), 2u);
+  const double at = plan.versions[0].effective_time_s;
+
+  RolloutOptions carry;
+  carry.start_time = 0.9;
+  carry.end_time = at;
+  carry.start_covariance = fusedP();
+  const Eigen::MatrixXd carried =
+      rolloutInformationForm(scenario_, book_.latest().schedule, carry).covariances.back();
+  PlanRequest request;
+  request.surrogate = PlanSurrogate::Information;
+  request.start_time = at;
+  request.start_covariance = carried;
+  request.warm_start = book_.latest().schedule;
+  request.max_seconds = 30.0;
+  const RateSchedule expected = planSchedule(scenario_, request).schedule;
+  EXPECT_LT((plan.versions[0].schedule.rates() - expected.rates()).cwiseAbs().maxCoeff(), 1e-9);
+
+  // The check can tell: planned from the fused covariance where it was, the tail differs.
+  request.start_covariance = fusedP();
+  const RateSchedule uncarried = planSchedule(scenario_, request).schedule;
+  EXPECT_GT((uncarried.rates() - expected.rates()).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST_F(Replanning, FailedSensorsAreRecordedAndPlannedWithout) {
+  Replanner r = replanner();
+  const std::vector<std::uint32_t> dead = {0, 2};
+  r.noteFailed(dead, 1);
+  EXPECT_EQ(r.settings().failed, (std::set<int>{0, 2}));
+  const Replan plan = r.replanAsIs(book_, running(1.0), 1);
+  ASSERT_EQ(plan.versions.size(), 2u);
+  const int k0 = plan.versions[0].schedule.intervalAt(plan.versions[0].effective_time_s);
+  for (int k = k0; k < scenario_.intervals; ++k) {
+    EXPECT_EQ(plan.versions[0].schedule.rate(k, 0), 0.0);
+    EXPECT_EQ(plan.versions[0].schedule.rate(k, 2), 0.0);
+  }
+  EXPECT_EQ(plan.versions[1].schedule.rates().col(0).norm(), 0.0);
+  EXPECT_EQ(plan.versions[1].schedule.rates().col(2).norm(), 0.0);
+  // An operator's exclusion counts the failed ones as out of service too.
+  const std::vector<std::uint32_t> the_rest = {1, 3};
+  EXPECT_THROW((void)r.exclude(the_rest, book_, running(1.0), 2), InputError);
+  const std::vector<std::uint32_t> out_of_range = {4};
+  EXPECT_THROW(r.noteFailed(out_of_range, 3), InputError);
+  const std::vector<std::uint32_t> also_dead = {1, 3};
+  r.noteFailed(also_dead, 4);
+  EXPECT_THROW((void)r.replanAsIs(book_, running(1.0), 4), InputError);
+}
+
+}  // namespace
+}  // namespace sensornet::emulator
