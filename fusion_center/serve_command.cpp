@@ -232,6 +232,7 @@ class FusionCenter {
     fused.z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(z.size()));
     fused.publish_wall_ns = m.publish_wall_time_ns;
     fused.receive_wall_ns = received_ns;
+    fused.network_delay_s = m.network_delay_s;
     a.episode = m.episode;
     if (const std::string_view run = dds::viewString(m.run_id); run != options_.run.run_id) {
       a.other_run = std::string(run);
@@ -522,6 +523,7 @@ class FusionCenter {
     r.run_id = dds::borrowString(options_.run.run_id);
     r.episode = e.episode;
     r.realized_cost = e.realized_cost;
+    r.realtime_cost = e.realtime_cost;
     r.bracket_lower = e.bracket.info;
     r.bracket_upper = e.bracket.cov;
     dds::borrowSequence(r.schedule_versions, e.versions);
@@ -534,6 +536,7 @@ class FusionCenter {
     r.summary.realized_mean = s.mean;
     r.summary.realized_ci95_low = s.ci95_low;
     r.summary.realized_ci95_high = s.ci95_high;
+    r.summary.realtime_mean = s.realtime_mean;
     r.summary.bracket_lower_mean = s.bracket_mean.info;
     r.summary.bracket_upper_mean = s.bracket_mean.cov;
     r.summary.meets_bracket = s.meets_bracket.value_or(false);

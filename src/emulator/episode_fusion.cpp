@@ -3,8 +3,154 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 namespace sensornet::emulator {
+namespace {
+
+using Key = std::tuple<double, int, std::uint64_t>;  // (time, sensor, seq): timestamp order
+
+Key keyOf(const FusedMeasurement& m) { return {m.time_s, m.sensor, m.seq}; }
+
+// The real-time cost of an episode (see the header): the covariance of what had arrived by each
+// instant, integrated exactly. Every step is one of CdKalmanFilter's exact steps, split at the
+// switch point as EpisodeFusion's own filter splits it, so that with zero delays the sequence of
+// floating-point operations is the hindsight filter's.
+class RealtimeCost {
+ public:
+  RealtimeCost(const Scenario& scenario, double switch_time_s)
+      : work_(scenario),
+        horizon_s_(scenario.horizon_s),
+        switch_time_s_(switch_time_s),
+        zero_mean_(Eigen::VectorXd::Zero(scenario.stateDim())) {
+    work_.reset();
+    initial_ = work_.covariance();
+  }
+
+  [[nodiscard]] double of(const std::vector<FusedMeasurement>& all) {
+    const std::vector<std::size_t> order = arrivalOrder(all);
+    const std::vector<Key> earliest = earliestKeyFrom(all, order);
+    double now = 0.0;
+    Eigen::MatrixXd current = initial_;  // the covariance of what had arrived by `now`
+    double cost = 0.0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const FusedMeasurement& m = all[order[i]];
+      const double arrival = m.time_s + m.network_delay_s;
+      // No measurement still to come is before the second checkpoint: the first is never a
+      // starting point again.
+      while (checkpoints_.size() >= 2 && checkpoints_[1].key < earliest[i]) {
+        checkpoints_.pop_front();
+      }
+      const Key key = keyOf(m);
+      const auto after = std::upper_bound(
+          checkpoints_.begin(), checkpoints_.end(), key,
+          [](const Key& k, const Checkpoint& c) { return k < c.key; });
+      if (after == checkpoints_.end() && m.time_s >= now) {
+        // The last of the set in timestamp order: its filter is the current one up to time_s.
+        current = propagate(now, current, m.time_s, &cost);
+        now = m.time_s;
+        Eigen::MatrixXd fused = update(now, current, m.sensor);
+        checkpoints_.push_back({key, fused});
+        if (arrival > now) {
+          current = propagate(now, current, arrival, &cost);  // not arrived yet on [time_s, a)
+          fused = propagate(now, fused, arrival, nullptr);
+          now = arrival;
+        }
+        current = std::move(fused);
+      } else {
+        current = propagate(now, current, arrival, &cost);
+        now = arrival;
+        current = refuseFrom(checkpoints_.insert(after, {key, Eigen::MatrixXd()}), now);
+      }
+    }
+    current = propagate(now, current, horizon_s_, &cost);
+    work_.reset(horizon_s_, zero_mean_, current);
+    return cost + work_.terminalCost();
+  }
+
+ private:
+  struct Checkpoint {
+    Key key;
+    Eigen::MatrixXd covariance;  // right after the measurement `key` was fused
+  };
+
+  // The measurements that arrive by T, by arrival (ties in timestamp order).
+  [[nodiscard]] std::vector<std::size_t> arrivalOrder(const std::vector<FusedMeasurement>& all) const {
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (all[i].time_s + all[i].network_delay_s <= horizon_s_) order.push_back(i);
+    }
+    const auto arrivalKey = [&all](std::size_t i) {
+      return std::make_pair(all[i].time_s + all[i].network_delay_s, keyOf(all[i]));
+    };
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return arrivalKey(a) < arrivalKey(b); });
+    return order;
+  }
+
+  // earliest[i]: the smallest key among order[i..] (the measurements still to arrive).
+  [[nodiscard]] static std::vector<Key> earliestKeyFrom(const std::vector<FusedMeasurement>& all,
+                                                        const std::vector<std::size_t>& order) {
+    std::vector<Key> earliest(order.size());
+    for (std::size_t i = order.size(); i-- > 0;) {
+      earliest[i] = keyOf(all[order[i]]);
+      if (i + 1 < order.size()) earliest[i] = std::min(earliest[i], earliest[i + 1]);
+    }
+    return earliest;
+  }
+
+  // The filter of the set again from the checkpoint before `inserted` (P0 at 0 when none), with
+  // the new measurement fused at its time; returns the set's covariance at `arrival`.
+  [[nodiscard]] Eigen::MatrixXd refuseFrom(std::deque<Checkpoint>::iterator inserted,
+                                           double arrival) {
+    double t = 0.0;
+    Eigen::MatrixXd covariance = initial_;
+    if (inserted != checkpoints_.begin()) {
+      const Checkpoint& before = *std::prev(inserted);
+      t = std::get<0>(before.key);
+      covariance = before.covariance;
+    }
+    for (auto it = inserted; it != checkpoints_.end(); ++it) {
+      const double at = std::get<0>(it->key);
+      covariance = propagate(t, covariance, at, nullptr);
+      t = at;
+      covariance = update(t, covariance, std::get<1>(it->key));
+      it->covariance = covariance;
+    }
+    return propagate(t, covariance, arrival, nullptr);
+  }
+
+  // P at `to` from P at `from`, in the hindsight filter's steps (split at the switch point);
+  // adds ∫ <W, P> of each step to *cost when given.
+  [[nodiscard]] Eigen::MatrixXd propagate(double from, const Eigen::MatrixXd& covariance,
+                                          double to, double* cost) {
+    if (to == from) return covariance;
+    work_.reset(from, zero_mean_, covariance);
+    if (from < switch_time_s_ && switch_time_s_ < to) {
+      work_.propagateTo(switch_time_s_);
+      if (cost != nullptr) *cost += work_.runningCost();
+      work_.reset(switch_time_s_, zero_mean_, work_.covariance());
+    }
+    work_.propagateTo(to);
+    if (cost != nullptr) *cost += work_.runningCost();
+    return work_.covariance();
+  }
+
+  [[nodiscard]] Eigen::MatrixXd update(double t, const Eigen::MatrixXd& covariance, int sensor) {
+    work_.reset(t, zero_mean_, covariance);
+    work_.updateCovariance(sensor);
+    return work_.covariance();
+  }
+
+  CdKalmanFilter work_;
+  double horizon_s_;
+  double switch_time_s_;
+  Eigen::VectorXd zero_mean_;
+  Eigen::MatrixXd initial_;  // P0
+  std::deque<Checkpoint> checkpoints_;  // the set so far, in timestamp order
+};
+
+}  // namespace
 
 std::uint64_t faultyRejections(const RejectionCounts& rejected) {
   std::uint64_t total = 0;
@@ -57,6 +203,9 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   }
   if (!(m.time_s >= 0.0 && m.time_s <= scenario_.horizon_s)) {
     return reject("malformed", who + ": time outside [0, T]");
+  }
+  if (!(m.network_delay_s >= 0.0 && std::isfinite(m.network_delay_s))) {
+    return reject("malformed", who + ": network delay not a finite number >= 0");
   }
   SensorTally& tally = tallies_[j];
   if (!seen_.insert({m.sensor, m.seq}).second) {
@@ -151,6 +300,7 @@ EpisodeResult EpisodeFusion::finish() {
   EpisodeResult result;
   result.episode = episode_;
   result.realized_cost = filter_.cost();
+  result.realtime_cost = RealtimeCost(scenario_, switch_time_s_).of(all_);
   for (const ScheduleSegment& segment : segments_) result.versions.push_back(segment.version->version);
   result.switch_time_s = switch_time_s_;
   if (at_switch_) {

@@ -50,6 +50,7 @@ std::uint64_t RunSummary::rejectedTotal() const {
 json episodeEntry(const EpisodeResult& r) {
   return {{"episode", r.episode},
           {"realized_cost", r.realized_cost},
+          {"realtime_cost", r.realtime_cost},
           {"bracket", {{"info", r.bracket.info}, {"cov", r.bracket.cov}}},
           {"schedule_versions", r.versions},
           {"switch_time_s", r.switch_time_s},
@@ -108,6 +109,7 @@ RunSummary RunReport::summary() const {
     episode_medians.push_back(e.value("latency_median_s", 0.0));
     if (!e.at("complete").get<bool>()) continue;
     costs.push_back(e.at("realized_cost").get<double>());
+    s.realtime_mean += e.value("realtime_cost", costs.back());
     s.bracket_mean.info += e.at("bracket").at("info").get<double>();
     s.bracket_mean.cov += e.at("bracket").at("cov").get<double>();
     s.nees_mean += e.value("nees", 0.0);
@@ -116,6 +118,7 @@ RunSummary RunReport::summary() const {
   if (!costs.empty()) {
     const double k = static_cast<double>(costs.size());
     for (const double c : costs) s.mean += c / k;
+    s.realtime_mean /= k;
     s.bracket_mean.info /= k;
     s.bracket_mean.cov /= k;
     s.nees_mean /= k;
@@ -203,6 +206,7 @@ json RunReport::toJson(const std::string& status, const json& faults,
         {"ci95", optionalJson(s.ci95)},
         {"ci95_low", s.ci95_low},
         {"ci95_high", s.ci95_high},
+        {"realtime_mean", s.realtime_mean},
         {"bracket", {{"info", s.bracket_mean.info}, {"cov", s.bracket_mean.cov}}},
         {"meets_bracket", s.meets_bracket ? json(*s.meets_bracket) : json(nullptr)},
         {"nees_mean", s.nees_mean},

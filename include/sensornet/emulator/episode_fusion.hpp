@@ -17,6 +17,16 @@
 // the realized cost is the same floating-point number whatever the arrival order and timing:
 // a run with a stall fuses exactly what a run without one does.
 //
+// Two costs. The hindsight cost (`realized_cost`) is J(P) of the filter over every measurement
+// in timestamp order. The real-time cost is ∫_0^T <W, P_rt(t)> dt + <W_T, P_rt(T)>, where
+// P_rt(t) is the covariance of the filter over the measurements that had arrived by t: a
+// measurement taken at time_s that the emulated network held back network_delay_s arrives at
+// a = time_s + network_delay_s (after T: never). The covariance depends only on which
+// measurements and when, so finish() computes it exactly: in arrival order, the set is fixed on
+// [a_i, a_i+1) and its covariance at a_i is the filter over that set in timestamp order, re-run
+// from the covariance kept after the last measurement before the inserted one. It takes the
+// steps the hindsight filter takes, so with every delay 0 the two costs are the same number.
+//
 // Accounting, per sensor (DESIGN.md): sent = received + lost + dropped_by_network. `sent` is the
 // sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
 // the highest seq received + 1), and the episode is incomplete. The emulated network (the
@@ -59,6 +69,7 @@ struct FusedMeasurement {
   Eigen::VectorXd z;
   std::int64_t publish_wall_ns = 0;
   std::int64_t receive_wall_ns = 0;
+  double network_delay_s = 0.0;  // emulated seconds the emulated network held it back
 };
 
 // What a sensor says of one episode at its end (the EpisodeTally topic).
@@ -97,7 +108,8 @@ struct Rejection {
 
 struct EpisodeResult {
   std::uint32_t episode = 0;
-  double realized_cost = 0.0;
+  double realized_cost = 0.0;           // hindsight: every measurement, in timestamp order
+  double realtime_cost = 0.0;           // what had arrived by each instant (see above)
   CostBracket bracket;
   std::vector<std::uint32_t> versions;  // in force during the episode, in time order
   double switch_time_s = 0.0;           // the last switch (0 when none)

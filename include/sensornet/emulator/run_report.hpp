@@ -39,6 +39,7 @@ struct RunSummary {
   std::optional<double> ci95;             // half-width t_{0.975,K-1} s / sqrt(K); none for K < 2
   double ci95_low = 0.0;                  // max(0, mean - ci95)
   double ci95_high = 0.0;
+  double realtime_mean = 0.0;             // mean real-time cost (EpisodeResult::realtime_cost)
   CostBracket bracket_mean;
   std::optional<bool> meets_bracket;      // [ci95_low, ci95_high] meets [info, cov]
   double nees_mean = 0.0;
