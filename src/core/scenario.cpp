@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/network.hpp"
 #include "sensornet/core/random.hpp"
 #include "sensornet/core/transition.hpp"
 
@@ -206,6 +207,97 @@ void checkSensorsOverHorizon(const Scenario& s, const Eigen::MatrixXd& open_loop
   }
 }
 
+// Emulated seconds within [0, T] (or (0, T]).
+void checkSeconds(double seconds, double horizon_s, bool positive, const std::string& source,
+                  const std::string& field) {
+  const bool low_ok = positive ? seconds > 0.0 : seconds >= 0.0;
+  if (!std::isfinite(seconds) || !low_ok || seconds > horizon_s) {
+    throw InputError(source, field,
+                     std::string("seconds in ") + (positive ? "(0, " : "[0, ") +
+                         number(horizon_s) + "] (at most the horizon), got " + number(seconds));
+  }
+}
+
+void checkProbability(double p, const std::string& source, const std::string& field) {
+  if (!(p >= 0.0 && p < 1.0)) {
+    throw InputError(source, field, "a probability in [0, 1), got " + number(p));
+  }
+}
+
+void checkSensorIndex(int sensor, int sensors, const std::string& source,
+                      const std::string& field) {
+  if (sensor < 0 || sensor >= sensors) {
+    throw InputError(source, field,
+                     "a sensor index from 0 to " + std::to_string(sensors - 1) + ", got " +
+                         std::to_string(sensor));
+  }
+}
+
+void checkLink(const LinkSpec& link, double horizon_s, const std::string& source,
+               const std::string& field) {
+  checkProbability(link.loss, source, field + ".loss");
+  checkProbability(link.duplicate, source, field + ".duplicate");
+  checkSeconds(link.delay_fixed_s, horizon_s, false, source, field + ".delay.fixed");
+  if (link.jitter != Jitter::None) {
+    checkSeconds(link.jitter_mean_s, horizon_s, true, source, field + ".delay.mean");
+  }
+  if (link.jitter == Jitter::Lognormal &&
+      !(link.jitter_sigma > 0.0 && link.jitter_sigma <= kMaxLognormalSigma)) {
+    throw InputError(source, field + ".delay.sigma",
+                     "a number in (0, " + number(kMaxLognormalSigma) + "], got " +
+                         number(link.jitter_sigma));
+  }
+}
+
+// Outage windows inside [0, T], and together on the grid refined by at most
+// kMaxOutageRefinement (the outage that breaks it is named).
+void checkOutages(const Scenario& s, const std::string& source) {
+  const std::vector<Outage>& outages = s.network->outages;
+  for (std::size_t i = 0; i < outages.size(); ++i) {
+    const Outage& outage = outages[i];
+    const std::string field = "network.outages[" + std::to_string(i) + "]";
+    checkSensorIndex(outage.sensor, s.sensorCount(), source, field + ".sensor");
+    if (!(std::isfinite(outage.from_s) && outage.from_s >= 0.0 && outage.from_s < s.horizon_s)) {
+      throw InputError(source, field + ".from",
+                       "seconds in [0, " + number(s.horizon_s) + ") (within the horizon), got " +
+                           number(outage.from_s));
+    }
+    if (!(std::isfinite(outage.to_s) && outage.to_s > outage.from_s &&
+          outage.to_s <= s.horizon_s)) {
+      throw InputError(source, field + ".to",
+                       "seconds in (from, T] = (" + number(outage.from_s) + ", " +
+                           number(s.horizon_s) + "], got " + number(outage.to_s));
+    }
+    const std::vector<Outage> so_far(outages.begin(), outages.begin() + static_cast<long>(i) + 1);
+    if (outageRefinement(s.horizon_s, s.intervals, so_far) == 0) {
+      throw InputError(source, field,
+                       "edges on the rate grid (T/N = " + number(s.intervalLength()) +
+                           " s) divided into at most " + std::to_string(kMaxOutageRefinement) +
+                           " equal steps, together with the outages before it");
+    }
+  }
+}
+
+void checkNetworkAndFaults(const Scenario& s, const std::string& source) {
+  if (s.network) {
+    if (s.network->links.size() != s.sensors.size()) {
+      throw InputError(source, "network",
+                       "one link per sensor (" + std::to_string(s.sensors.size()) + "), got " +
+                           std::to_string(s.network->links.size()));
+    }
+    for (std::size_t j = 0; j < s.network->links.size(); ++j) {
+      checkLink(s.network->links[j], s.horizon_s, source,
+                "network.links[" + std::to_string(j) + "]");
+    }
+    checkOutages(s, source);
+  }
+  for (std::size_t i = 0; i < s.faults.size(); ++i) {
+    const std::string field = "faults[" + std::to_string(i) + "]";
+    checkSensorIndex(s.faults[i].sensor, s.sensorCount(), source, field + ".sensor");
+    checkSeconds(s.faults[i].at_s, s.horizon_s, false, source, field + ".at");
+  }
+}
+
 }  // namespace
 
 Eigen::VectorXd Scenario::maxRates() const {
@@ -282,6 +374,7 @@ void validateScenario(const Scenario& s, const std::string& source) {
 
   const Eigen::MatrixXd open_loop = checkPlantOverHorizon(s, source);
   checkSensorsOverHorizon(s, open_loop, source);
+  checkNetworkAndFaults(s, source);
 }
 
 namespace {

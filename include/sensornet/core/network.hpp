@@ -41,6 +41,9 @@ namespace sensornet {
 // Outage edges must fall on the schedule's grid refined by at most this factor.
 inline constexpr int kMaxOutageRefinement = 1000;
 
+// Largest lognormal jitter sigma (standard deviation of log(delay)) a scenario may ask for.
+inline constexpr double kMaxLognormalSigma = 10.0;
+
 // The smallest factor f in [1, kMaxOutageRefinement] that puts both edges of every outage on the
 // grid of step T / (N f) (to 1e-6 of a step), or 0 when there is none.
 [[nodiscard]] int outageRefinement(double horizon_s, int intervals,

@@ -77,7 +77,9 @@ inline constexpr double kMaxMeasurementsPerHorizon = 1e9;
 
 // Checks every field for shape, symmetry, definiteness and finiteness, and the derived
 // quantities the math forms from them (A T, Q T, the open-loop transition and covariance over
-// the horizon, H_j' R_j^-1 H_j, λ̄_j T) against the bounds above; throws InputError with
+// the horizon, H_j' R_j^-1 H_j, λ̄_j T) against the bounds above, and the emulated network and
+// faults (probabilities in [0, 1), delays and instants within the horizon, sensor indices below
+// M, outage edges on the grid refined by at most kMaxOutageRefinement); throws InputError with
 // `source` and the field path (for example "sensors[3].R") on the first problem found.
 void validateScenario(const Scenario& scenario, const std::string& source);
 

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -180,6 +182,237 @@ INSTANTIATE_TEST_SUITE_P(
                         "random.states", ">= 1"},
         BadScenarioCase{"random and explicit", std::string(kValid) + "random: {states: 1}\n",
                         "plant", "not both"}));
+
+// The valid fixture (horizon 2, intervals 4, two sensors) with a network section and faults.
+std::string withNetwork(const std::string& network, const std::string& faults = "") {
+  return std::string(kValid) + network + faults;
+}
+
+const char* kNetwork = R"(network:
+  default: {loss: 0.1, delay: {fixed: 0.005, jitter: exponential, mean: 0.010}, duplicate: 0.0}
+  sensors: {1: {loss: 0.5}}
+  outages:
+    - {sensor: 1, episodes: all, from: 0.5, to: 1.25}
+    - {sensor: 0, episodes: [2, 4], from: 0, to: 2}
+)";
+
+const char* kFaults = R"(faults:
+  - {kind: crash, sensor: 1, episode: 2, at: 1.0}
+)";
+
+TEST(ScenarioFileNetwork, ParsesLinksOverridesOutagesAndFaults) {
+  const Scenario s = parseScenarioYaml(withNetwork(kNetwork, kFaults), "net.yaml");
+  ASSERT_TRUE(s.network.has_value());
+  ASSERT_EQ(s.network->links.size(), 2U);
+  const LinkSpec& first = s.network->links[0];
+  EXPECT_DOUBLE_EQ(first.loss, 0.1);
+  EXPECT_DOUBLE_EQ(first.delay_fixed_s, 0.005);
+  EXPECT_EQ(first.jitter, Jitter::Exponential);
+  EXPECT_DOUBLE_EQ(first.jitter_mean_s, 0.010);
+  EXPECT_DOUBLE_EQ(first.duplicate, 0.0);
+  // The override replaces the loss only; the delay is the default's.
+  const LinkSpec& second = s.network->links[1];
+  EXPECT_DOUBLE_EQ(second.loss, 0.5);
+  EXPECT_DOUBLE_EQ(second.delay_fixed_s, 0.005);
+  EXPECT_EQ(second.jitter, Jitter::Exponential);
+  EXPECT_DOUBLE_EQ(second.jitter_mean_s, 0.010);
+  ASSERT_EQ(s.network->outages.size(), 2U);
+  EXPECT_EQ(s.network->outages[0].sensor, 1);
+  EXPECT_TRUE(s.network->outages[0].episodes.empty());  // all
+  EXPECT_DOUBLE_EQ(s.network->outages[0].from_s, 0.5);
+  EXPECT_DOUBLE_EQ(s.network->outages[0].to_s, 1.25);
+  EXPECT_EQ(s.network->outages[1].episodes, (std::vector<std::uint32_t>{2, 4}));
+  ASSERT_EQ(s.faults.size(), 1U);
+  EXPECT_EQ(s.faults[0].sensor, 1);
+  EXPECT_EQ(s.faults[0].episode, 2U);
+  EXPECT_DOUBLE_EQ(s.faults[0].at_s, 1.0);
+}
+
+TEST(ScenarioFileNetwork, WithoutTheSectionThereIsNoNetworkAndNoFault) {
+  const Scenario s = parseScenarioYaml(kValid, "ok.yaml");
+  EXPECT_FALSE(s.network.has_value());
+  EXPECT_TRUE(s.faults.empty());
+}
+
+TEST(ScenarioFileNetwork, LognormalSigmaDefaultsToOneHalfAndOverridesApplyFieldByField) {
+  const Scenario s = parseScenarioYaml(withNetwork(R"(network:
+  default: {delay: {jitter: lognormal, mean: 0.02}}
+  sensors:
+    0: {delay: {jitter: none}, duplicate: 0.25}
+    1: {delay: {sigma: 1.5}}
+)"),
+                                       "net.yaml");
+  const LinkSpec& zero = s.network->links[0];
+  EXPECT_EQ(zero.jitter, Jitter::None);
+  EXPECT_DOUBLE_EQ(zero.jitter_mean_s, 0.0);
+  EXPECT_DOUBLE_EQ(zero.duplicate, 0.25);
+  EXPECT_DOUBLE_EQ(zero.loss, 0.0);
+  const LinkSpec& one = s.network->links[1];
+  EXPECT_EQ(one.jitter, Jitter::Lognormal);
+  EXPECT_DOUBLE_EQ(one.jitter_mean_s, 0.02);
+  EXPECT_DOUBLE_EQ(one.jitter_sigma, 1.5);
+  const Scenario defaults = parseScenarioYaml(
+      withNetwork("network: {default: {delay: {jitter: lognormal, mean: 0.02}}}\n"), "n.yaml");
+  EXPECT_DOUBLE_EQ(defaults.network->links[0].jitter_sigma, 0.5);
+}
+
+TEST(ScenarioFileNetwork, TheRandomFormTakesANetworkToo) {
+  const Scenario s = parseScenarioYaml(
+      "horizon: 3\nintervals: 30\nrandom: {states: 2, sensors: 3, seed: 1}\n"
+      "network: {sensors: {2: {loss: 0.3}}}\n",
+      "r.yaml");
+  ASSERT_TRUE(s.network.has_value());
+  ASSERT_EQ(s.network->links.size(), 3U);
+  EXPECT_TRUE(s.network->links[0].perfect());
+  EXPECT_DOUBLE_EQ(s.network->links[2].loss, 0.3);
+}
+
+TEST(ScenarioFileNetwork, ShippedLossyScenarioParsesWithANetwork) {
+  const Scenario s =
+      loadScenarioFile(std::string(SENSORNET_SOURCE_DIR) + "/scenarios/lossy.yaml");
+  ASSERT_TRUE(s.network.has_value());
+  EXPECT_EQ(s.network->links.size(), s.sensors.size());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    NetworkAndFaults, BadScenario,
+    testing::Values(
+        BadScenarioCase{"loss one", withNetwork("network: {default: {loss: 1}}\n"),
+                        "network.default.loss", "[0, 1), got 1"},
+        BadScenarioCase{"loss negative", withNetwork("network: {sensors: {0: {loss: -0.1}}}\n"),
+                        "network.sensors.0.loss", "[0, 1)"},
+        BadScenarioCase{"duplicate too big", withNetwork("network: {default: {duplicate: 1.5}}\n"),
+                        "network.default.duplicate", "[0, 1)"},
+        BadScenarioCase{"loss not a number", withNetwork("network: {default: {loss: lots}}\n"),
+                        "network.default.loss", "a number"},
+        BadScenarioCase{"fixed delay beyond horizon",
+                        withNetwork("network: {default: {delay: {fixed: 2.5}}}\n"),
+                        "network.default.delay.fixed", "at most the horizon"},
+        BadScenarioCase{"negative delay",
+                        withNetwork("network: {default: {delay: {fixed: -0.1}}}\n"),
+                        "network.default.delay.fixed", "[0, 2]"},
+        BadScenarioCase{"infinite delay",
+                        withNetwork("network: {default: {delay: {fixed: .inf}}}\n"),
+                        "network.default.delay.fixed", "finite"},
+        BadScenarioCase{"unknown jitter",
+                        withNetwork("network: {default: {delay: {jitter: pareto, mean: 1}}}\n"),
+                        "network.default.delay.jitter", "none, exponential, lognormal"},
+        BadScenarioCase{"exponential without mean",
+                        withNetwork("network: {default: {delay: {jitter: exponential}}}\n"),
+                        "network.default.delay.mean", "required for jitter"},
+        BadScenarioCase{"override switches on a jitter without mean",
+                        withNetwork("network: {sensors: {1: {delay: {jitter: lognormal}}}}\n"),
+                        "network.sensors.1.delay.mean", "required"},
+        BadScenarioCase{"zero jitter mean",
+                        withNetwork("network: {default: {delay: {jitter: exponential, mean: 0}}}\n"),
+                        "network.default.delay.mean", "(0, 2]"},
+        BadScenarioCase{"mean without jitter",
+                        withNetwork("network: {default: {delay: {mean: 0.1}}}\n"),
+                        "network.default.delay.mean", "jitter: none"},
+        BadScenarioCase{"sigma with exponential",
+                        withNetwork("network: {default: {delay: {jitter: exponential, mean: 0.1, "
+                                    "sigma: 1}}}\n"),
+                        "network.default.delay.sigma", "lognormal"},
+        BadScenarioCase{"sigma zero",
+                        withNetwork("network: {default: {delay: {jitter: lognormal, mean: 0.1, "
+                                    "sigma: 0}}}\n"),
+                        "network.default.delay.sigma", "(0, 10]"},
+        BadScenarioCase{"unknown link key", withNetwork("network: {default: {los: 0.1}}\n"),
+                        "network.default.los", "known keys (loss, delay, duplicate)"},
+        BadScenarioCase{"unknown delay key",
+                        withNetwork("network: {default: {delay: {fix: 0.1}}}\n"),
+                        "network.default.delay.fix", "known keys"},
+        BadScenarioCase{"unknown network key", withNetwork("network: {defaults: {}}\n"),
+                        "network.defaults", "known keys (default, sensors, outages)"},
+        BadScenarioCase{"override sensor out of range",
+                        withNetwork("network: {sensors: {2: {loss: 0.1}}}\n"), "network.sensors.2",
+                        "sensor index from 0 to 1, got 2"},
+        BadScenarioCase{"override sensor not an index",
+                        withNetwork("network: {sensors: {x: {loss: 0.1}}}\n"), "network.sensors.x",
+                        "a number"},
+        BadScenarioCase{"outage sensor out of range",
+                        withNetwork("network: {outages: [{sensor: 5, from: 0, to: 1}]}\n"),
+                        "network.outages[0].sensor", "from 0 to 1, got 5"},
+        BadScenarioCase{"outage from negative",
+                        withNetwork("network: {outages: [{sensor: 0, from: -0.5, to: 1}]}\n"),
+                        "network.outages[0].from", "[0, 2)"},
+        BadScenarioCase{"outage to before from",
+                        withNetwork("network: {outages: [{sensor: 0, from: 1, to: 0.5}]}\n"),
+                        "network.outages[0].to", "(from, T]"},
+        BadScenarioCase{"outage beyond horizon",
+                        withNetwork("network: {outages: [{sensor: 0, from: 1, to: 2.5}]}\n"),
+                        "network.outages[0].to", "(1, 2]"},
+        BadScenarioCase{"outage off the refined grid",
+                        withNetwork("network: {outages: [{sensor: 0, from: 0.1234567, to: 1}]}\n"),
+                        "network.outages[0]", "at most 1000 equal steps"},
+        BadScenarioCase{"outage without to",
+                        withNetwork("network: {outages: [{sensor: 0, from: 0.5}]}\n"),
+                        "network.outages[0].to", "missing"},
+        BadScenarioCase{"outage episodes empty",
+                        withNetwork("network: {outages: [{sensor: 0, episodes: [], from: 0, to: "
+                                    "1}]}\n"),
+                        "network.outages[0].episodes", "all or a non-empty list"},
+        BadScenarioCase{"outage episodes word",
+                        withNetwork("network: {outages: [{sensor: 0, episodes: some, from: 0, "
+                                    "to: 1}]}\n"),
+                        "network.outages[0].episodes", "all or a non-empty list"},
+        BadScenarioCase{"outage episode negative",
+                        withNetwork("network: {outages: [{sensor: 0, episodes: [1, -2], from: 0, "
+                                    "to: 1}]}\n"),
+                        "network.outages[0].episodes[1]", "episode number"},
+        BadScenarioCase{"outage unknown key",
+                        withNetwork("network: {outages: [{sensor: 0, from: 0, to: 1, link: 2}]}\n"),
+                        "network.outages[0].link", "known keys"},
+        BadScenarioCase{"outages not a list",
+                        withNetwork("network: {outages: {sensor: 0}}\n"), "network.outages",
+                        "a list of outages"},
+        BadScenarioCase{"network empty", withNetwork("network:\n"), "network", "a mapping"},
+        BadScenarioCase{"fault kind unknown",
+                        withNetwork("", "faults: [{kind: partition, sensor: 0, episode: 0, at: "
+                                        "1}]\n"),
+                        "faults[0].kind", "known kinds (crash), got 'partition'"},
+        BadScenarioCase{"fault kind missing",
+                        withNetwork("", "faults: [{sensor: 0, episode: 0, at: 1}]\n"),
+                        "faults[0].kind", "missing"},
+        BadScenarioCase{"fault sensor out of range",
+                        withNetwork("", "faults: [{kind: crash, sensor: 2, episode: 0, at: 1}]\n"),
+                        "faults[0].sensor", "from 0 to 1, got 2"},
+        BadScenarioCase{"fault after the horizon",
+                        withNetwork("", "faults: [{kind: crash, sensor: 0, episode: 0, at: 3}]\n"),
+                        "faults[0].at", "[0, 2]"},
+        BadScenarioCase{"fault before zero",
+                        withNetwork("", "faults: [{kind: crash, sensor: 0, episode: 0, at: "
+                                        "-1}]\n"),
+                        "faults[0].at", "[0, 2]"},
+        BadScenarioCase{"fault episode fractional",
+                        withNetwork("", "faults: [{kind: crash, sensor: 0, episode: 0.5, at: "
+                                        "1}]\n"),
+                        "faults[0].episode", "an integer"},
+        BadScenarioCase{"fault unknown key",
+                        withNetwork("", "faults: [{kind: crash, sensor: 0, episode: 0, at: 1, "
+                                        "signal: 9}]\n"),
+                        "faults[0].signal", "known keys (kind, sensor, episode, at)"},
+        BadScenarioCase{"faults not a list",
+                        withNetwork("", "faults: {kind: crash}\n"), "faults", "a list of faults"}));
+
+TEST(ScenarioFileNetwork, ErrorsNameTheLineOfTheField) {
+  // Line 19 of the fixture plus network section: the outage list entry.
+  const std::string text = withNetwork(R"(network:
+  outages:
+    - {sensor: 0, from: 0.5, to: 1}
+    - {sensor: 1, from: 1.5, to: 9}
+)");
+  const std::string message = errorOf(text);
+  const int expected_line = 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n')) - 1;
+  EXPECT_NE(message.find("bad.yaml:" + std::to_string(expected_line) + ": network.outages[1].to"),
+            std::string::npos)
+      << message;
+  const std::string loss = withNetwork("network:\n  default:\n    loss: 2\n");
+  const int loss_line = static_cast<int>(std::count(loss.begin(), loss.end(), '\n'));
+  EXPECT_NE(errorOf(loss).find("bad.yaml:" + std::to_string(loss_line) + ": network.default.loss"),
+            std::string::npos)
+      << errorOf(loss);
+}
 
 TEST(ScenarioFile, ErrorsNameTheLine) {
   const std::string message = errorOf(replaced("P0: [[10, 0], [0, 10]]", "P0: [[10, 0], [0, -3]]"));
