@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/core/network.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/listener.hpp"
 #include "sensornet/dds/participant.hpp"
@@ -174,7 +175,10 @@ class FusionCenter {
     open.clock = start.clock;
     open.fusion = std::make_unique<emulator::EpisodeFusion>(
         inputs_.scenario(), inputs_.plant(), inputs_.book(), start.episode,
-        [this](const emulator::ScheduleVersion& v) { return bracketOf(v); });
+        [this](const emulator::ScheduleVersion& v) { return bracketOf(v); },
+        [this, episode = start.episode](const emulator::ScheduleVersion& v) {
+          return deliveredBracketOf(v, episode);
+        });
     const auto sensors = static_cast<std::size_t>(inputs_.scenario().sensorCount());
     open.last_heard_ns.assign(sensors, 0);
     open.tallies.assign(sensors, sensornet_EpisodeTally{});
@@ -194,6 +198,24 @@ class FusionCenter {
     auto it = brackets_.find(v.version);
     if (it == brackets_.end()) {
       it = brackets_.emplace(v.version, computeBracket(inputs_.scenario(), v.schedule)).first;
+    }
+    return it->second;
+  }
+
+  // The bracket of what the emulated network delivers of version v in `episode`: the same for
+  // every episode with the same outages.
+  CostBracket deliveredBracketOf(const emulator::ScheduleVersion& v, std::uint32_t episode) {
+    const NetworkSpec& network = *inputs_.scenario().network;
+    std::vector<std::size_t> outages;
+    for (std::size_t i = 0; i < network.outages.size(); ++i) {
+      if (network.outages[i].appliesTo(episode)) outages.push_back(i);
+    }
+    auto key = std::make_pair(v.version, std::move(outages));
+    auto it = delivered_brackets_.find(key);
+    if (it == delivered_brackets_.end()) {
+      const RateSchedule delivered = deliveredSchedule(v.schedule, network, episode);
+      it = delivered_brackets_.emplace(std::move(key), computeBracket(inputs_.scenario(), delivered))
+               .first;
     }
     return it->second;
   }
@@ -526,6 +548,8 @@ class FusionCenter {
     r.realtime_cost = e.realtime_cost;
     r.bracket_lower = e.bracket.info;
     r.bracket_upper = e.bracket.cov;
+    r.delivered_bracket_lower = e.delivered_bracket.info;
+    r.delivered_bracket_upper = e.delivered_bracket.cov;
     dds::borrowSequence(r.schedule_versions, e.versions);
     r.nees = e.nees;
     dds::borrowSequence(r.counts, counts);
@@ -540,6 +564,9 @@ class FusionCenter {
     r.summary.bracket_lower_mean = s.bracket_mean.info;
     r.summary.bracket_upper_mean = s.bracket_mean.cov;
     r.summary.meets_bracket = s.meets_bracket.value_or(false);
+    r.summary.delivered_lower_mean = s.delivered_bracket_mean.info;
+    r.summary.delivered_upper_mean = s.delivered_bracket_mean.cov;
+    r.summary.meets_delivered_bracket = s.meets_delivered_bracket.value_or(false);
     r.summary.nees_mean = s.nees_mean;
     r.summary.sent = s.sent;
     r.summary.received = s.received;
@@ -632,6 +659,8 @@ class FusionCenter {
   std::optional<emulator::EpisodeLog> episode_log_;
   std::optional<emulator::RunReport> report_;
   std::map<std::uint32_t, CostBracket> brackets_;
+  // (version, the outages of an episode) -> the bracket of what the network delivers
+  std::map<std::pair<std::uint32_t, std::vector<std::size_t>>, CostBracket> delivered_brackets_;
   std::map<std::uint32_t, OpenEpisode> open_;
   std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
   std::map<std::uint32_t, std::vector<sensornet_EpisodeTally>> early_tallies_;

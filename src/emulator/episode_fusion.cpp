@@ -5,6 +5,8 @@
 #include <cmath>
 #include <deque>
 
+#include "sensornet/core/network.hpp"
+
 namespace sensornet::emulator {
 namespace {
 
@@ -162,12 +164,13 @@ std::uint64_t faultyRejections(const RejectionCounts& rejected) {
 
 EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plant,
                              const ScheduleBook& book, std::uint32_t episode,
-                             BracketOf bracket_of)
+                             BracketOf bracket_of, BracketOf delivered_bracket_of)
     : scenario_(scenario),
       plant_(plant),
       book_(book),
       episode_(episode),
       bracket_of_(std::move(bracket_of)),
+      delivered_bracket_of_(std::move(delivered_bracket_of)),
       filter_(scenario),
       tallies_(static_cast<std::size_t>(scenario.sensorCount())),
       sent_at_least_(tallies_.size(), 0) {
@@ -280,6 +283,24 @@ void EpisodeFusion::fuseUpTo(double t) {
   }
 }
 
+CostBracket EpisodeFusion::bracketAfterSwitch(const RateSchedule& schedule) const {
+  RolloutOptions options;
+  options.start_time = switch_time_s_;
+  options.start_covariance = at_switch_->second;
+  const CostBracket rest = computeBracket(scenario_, schedule, options);
+  return {at_switch_->first + rest.info, at_switch_->first + rest.cov};
+}
+
+CostBracket EpisodeFusion::deliveredBracket() const {
+  if (segments_.empty()) return {};
+  const ScheduleVersion& last = *segments_.back().version;
+  if (at_switch_) {
+    return bracketAfterSwitch(deliveredSchedule(last.schedule, *scenario_.network, episode_));
+  }
+  if (delivered_bracket_of_) return delivered_bracket_of_(last);
+  return computeBracket(scenario_, deliveredSchedule(last.schedule, *scenario_.network, episode_));
+}
+
 EpisodeResult EpisodeFusion::finish() {
   scheduleChanged();
   if (replay_) {
@@ -304,14 +325,11 @@ EpisodeResult EpisodeFusion::finish() {
   for (const ScheduleSegment& segment : segments_) result.versions.push_back(segment.version->version);
   result.switch_time_s = switch_time_s_;
   if (at_switch_) {
-    RolloutOptions options;
-    options.start_time = switch_time_s_;
-    options.start_covariance = at_switch_->second;
-    const CostBracket rest = computeBracket(scenario_, segments_.back().version->schedule, options);
-    result.bracket = {at_switch_->first + rest.info, at_switch_->first + rest.cov};
+    result.bracket = bracketAfterSwitch(segments_.back().version->schedule);
   } else if (!segments_.empty()) {
     result.bracket = bracket_of_(*segments_.front().version);
   }
+  result.delivered_bracket = scenario_.network ? deliveredBracket() : result.bracket;
   const Eigen::VectorXd error = plant_.stateAt(episode_, plant_.tickCount()) - filter_.mean();
   result.nees = error.dot(filter_.covariance().llt().solve(error));
   result.complete = allSettled();

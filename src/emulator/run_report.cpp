@@ -29,6 +29,22 @@ json optionalJson(const std::optional<double>& value) {
   return value ? json(*value) : json(nullptr);
 }
 
+json optionalJson(const std::optional<bool>& value) {
+  return value ? json(*value) : json(nullptr);
+}
+
+json bracketJson(const CostBracket& b) { return {{"info", b.info}, {"cov", b.cov}}; }
+
+void addBracket(CostBracket& sum, const json& b) {
+  sum.info += b.at("info").get<double>();
+  sum.cov += b.at("cov").get<double>();
+}
+
+// The 95% interval of the mean meets the bracket.
+bool meets(const RunSummary& s, const CostBracket& bracket) {
+  return s.ci95_low <= bracket.cov && s.ci95_high >= bracket.info;
+}
+
 }  // namespace
 
 double quantile(std::vector<double> values, double q) {
@@ -51,7 +67,8 @@ json episodeEntry(const EpisodeResult& r) {
   return {{"episode", r.episode},
           {"realized_cost", r.realized_cost},
           {"realtime_cost", r.realtime_cost},
-          {"bracket", {{"info", r.bracket.info}, {"cov", r.bracket.cov}}},
+          {"bracket", bracketJson(r.bracket)},
+          {"delivered_bracket", bracketJson(r.delivered_bracket)},
           {"schedule_versions", r.versions},
           {"switch_time_s", r.switch_time_s},
           {"nees", r.nees},
@@ -110,8 +127,8 @@ RunSummary RunReport::summary() const {
     if (!e.at("complete").get<bool>()) continue;
     costs.push_back(e.at("realized_cost").get<double>());
     s.realtime_mean += e.value("realtime_cost", costs.back());
-    s.bracket_mean.info += e.at("bracket").at("info").get<double>();
-    s.bracket_mean.cov += e.at("bracket").at("cov").get<double>();
+    addBracket(s.bracket_mean, e.at("bracket"));
+    addBracket(s.delivered_bracket_mean, e.value("delivered_bracket", e.at("bracket")));
     s.nees_mean += e.value("nees", 0.0);
   }
   s.episodes_complete = static_cast<std::uint32_t>(costs.size());
@@ -121,6 +138,8 @@ RunSummary RunReport::summary() const {
     s.realtime_mean /= k;
     s.bracket_mean.info /= k;
     s.bracket_mean.cov /= k;
+    s.delivered_bracket_mean.info /= k;
+    s.delivered_bracket_mean.cov /= k;
     s.nees_mean /= k;
     s.ci95_low = s.ci95_high = s.mean;
   }
@@ -132,7 +151,8 @@ RunSummary RunReport::summary() const {
     s.ci95 = studentTQuantile(0.975, k - 1.0) * s.std_dev / std::sqrt(k);
     s.ci95_low = std::max(0.0, s.mean - *s.ci95);
     s.ci95_high = s.mean + *s.ci95;
-    s.meets_bracket = s.ci95_low <= s.bracket_mean.cov && s.ci95_high >= s.bracket_mean.info;
+    s.meets_bracket = meets(s, s.bracket_mean);
+    s.meets_delivered_bracket = meets(s, s.delivered_bracket_mean);
   }
   if (!latencies_s_.empty()) {
     s.latency_median_s = quantile(latencies_s_, 0.5);
@@ -207,8 +227,10 @@ json RunReport::toJson(const std::string& status, const json& faults,
         {"ci95_low", s.ci95_low},
         {"ci95_high", s.ci95_high},
         {"realtime_mean", s.realtime_mean},
-        {"bracket", {{"info", s.bracket_mean.info}, {"cov", s.bracket_mean.cov}}},
-        {"meets_bracket", s.meets_bracket ? json(*s.meets_bracket) : json(nullptr)},
+        {"bracket", bracketJson(s.bracket_mean)},
+        {"meets_bracket", optionalJson(s.meets_bracket)},
+        {"delivered_bracket", bracketJson(s.delivered_bracket_mean)},
+        {"meets_delivered_bracket", optionalJson(s.meets_delivered_bracket)},
         {"nees_mean", s.nees_mean},
         {"sent", s.sent},
         {"received", s.received},

@@ -42,6 +42,10 @@
 // the version in force after s, started from the fused P(s). Conditioned on what happened up to
 // s, the schedule from s on is fixed, so Corollary 1 brackets E[J | F_s] and, averaged over
 // episodes, E[J].
+//
+// The delivered bracket: the same, for the schedule the emulated network lets through in this
+// episode (deliveredSchedule of network.hpp: rates thinned by loss, zero in the episode's
+// outages) instead of the planned one; without a `network:` section it is the bracket.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -111,6 +115,7 @@ struct EpisodeResult {
   double realized_cost = 0.0;           // hindsight: every measurement, in timestamp order
   double realtime_cost = 0.0;           // what had arrived by each instant (see above)
   CostBracket bracket;
+  CostBracket delivered_bracket;        // of the schedule the emulated network delivers
   std::vector<std::uint32_t> versions;  // in force during the episode, in time order
   double switch_time_s = 0.0;           // the last switch (0 when none)
   double nees = 0.0;                    // e(T)' P(T)^{-1} e(T) against the emulated truth
@@ -131,8 +136,11 @@ class EpisodeFusion {
 
   // The book must hold the version in force at time 0 of `episode`; the references must
   // outlive this object. Versions added to the book later are picked up by scheduleChanged().
+  // bracket_of: the bracket of a version over [0, T] from P0 (a caller may cache it);
+  // delivered_bracket_of: the same of the version's delivered schedule in this episode, computed
+  // here when not given.
   EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plant, const ScheduleBook& book,
-                std::uint32_t episode, BracketOf bracket_of);
+                std::uint32_t episode, BracketOf bracket_of, BracketOf delivered_bracket_of = {});
 
   [[nodiscard]] std::uint32_t episode() const { return episode_; }
   // Call after the book got a version: the stretches of the episode are recomputed. If the
@@ -168,12 +176,16 @@ class EpisodeFusion {
   using Key = std::tuple<double, int, std::uint64_t>;  // (time, sensor, seq)
   void fuse(const FusedMeasurement& m);
   void propagateTo(double t);  // stops at the last switch point to record P(s)
+  // The bracket of `schedule` on what is left after the last switch, plus the realized part.
+  [[nodiscard]] CostBracket bracketAfterSwitch(const RateSchedule& schedule) const;
+  [[nodiscard]] CostBracket deliveredBracket() const;
 
   const Scenario& scenario_;
   const EmulatedPlant& plant_;
   const ScheduleBook& book_;
   std::uint32_t episode_;
   BracketOf bracket_of_;
+  BracketOf delivered_bracket_of_;
   std::vector<ScheduleSegment> segments_;
   double switch_time_s_ = 0.0;
   std::optional<std::pair<double, Eigen::MatrixXd>> at_switch_;  // running cost, P(s)

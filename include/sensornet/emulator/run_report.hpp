@@ -42,6 +42,8 @@ struct RunSummary {
   double realtime_mean = 0.0;             // mean real-time cost (EpisodeResult::realtime_cost)
   CostBracket bracket_mean;
   std::optional<bool> meets_bracket;      // [ci95_low, ci95_high] meets [info, cov]
+  CostBracket delivered_bracket_mean;     // of the schedules the emulated network delivered
+  std::optional<bool> meets_delivered_bracket;
   double nees_mean = 0.0;
   std::uint64_t sent = 0;
   std::uint64_t received = 0;

@@ -14,6 +14,7 @@
 
 #include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/network_spec.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/run_report.hpp"
@@ -396,6 +397,84 @@ TEST_F(EpisodeFusionTest, BracketsASwitchedEpisodeFromTheFusedCovarianceAtTheSwi
   for (const auto& t : r.sensors) EXPECT_EQ(t.wrong_version, 0u);
 }
 
+// A network that drops 30% of sensor 1's measurements in every episode and cuts sensor 2 off on
+// [0.5, 1.5) in episode 1 only (on the 0.5 s grid of smallScenario: intervals 1 and 2).
+NetworkSpec lossyNetwork() {
+  NetworkSpec network;
+  network.links.resize(4);
+  network.links[1].loss = 0.3;
+  network.outages.push_back({2, {1}, 0.5, 1.5});
+  return network;
+}
+
+// The delivered schedule by hand: λ_1 (1 - 0.3) and, in episode 1, λ_2 = 0 on intervals 1, 2.
+RateSchedule thinnedByHand(const RateSchedule& planned, std::uint32_t episode) {
+  Eigen::MatrixXd rates = planned.rates();
+  rates.col(1) *= 0.7;
+  if (episode == 1) rates.block(1, 2, 2, 1).setZero();
+  return RateSchedule(planned.horizon(), rates);
+}
+
+TEST_F(EpisodeFusionTest, BracketsWhatTheNetworkDeliversBesideWhatWasPlanned) {
+  Scenario lossy = scenario_;
+  ASSERT_DOUBLE_EQ(lossy.intervalLength(), 0.5);
+  lossy.network = lossyNetwork();
+  const RateSchedule planned = uniformSchedule(lossy);
+  const CostBracket planned_bracket = computeBracket(lossy, planned);
+  int computed_here = 0;
+  for (std::uint32_t episode = 0; episode < 2; ++episode) {
+    EpisodeFusion fusion(lossy, plant_, book_, episode,
+                         [&](const ScheduleVersion& v) { return computeBracket(lossy, v.schedule); });
+    const EpisodeResult r = fusion.finish();
+    const CostBracket by_hand = computeBracket(lossy, thinnedByHand(planned, episode));
+    EXPECT_EQ(r.bracket.info, planned_bracket.info);
+    EXPECT_NEAR(r.delivered_bracket.info, by_hand.info, 1e-9 * by_hand.info) << episode;
+    EXPECT_NEAR(r.delivered_bracket.cov, by_hand.cov, 1e-9 * by_hand.cov) << episode;
+    // Less information arrives than planned: both surrogate costs are higher.
+    EXPECT_GT(r.delivered_bracket.info, r.bracket.info);
+    EXPECT_GT(r.delivered_bracket.cov, r.bracket.cov);
+    // A caller's (cached) delivered bracket is used when given.
+    EpisodeFusion cached(lossy, plant_, book_, episode,
+                         [&](const ScheduleVersion& v) { return computeBracket(lossy, v.schedule); },
+                         [&](const ScheduleVersion&) {
+                           ++computed_here;
+                           return CostBracket{1.0, 2.0};
+                         });
+    EXPECT_EQ(cached.finish().delivered_bracket.cov, 2.0);
+  }
+  EXPECT_EQ(computed_here, 2);
+  // Without a network: the delivered bracket is the bracket.
+  EpisodeFusion plain(scenario_, plant_, book_, 1, bracketOf());
+  const EpisodeResult r = plain.finish();
+  EXPECT_EQ(r.delivered_bracket.info, r.bracket.info);
+  EXPECT_EQ(r.delivered_bracket.cov, r.bracket.cov);
+}
+
+// After a switch at s: the realized ∫<W,P> up to s plus the surrogates of the new version's
+// delivered schedule from the fused P(s).
+TEST_F(EpisodeFusionTest, BracketsWhatTheNetworkDeliversAfterASwitch) {
+  Scenario lossy = scenario_;
+  lossy.cost.W = Eigen::MatrixXd::Identity(3, 3);
+  lossy.network = lossyNetwork();
+  const double at = plant_.timeOf(plant_.tickAt(1.1));
+  ScheduleBook book;
+  (void)book.add(versionOf(1, uniformSchedule(lossy)));
+  (void)book.add(versionOf(2, withoutSensorZero(lossy), 1, at));
+  EpisodeFusion fusion(lossy, plant_, book, 1,
+                       [&](const ScheduleVersion& v) { return computeBracket(lossy, v.schedule); });
+  const EpisodeResult r = fusion.finish();  // no measurement: P(s) is the open-loop covariance
+  CdKalmanFilter filter(lossy);
+  filter.propagateTo(at);
+  RolloutOptions options;
+  options.start_time = at;
+  options.start_covariance = filter.covariance();
+  const CostBracket rest =
+      computeBracket(lossy, thinnedByHand(withoutSensorZero(lossy), 1), options);
+  EXPECT_NEAR(r.delivered_bracket.info, filter.runningCost() + rest.info, 1e-9 * r.delivered_bracket.info);
+  EXPECT_NEAR(r.delivered_bracket.cov, filter.runningCost() + rest.cov, 1e-9 * r.delivered_bracket.cov);
+  EXPECT_GT(r.delivered_bracket.info, r.bracket.info);
+}
+
 EpisodeResult episodeWith(std::uint32_t number, double cost, double info, bool complete) {
   EpisodeResult e;
   e.episode = number;
@@ -460,6 +539,44 @@ TEST(RunReport, CountsWhatTheNetworkDroppedPerEpisodePerSensorAndInTotal) {
   const RunSummary s = report.summary();
   EXPECT_EQ(s.sent, s.received + s.lost + s.dropped_by_network);
   EXPECT_EQ(faultyRejections(s.rejected), 0u);
+}
+
+// Costs 4, 5, 6 (mean 5, 95% interval 5 ± 4.30 * 1 / sqrt(3) = [2.52, 7.48]) against a planned
+// bracket [1, 2] it misses and a delivered bracket [4, 6] it meets; an incomplete episode and
+// an entry without a delivered bracket (an older log: the bracket stands in) as stated.
+TEST(RunReport, SaysWhetherTheMeanMeetsTheDeliveredBracket) {
+  RunReport report("r", "d", 2, 3);
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    EpisodeResult e = episodeWith(i, 4.0 + i, 1.0, true);
+    e.bracket = {1.0, 2.0};
+    e.delivered_bracket = {3.0 + i, 5.0 + i};
+    report.add(episodeEntry(e));
+  }
+  EpisodeResult incomplete = episodeWith(3, 100.0, 1.0, false);
+  incomplete.delivered_bracket = {100.0, 200.0};
+  report.add(episodeEntry(incomplete));
+  RunSummary s = report.summary();
+  EXPECT_DOUBLE_EQ(s.delivered_bracket_mean.info, 4.0);
+  EXPECT_DOUBLE_EQ(s.delivered_bracket_mean.cov, 6.0);
+  EXPECT_EQ(s.meets_bracket, std::optional<bool>(false));
+  EXPECT_EQ(s.meets_delivered_bracket, std::optional<bool>(true));
+  const nlohmann::json doc = report.toJson("completed", nlohmann::json::array(), nlohmann::json::array());
+  EXPECT_EQ(doc.at("summary").at("delivered_bracket"), nlohmann::json({{"info", 4.0}, {"cov", 6.0}}));
+  EXPECT_EQ(doc.at("summary").at("meets_delivered_bracket"), true);
+  EXPECT_EQ(doc.at("per_episode").at(1).at("delivered_bracket").at("cov"), 6.0);
+
+  nlohmann::json old = episodeEntry(episodeWith(4, 5.0, 1.0, true));
+  old.erase("delivered_bracket");
+  report.add(old);
+  s = report.summary();
+  EXPECT_DOUBLE_EQ(s.delivered_bracket_mean.info, (12.0 + 1.0) / 4.0);
+
+  RunReport one("r", "d", 2, 3);
+  one.add(episodeEntry(episodeWith(0, 3.0, 1.0, true)));
+  EXPECT_TRUE(one.toJson("completed", nlohmann::json::array(), nlohmann::json::array())
+                  .at("summary")
+                  .at("meets_delivered_bracket")
+                  .is_null());
 }
 
 TEST(RunReport, ClipsTheIntervalAtZeroAndLeavesOneEpisodeUndetermined) {
