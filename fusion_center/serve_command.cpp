@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -165,6 +166,12 @@ class FusionCenter {
       for (auto& [episode, open] : open_) open.fusion->scheduleChanged();
     }
     for (const emulator::EpisodeStart& start : update.starts) startEpisode(start);
+    for (const emulator::SensorFailure& failure : update.failures) {
+      spdlog::warn("sensors failed in episode {} at {:.3g} s: {}", failure.episode, failure.at_s,
+                   failure.detail);
+      failures_.push_back(failure);
+      for (auto& [number, open] : open_) applyFailure(number, open, failure);
+    }
     if (update.shutdown) return update.end;
     return std::nullopt;
   }
@@ -183,6 +190,8 @@ class FusionCenter {
     open.last_heard_ns.assign(sensors, 0);
     open.tallies.assign(sensors, sensornet_EpisodeTally{});
     auto& slot = open_.emplace(start.episode, std::move(open)).first->second;
+    for (const int j : start.failed_sensors) slot.fusion->sensorFailedBefore(j);
+    for (const emulator::SensorFailure& failure : failures_) applyFailure(start.episode, slot, failure);
     // Measurements and tallies that came before the episode's control sample.
     if (auto early = early_.find(start.episode); early != early_.end()) {
       for (auto& m : early->second) route(slot, std::move(m));
@@ -191,6 +200,21 @@ class FusionCenter {
     if (auto early = early_tallies_.find(start.episode); early != early_tallies_.end()) {
       for (const auto& t : early->second) applyTally(slot, t);
       early_tallies_.erase(early);
+    }
+  }
+
+  // A failed sensor is never awaited: in the episode it died in (the episode is incomplete), in
+  // the later ones (dead from their start), and in an earlier one still waiting for its count.
+  static void applyFailure(std::uint32_t number, OpenEpisode& open,
+                           const emulator::SensorFailure& failure) {
+    for (const int j : failure.sensors) {
+      if (number == failure.episode) {
+        open.fusion->sensorFailedAt(j, failure.at_s);
+      } else if (number > failure.episode) {
+        open.fusion->sensorFailedBefore(j);
+      } else if (!open.fusion->settled(j)) {
+        open.fusion->sensorFailedAt(j, std::numeric_limits<double>::infinity());
+      }
     }
   }
 
@@ -664,6 +688,7 @@ class FusionCenter {
   std::map<std::uint32_t, OpenEpisode> open_;
   std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
   std::map<std::uint32_t, std::vector<sensornet_EpisodeTally>> early_tallies_;
+  std::vector<emulator::SensorFailure> failures_;  // the coordinator's notices, in order
   std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 
 #include "sensornet/core/network.hpp"
@@ -173,7 +174,9 @@ EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plan
       delivered_bracket_of_(std::move(delivered_bracket_of)),
       filter_(scenario),
       tallies_(static_cast<std::size_t>(scenario.sensorCount())),
-      sent_at_least_(tallies_.size(), 0) {
+      sent_at_least_(tallies_.size(), 0),
+      failed_at_(tallies_.size()),
+      failed_before_(tallies_.size(), false) {
   scheduleChanged();
 }
 
@@ -246,7 +249,26 @@ void EpisodeFusion::noteSentAtLeast(int sensor, std::uint64_t sent) {
   at_least = std::max(at_least, sent);
 }
 
+void EpisodeFusion::sensorFailedAt(int sensor, double at_s) {
+  if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
+  const auto j = static_cast<std::size_t>(sensor);
+  if (failed_before_[j]) return;
+  if (!failed_at_[j] || at_s < *failed_at_[j]) failed_at_[j] = at_s;
+}
+
+void EpisodeFusion::sensorFailedBefore(int sensor) {
+  if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
+  const auto j = static_cast<std::size_t>(sensor);
+  if (!failed_at_[j]) failed_before_[j] = true;
+}
+
+bool EpisodeFusion::failed(int sensor) const {
+  const auto j = static_cast<std::size_t>(sensor);
+  return failed_before_[j] || failed_at_[j].has_value();
+}
+
 bool EpisodeFusion::settled(int sensor) const {
+  if (failed(sensor)) return true;
   const SensorTally& t = tallies_[static_cast<std::size_t>(sensor)];
   return t.tallied && t.received + t.dropped_by_network >= t.sent;
 }
@@ -301,6 +323,30 @@ CostBracket EpisodeFusion::deliveredBracket() const {
   return computeBracket(scenario_, deliveredSchedule(last.schedule, *scenario_.network, episode_));
 }
 
+std::string EpisodeFusion::incompleteReason() const {
+  std::string reason;
+  const auto add = [&reason](const std::string& part) {
+    reason += (reason.empty() ? "" : "; ") + part;
+  };
+  for (std::size_t j = 0; j < failed_at_.size(); ++j) {
+    if (!failed_at_[j]) continue;
+    char at[32];
+    std::snprintf(at, sizeof at, "%.6g", *failed_at_[j]);
+    add("sensor " + std::to_string(j) +
+        (*failed_at_[j] < scenario_.horizon_s
+             ? " failed at " + std::string(at) + " s"
+             : " failed after the episode's end, before its count arrived"));
+  }
+  for (const int j : unsettled()) {
+    const SensorTally& t = tallies_[static_cast<std::size_t>(j)];
+    add("sensor " + std::to_string(j) + ": " +
+        (t.tallied ? std::to_string(t.received) + " of " + std::to_string(t.sent) +
+                         " sent measurements arrived"
+                   : "no count (" + std::to_string(t.received) + " measurements arrived)"));
+  }
+  return reason;
+}
+
 EpisodeResult EpisodeFusion::finish() {
   scheduleChanged();
   if (replay_) {
@@ -332,7 +378,11 @@ EpisodeResult EpisodeFusion::finish() {
   result.delivered_bracket = scenario_.network ? deliveredBracket() : result.bracket;
   const Eigen::VectorXd error = plant_.stateAt(episode_, plant_.tickCount()) - filter_.mean();
   result.nees = error.dot(filter_.covariance().llt().solve(error));
-  result.complete = allSettled();
+  result.incomplete_reason = incompleteReason();
+  result.complete = result.incomplete_reason.empty();
+  for (int j = 0; j < scenario_.sensorCount(); ++j) {
+    if (failed(j)) result.failed_sensors.push_back(j);
+  }
   std::vector<SensorTally> tallies = tallies_;
   for (const ScheduleSegment& segment : segments_) {
     const Eigen::VectorXd expected =

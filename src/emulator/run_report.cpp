@@ -73,6 +73,8 @@ json episodeEntry(const EpisodeResult& r) {
           {"switch_time_s", r.switch_time_s},
           {"nees", r.nees},
           {"complete", r.complete},
+          {"incomplete_reason", r.complete ? json(nullptr) : json(r.incomplete_reason)},
+          {"failed_sensors", r.failed_sensors},
           {"sent", perSensor(r, [](const SensorTally& t) { return t.sent; })},
           {"received", perSensor(r, [](const SensorTally& t) { return t.received; })},
           {"lost", perSensor(r, [](const SensorTally& t) { return t.lost; })},

@@ -7,6 +7,7 @@
 //   fusion.add(measurement);           // any order; returns the rejection when it refuses one
 //   fusion.fuseUpTo(watermark_s);      // online: fuse what can no longer be overtaken
 //   fusion.setTally(j, {sent, dropped, duplicated});  // sensor j's end-of-episode tally
+//   fusion.sensorFailedAt(k, 1.25);    // sensor k died: nobody waits for its tally
 //   if (fusion.allSettled()) ...;      // every tally in, and every sent measurement received
 //   EpisodeResult r = fusion.finish(); // fuse the rest, propagate to T, bracket, account
 //
@@ -35,6 +36,11 @@
 // copies refused as "duplicate", up to the tally's duplicated_by_network are counted as
 // "network_duplicate" instead: a scripted impairment, not a fault. Rejected samples are counted
 // by reason and never fused nor received.
+//
+// Failed sensors (their process died) are never awaited. One that died during the episode
+// (sensorFailedAt) leaves it incomplete ("sensor 3 failed at 1.25 s"), with its sent count the
+// best lower bound; one that was dead before it (sensorFailedBefore) sends and receives nothing
+// and does not make it incomplete (its expected count still shows what the schedule asked).
 //
 // The bracket in force: with one schedule version over the episode, [J(P_info), J(P_cov)] of
 // that version from P0 (Corollary 1 of the first paper). When versions switched during the
@@ -123,6 +129,8 @@ struct EpisodeResult {
   std::vector<double> latencies_s;      // publish to fusion, one per measurement
   RejectionCounts rejected;
   bool complete = false;                // every tally in and every sent measurement received
+  std::string incomplete_reason;        // why not complete ("sensor 3 failed at 1.25 s; ...")
+  std::vector<int> failed_sensors;      // dead during or before the episode
   // Filled in by the fusion center: wall seconds from the later of the episode's end and the
   // last tally's publication until everything owed was in, less its own stalls; the largest
   // number of measurements waiting for its main loop during the episode.
@@ -155,7 +163,14 @@ class EpisodeFusion {
   void setTally(int sensor, const EpisodeCount& count);
   // A lower bound of what `sensor` published, from its status (used when no tally comes).
   void noteSentAtLeast(int sensor, std::uint64_t sent);
-  // Its tally is in and every measurement it sent was received or dropped by the network.
+  // `sensor` died at emulated time at_s of this episode (at_s >= T: after its end, before its
+  // tally came); the earliest time given counts.
+  void sensorFailedAt(int sensor, double at_s);
+  // `sensor` was dead before this episode began.
+  void sensorFailedBefore(int sensor);
+  [[nodiscard]] bool failed(int sensor) const;
+  // Its tally is in and every measurement it sent was received or dropped by the network, or it
+  // failed (a dead sensor is not awaited).
   [[nodiscard]] bool settled(int sensor) const;
   [[nodiscard]] bool allSettled() const;
   [[nodiscard]] std::vector<int> unsettled() const;
@@ -176,6 +191,7 @@ class EpisodeFusion {
   using Key = std::tuple<double, int, std::uint64_t>;  // (time, sensor, seq)
   void fuse(const FusedMeasurement& m);
   void propagateTo(double t);  // stops at the last switch point to record P(s)
+  [[nodiscard]] std::string incompleteReason() const;
   // The bracket of `schedule` on what is left after the last switch, plus the realized part.
   [[nodiscard]] CostBracket bracketAfterSwitch(const RateSchedule& schedule) const;
   [[nodiscard]] CostBracket deliveredBracket() const;
@@ -195,6 +211,8 @@ class EpisodeFusion {
   std::set<std::pair<int, std::uint64_t>> seen_;   // (sensor, seq)
   std::vector<SensorTally> tallies_;
   std::vector<std::uint64_t> sent_at_least_;  // status and highest seq + 1
+  std::vector<std::optional<double>> failed_at_;  // died during the episode, at this time
+  std::vector<bool> failed_before_;               // dead before the episode
   RejectionCounts rejected_;
   bool replay_ = false;
 };

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "sensornet/core/cdkf.hpp"
@@ -333,6 +334,88 @@ TEST_F(EpisodeFusionTest, NetworkDropsAreNotLossesAndItsCopiesAreNoFault) {
   for (int j = 2; j < 4; ++j) whole.setTally(j, {by_sensor[static_cast<std::size_t>(j)].size()});
   EXPECT_TRUE(whole.allSettled());
   EXPECT_TRUE(whole.finish().complete);
+}
+
+// Sensor 2 dies at 1.5 s: what it sent before arrives, its tally never comes. The episode closes
+// once the live sensors are settled, incomplete and saying why, with sensor 2's sent count the
+// best lower bound (highest seq + 1); its missing tally is not waited for.
+TEST_F(EpisodeFusionTest, ASensorThatDiesIsNotAwaitedAndLeavesItsEpisodeIncomplete) {
+  const std::vector<FusedMeasurement> all = measurements(4);
+  std::vector<FusedMeasurement> delivered;
+  std::vector<std::uint64_t> sent(4, 0);
+  for (const auto& m : all) {
+    if (m.sensor == 2 && m.time_s >= 1.5) continue;
+    delivered.push_back(m);
+    sent[static_cast<std::size_t>(m.sensor)] = m.seq + 1;
+  }
+  ASSERT_GT(sent[2], 0u);
+  EpisodeFusion fusion(scenario_, plant_, book_, 4, bracketOf());
+  for (const auto& m : delivered) EXPECT_FALSE(fusion.add(m));
+  for (const int j : {0, 1, 3}) fusion.setTally(j, {sent[static_cast<std::size_t>(j)]});
+  EXPECT_EQ(fusion.unsettled(), std::vector<int>{2});
+  fusion.sensorFailedAt(2, 1.5);
+  fusion.sensorFailedAt(2, 1.75);  // a later notice naming it again: the earliest time stands
+  EXPECT_TRUE(fusion.failed(2));
+  EXPECT_TRUE(fusion.allSettled());
+  EXPECT_TRUE(fusion.unsettled().empty());
+  const EpisodeResult r = fusion.finish();
+  EXPECT_FALSE(r.complete);
+  EXPECT_EQ(r.incomplete_reason, "sensor 2 failed at 1.5 s");
+  EXPECT_EQ(r.failed_sensors, std::vector<int>{2});
+  EXPECT_EQ(r.sensors[2].sent, sent[2]);
+  EXPECT_EQ(r.sensors[2].received, sent[2]);
+  EXPECT_EQ(r.sensors[2].lost, 0u);
+  EXPECT_EQ(r.realized_cost, inOrderCost(delivered));
+}
+
+// Dead before the episode: nothing sent, nothing awaited, the episode complete; the expected
+// count still says what the schedule asked of it.
+TEST_F(EpisodeFusionTest, ASensorDeadBeforeTheEpisodeSendsNothingAndLeavesItComplete) {
+  std::vector<FusedMeasurement> live;
+  for (const auto& m : measurements(5)) {
+    if (m.sensor != 1) live.push_back(m);
+  }
+  std::vector<std::uint64_t> sent(4, 0);
+  for (const auto& m : live) sent[static_cast<std::size_t>(m.sensor)] = m.seq + 1;
+  EpisodeFusion fusion(scenario_, plant_, book_, 5, bracketOf());
+  fusion.sensorFailedBefore(1);
+  fusion.sensorFailedAt(1, 0.5);  // a notice listing every sensor dead so far: still "before"
+  for (const auto& m : live) EXPECT_FALSE(fusion.add(m));
+  for (const int j : {0, 2, 3}) fusion.setTally(j, {sent[static_cast<std::size_t>(j)]});
+  EXPECT_TRUE(fusion.allSettled());
+  const EpisodeResult r = fusion.finish();
+  EXPECT_TRUE(r.complete);
+  EXPECT_EQ(r.incomplete_reason, "");
+  EXPECT_EQ(r.failed_sensors, std::vector<int>{1});
+  EXPECT_EQ(r.sensors[1].sent, 0u);
+  EXPECT_EQ(r.sensors[1].received, 0u);
+  EXPECT_EQ(r.sensors[1].lost, 0u);
+  EXPECT_DOUBLE_EQ(r.sensors[1].expected,
+                   uniformSchedule(scenario_).expectedCounts(0.0, scenario_.horizon_s)(1));
+  EXPECT_GT(r.sensors[1].expected, 0.0);
+}
+
+TEST_F(EpisodeFusionTest, AnIncompleteEpisodeSaysWhatItMissed) {
+  const std::vector<FusedMeasurement> all = measurements(6);
+  EpisodeFusion fusion(scenario_, plant_, book_, 6, bracketOf());
+  const FusedMeasurement& m = all[0];
+  EXPECT_FALSE(fusion.add(m));
+  fusion.setTally(m.sensor, {3});
+  const int other = (m.sensor + 1) % 4;
+  fusion.sensorFailedAt(other, std::numeric_limits<double>::infinity());
+  const EpisodeResult r = fusion.finish();
+  EXPECT_FALSE(r.complete);
+  EXPECT_NE(r.incomplete_reason.find("sensor " + std::to_string(other) +
+                                     " failed after the episode's end, before its count arrived"),
+            std::string::npos)
+      << r.incomplete_reason;
+  EXPECT_NE(r.incomplete_reason.find("sensor " + std::to_string(m.sensor) +
+                                     ": 1 of 3 sent measurements arrived"),
+            std::string::npos)
+      << r.incomplete_reason;
+  const nlohmann::json entry = episodeEntry(r);
+  EXPECT_EQ(entry.at("incomplete_reason"), r.incomplete_reason);
+  EXPECT_EQ(entry.at("failed_sensors"), nlohmann::json({other}));
 }
 
 TEST_F(EpisodeFusionTest, OnlineWatermarksNeverChangeTheRealizedCost) {
