@@ -88,9 +88,9 @@ RateSchedule deliveredSchedule(const RateSchedule& schedule, const NetworkSpec& 
   const std::vector<Outage> outages = outagesOf(network, episode);
   const int factor = outageRefinement(schedule.horizon(), schedule.intervals(), outages);
   if (factor == 0) {
-    throw InputError("network", "outages",
-                     "edges on the schedule's grid refined by at most " +
-                         std::to_string(kMaxOutageRefinement));
+    throw InputError(
+        "network", "outages",
+        "edges on the schedule's grid refined by at most " + std::to_string(kMaxOutageRefinement));
   }
   Eigen::MatrixXd rates(static_cast<Eigen::Index>(schedule.intervals()) * factor,
                         schedule.sensorCount());

@@ -32,8 +32,8 @@ double delaySeconds(const YamlReader& in, const YAML::Node& node, const std::str
   const bool low_ok = positive ? seconds > 0.0 : seconds >= 0.0;
   if (!low_ok || seconds > horizon_s) {
     in.fail(node, field,
-         std::string("seconds in ") + (positive ? "(0, " : "[0, ") + shown(horizon_s) +
-             "] (at most the horizon), got " + shown(seconds));
+            std::string("seconds in ") + (positive ? "(0, " : "[0, ") + shown(horizon_s) +
+                "] (at most the horizon), got " + shown(seconds));
   }
   return seconds;
 }
@@ -67,14 +67,14 @@ void readDelay(const YamlReader& in, const YAML::Node& delay, const std::string&
     draft.has_mean = true;
     if (draft.link.jitter == Jitter::None) {
       in.fail(delay["mean"], field + ".mean",
-           "no mean with jitter: none (give jitter: exponential or lognormal)");
+              "no mean with jitter: none (give jitter: exponential or lognormal)");
     }
   }
   if (delay["sigma"]) {
     const double sigma = in.number(delay["sigma"], field + ".sigma");
     if (!(sigma > 0.0 && sigma <= kMaxLognormalSigma)) {
       in.fail(delay["sigma"], field + ".sigma",
-           "a number in (0, " + shown(kMaxLognormalSigma) + "], got " + shown(sigma));
+              "a number in (0, " + shown(kMaxLognormalSigma) + "], got " + shown(sigma));
     }
     draft.link.jitter_sigma = sigma;
     draft.has_sigma = true;
@@ -102,7 +102,7 @@ LinkSpec finished(const YamlReader& in, const YAML::Node& node, const std::strin
   LinkSpec& link = draft.link;
   if (link.jitter != Jitter::None && !draft.has_mean) {
     in.fail(node, field + ".delay.mean",
-         "a value: the mean jitter in seconds (required for jitter: exponential and lognormal)");
+            "a value: the mean jitter in seconds (required for jitter: exponential and lognormal)");
   }
   if (link.jitter == Jitter::Lognormal && !draft.has_sigma) link.jitter_sigma = 0.5;
   if (link.jitter != Jitter::Lognormal) link.jitter_sigma = 0.0;
@@ -115,8 +115,8 @@ int sensorIndex(const YamlReader& in, const YAML::Node& node, const std::string&
   const long index = in.integer(node, field);
   if (index < 0 || index >= sensors) {
     in.fail(node, field,
-         "a sensor index from 0 to " + std::to_string(sensors - 1) + ", got " +
-             std::to_string(index));
+            "a sensor index from 0 to " + std::to_string(sensors - 1) + ", got " +
+                std::to_string(index));
   }
   return static_cast<int>(index);
 }
@@ -142,7 +142,7 @@ void readLinks(const YamlReader& in, const YAML::Node& network, Scenario& s, Net
   if (!overrides) return;
   if (!overrides.IsMap()) {
     in.fail(overrides, "network.sensors",
-         "a mapping from sensor index to link fields, like {2: {loss: 0.5}}");
+            "a mapping from sensor index to link fields, like {2: {loss: 0.5}}");
   }
   std::set<int> seen;
   for (const auto& entry : overrides) {
@@ -168,11 +168,10 @@ std::vector<std::uint32_t> readEpisodeList(const YamlReader& in, const YAML::Nod
   return episodes;
 }
 
-void readOutages(const YamlReader& in, const YAML::Node& outages, int sensors,
-                 NetworkSpec& spec) {
+void readOutages(const YamlReader& in, const YAML::Node& outages, int sensors, NetworkSpec& spec) {
   if (!outages.IsSequence()) {
     in.fail(outages, "network.outages",
-         "a list of outages, like [{sensor: 1, episodes: all, from: 0.5, to: 1.2}]");
+            "a list of outages, like [{sensor: 1, episodes: all, from: 0.5, to: 1.2}]");
   }
   for (std::size_t i = 0; i < outages.size(); ++i) {
     const std::string field = "network.outages[" + std::to_string(i) + "]";
@@ -181,7 +180,8 @@ void readOutages(const YamlReader& in, const YAML::Node& outages, int sensors,
     Outage outage;
     outage.sensor =
         sensorIndex(in, in.required(node, "sensor", field + ".sensor"), field + ".sensor", sensors);
-    if (node["episodes"]) outage.episodes = readEpisodeList(in, node["episodes"], field + ".episodes");
+    if (node["episodes"])
+      outage.episodes = readEpisodeList(in, node["episodes"], field + ".episodes");
     outage.from_s = in.number(in.required(node, "from", field + ".from"), field + ".from");
     outage.to_s = in.number(in.required(node, "to", field + ".to"), field + ".to");
     spec.outages.push_back(std::move(outage));
@@ -208,7 +208,8 @@ void readNetworkSection(const YamlReader& in, const YAML::Node& network, Scenari
 void readFaults(const YamlReader& in, const YAML::Node& faults, Scenario& scenario) {
   if (!faults) return;
   if (!faults.IsSequence()) {
-    in.fail(faults, "faults", "a list of faults, like [{kind: crash, sensor: 3, episode: 2, at: 1.0}]");
+    in.fail(faults, "faults",
+            "a list of faults, like [{kind: crash, sensor: 3, episode: 2, at: 1.0}]");
   }
   for (std::size_t i = 0; i < faults.size(); ++i) {
     const std::string field = "faults[" + std::to_string(i) + "]";
@@ -217,8 +218,8 @@ void readFaults(const YamlReader& in, const YAML::Node& faults, Scenario& scenar
     const YAML::Node kind = in.required(node, "kind", field + ".kind");
     if (!kind.IsScalar() || kind.Scalar() != "crash") {
       in.fail(kind, field + ".kind",
-           "one of the known kinds (crash), got '" +
-               shortened(kind.IsScalar() ? kind.Scalar() : "(not a name)") + "'");
+              "one of the known kinds (crash), got '" +
+                  shortened(kind.IsScalar() ? kind.Scalar() : "(not a name)") + "'");
     }
     in.rejectUnknownKeys(node, field, {"kind", "sensor", "episode", "at"});
     CrashFault crash;

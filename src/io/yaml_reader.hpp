@@ -94,8 +94,8 @@ class YamlReader {
              std::to_string(cols) + " entries like row 0, got " + std::to_string(row.size()));
       }
       for (Eigen::Index j = 0; j < cols; ++j) {
-        m(i, j) = number(row[static_cast<std::size_t>(j)],
-                         row_field + "[" + std::to_string(j) + "]");
+        m(i, j) =
+            number(row[static_cast<std::size_t>(j)], row_field + "[" + std::to_string(j) + "]");
       }
     }
     return m;

@@ -112,8 +112,8 @@ TEST(DeliveryFactors, AreTheDeliveredFractionOfEachInterval) {
   NetworkSpec network = lossEverywhere(0.0, 2);
   network.links[0].loss = 0.2;
   network.outages.push_back(outage(0, 0.25, 0.75));
-  network.outages.push_back(outage(0, 0.3, 0.5));         // overlaps the first: counted once
-  network.outages.push_back(outage(1, 0.0, 0.5, {0}));    // one episode only: not planned for
+  network.outages.push_back(outage(0, 0.3, 0.5));       // overlaps the first: counted once
+  network.outages.push_back(outage(1, 0.0, 0.5, {0}));  // one episode only: not planned for
   s.network = network;
   const Eigen::MatrixXd f = deliveryFactors(s);
   ASSERT_EQ(f.rows(), 10);

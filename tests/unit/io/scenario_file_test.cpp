@@ -304,7 +304,8 @@ INSTANTIATE_TEST_SUITE_P(
                         withNetwork("network: {sensors: {1: {delay: {jitter: lognormal}}}}\n"),
                         "network.sensors.1.delay.mean", "required"},
         BadScenarioCase{"zero jitter mean",
-                        withNetwork("network: {default: {delay: {jitter: exponential, mean: 0}}}\n"),
+                        withNetwork("network: {default: {delay: {jitter: exponential, "
+                                    "mean: 0}}}\n"),
                         "network.default.delay.mean", "(0, 2]"},
         BadScenarioCase{"mean without jitter",
                         withNetwork("network: {default: {delay: {mean: 0.1}}}\n"),
