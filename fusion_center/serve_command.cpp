@@ -51,7 +51,13 @@ struct ServeOptions {
   double keep_up_limit_s = 1.0;  // wall seconds of drain or sensor lag that count as overload
   double state_period_s = 0.05;  // FusionState publication period (wall seconds)
   bool json = false;
+  bool resume = false;           // restarted by the launcher: go on from the episode log
 };
+
+// A restarted fusion center waits at most this long (wall seconds after it joined) for its
+// measurement reader to match every live sensor process before it answers for the episode it
+// could not fuse (the coordinator then starts the next one, which must lose nothing).
+constexpr double kResumeMatchWaitS = 5.0;
 
 std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
 
@@ -118,11 +124,19 @@ class FusionCenter {
     inputs_.attachTo(waitset_);
     waitset_.attach(tally_ready_, 1);
     waitset_.attach(status_ready_, 2);
+    const std::int64_t joined_ns = wallNowNs();
     if (!options_.report_path.empty()) {
       const auto log_path = emulator::episodeLogPath(options_.report_path);
-      episode_log_.emplace(log_path);
+      if (options_.resume) {
+        resumed_.emplace(emulator::readEpisodeLog(log_path), joined_ns);
+        spdlog::info("resuming from {} episodes in the episode log {}",
+                     resumed_->entries().size(), log_path.string());
+      }
+      episode_log_.emplace(log_path, options_.resume ? emulator::EpisodeLog::Mode::Append
+                                                     : emulator::EpisodeLog::Mode::Truncate);
       spdlog::info("episode log: {}", log_path.string());
     }
+    if (options_.resume && !resumed_) resumed_.emplace(std::vector<json>{}, joined_ns);
   }
 
   int run() {
@@ -145,6 +159,12 @@ class FusionCenter {
     }
     for (auto& [number, open] : open_) finishEpisode(number, open);
     open_.clear();
+    if (resumed_ && end && report_) {
+      for (const std::uint32_t e : resumed_->heardEnd(end->episodes_run)) restarted_.emplace(e, 0);
+    }
+    if (report_) {
+      while (!restarted_.empty()) finishRestarted(restarted_.begin()->first);
+    }
     const std::string status = decideStatus(end);
     writeReport(status);
     (void)report_writer_.waitForAcks(2s);
@@ -161,6 +181,9 @@ class FusionCenter {
     if (update.scenario_arrived) {
       const Scenario& s = inputs_.scenario();
       report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim());
+      if (resumed_) {
+        for (const json& entry : resumed_->entries()) report_->add(entry);
+      }
     }
     if (update.new_versions > 0) {
       for (auto& [episode, open] : open_) open.fusion->scheduleChanged();
@@ -169,6 +192,14 @@ class FusionCenter {
     for (const emulator::SensorFailure& failure : update.failures) {
       spdlog::warn("sensors failed in episode {} at {:.3g} s: {}", failure.episode, failure.at_s,
                    failure.detail);
+      if (resumed_ && open_.count(failure.episode) == 0 &&
+          (!inputs_.lastStarted() || failure.episode > *inputs_.lastStarted())) {
+        // Under way, and its start was before this process joined (the durable control sample
+        // is this notice now): it cannot be fused; its end is unknown.
+        for (const std::uint32_t e : resumed_->heardOfRunning(failure.episode)) {
+          restarted_.emplace(e, 0);
+        }
+      }
       failures_.push_back(failure);
       for (auto& [number, open] : open_) applyFailure(number, open, failure);
     }
@@ -178,6 +209,17 @@ class FusionCenter {
 
   void startEpisode(const emulator::EpisodeStart& start) {
     episodes_planned_ = start.episodes_planned;
+    if (resumed_) {
+      for (const std::uint32_t e : resumed_->heardStart(start.episode, start.clock.start_wall_ns)) {
+        restarted_.emplace(e, e == start.episode ? start.clock.wallAt(inputs_.scenario().horizon_s)
+                                                 : 0);
+      }
+      if (resumed_->ignores(start.episode)) {
+        early_.erase(start.episode);
+        early_tallies_.erase(start.episode);
+        return;
+      }
+    }
     OpenEpisode open;
     open.clock = start.clock;
     open.fusion = std::make_unique<emulator::EpisodeFusion>(
@@ -316,6 +358,7 @@ class FusionCenter {
       return;
     }
     const std::uint32_t episode = arrival.episode;
+    if (resumed_ && resumed_->ignores(episode)) return;  // logged before, or not fusable here
     auto open = open_.find(episode);
     if (open == open_.end()) {
       if (networkCopyAfterClose(episode, arrival.measurement.sensor)) return;
@@ -357,6 +400,7 @@ class FusionCenter {
         ++rejected_outside_["malformed_tally"];
         continue;
       }
+      if (resumed_ && resumed_->ignores(t.episode)) continue;  // no late tally for those
       if (auto open = open_.find(t.episode); open != open_.end()) {
         applyTally(open->second, t);
       } else if (!inputs_.lastStarted() || t.episode > *inputs_.lastStarted()) {
@@ -394,6 +438,7 @@ class FusionCenter {
     for (auto& received : status_reader_.take(64).samples) {
       const sensornet_SensorStatus& s = *received.sample;
       if (dds::viewString(s.run_id) != options_.run.run_id) continue;
+      sensor_processes_[s.sensor_id] = {s.process_id, s.state};
       auto open = open_.find(s.episode);
       if (open == open_.end() || !inputs_.hasScenario() ||
           s.sensor_id >= static_cast<std::uint32_t>(inputs_.scenario().sensorCount())) {
@@ -419,6 +464,7 @@ class FusionCenter {
 
   void advance() {
     const std::int64_t now = wallNowNs();
+    answerRestarted(now);
     // Measurements handled in this loop turn: how many were waiting for the main loop.
     const std::uint64_t waiting = std::exchange(waiting_, 0);
     for (auto it = open_.begin(); it != open_.end();) {
@@ -445,6 +491,57 @@ class FusionCenter {
       if (now >= next_state_ns_) publishState(number, open);
       ++it;
     }
+  }
+
+  // Episodes this restarted process cannot fuse: each answered (logged, reported, its Report
+  // published so the coordinator moves on) once its end has passed and the measurement reader
+  // has matched every live sensor process, or kResumeMatchWaitS after the join.
+  void answerRestarted(std::int64_t now) {
+    if (restarted_.empty() || !report_) return;
+    const bool waited = awakeSince(resumed_->joinedWallNs(), now) >= kResumeMatchWaitS;
+    if (!waited && !matchedEverySensorProcess()) return;
+    for (auto it = restarted_.begin(); it != restarted_.end();) {
+      const auto [episode, end_ns] = *it;
+      ++it;
+      if (now >= end_ns) finishRestarted(episode);
+    }
+  }
+
+  // The Measurement reader has matched a writer per live sensor process (one per sensor_agent),
+  // as far as the sensors' statuses tell.
+  [[nodiscard]] bool matchedEverySensorProcess() const {
+    std::set<std::int32_t> processes;
+    for (const auto& [sensor, process] : sensor_processes_) {
+      const bool dead = inputs_.failedSensors().count(static_cast<int>(sensor)) > 0 ||
+                        process.state == sensornet_SENSOR_FAILED ||
+                        process.state == sensornet_SENSOR_STOPPED;
+      if (!dead) processes.insert(process.id);
+    }
+    return !processes.empty() && measurement_reader_.matchedWriters() >= processes.size();
+  }
+
+  // The entry and Report of an episode this process could not fuse (it restarted during it).
+  void finishRestarted(std::uint32_t episode) {
+    restarted_.erase(episode);
+    early_.erase(episode);
+    early_tallies_.erase(episode);
+    const Scenario& scenario = inputs_.scenario();
+    emulator::EpisodeResult result = emulator::restartedEpisode(episode, scenario.sensorCount());
+    const auto segments = inputs_.book().segments(episode, scenario.horizon_s);
+    for (const emulator::ScheduleSegment& segment : segments) {
+      result.versions.push_back(segment.version->version);
+    }
+    if (segments.size() == 1) {  // after a switch the bracket needs the fused P(s): unknown
+      result.bracket = bracketOf(*segments.front().version);
+      result.delivered_bracket = scenario.network
+                                     ? deliveredBracketOf(*segments.front().version, episode)
+                                     : result.bracket;
+    }
+    const json entry = emulator::episodeEntry(result);
+    if (episode_log_) episode_log_->append(entry);
+    report_->add(entry);
+    spdlog::warn("episode {}: not fused (the fusion center restarted during it)", episode);
+    publishReport(result, report_->summary());
   }
 
   static std::string formatSeconds(double seconds) {
@@ -517,6 +614,7 @@ class FusionCenter {
     const json entry = emulator::episodeEntry(result);
     if (episode_log_) episode_log_->append(entry);
     report_->add(entry);
+    if (resumed_) resumed_->noteFused(number);
     const emulator::RunSummary s = report_->summary();
     spdlog::info(
         "episode {}{}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} over {} complete "
@@ -608,6 +706,7 @@ class FusionCenter {
   // of the processes): failed when the coordinator gave up, interrupted on a signal, degraded
   // when an episode is missing or incomplete, something was lost or rejected, or it overloaded.
   std::string decideStatus(const std::optional<emulator::RunEnd>& end) {
+    if (resumed_) noteRestart();
     if (!end) return "interrupted";
     if (end->aborted) {
       faults_.push_back(emulator::faultEntry("run_aborted", "coordinator", std::nullopt,
@@ -639,6 +738,24 @@ class FusionCenter {
     }
     const bool clean = faults_.empty() && s.lost == 0 && s.episodes == s.episodes_complete;
     return clean ? "completed" : "degraded";
+  }
+
+  // The restart in the report's faults: the process, the episodes it could not fuse.
+  void noteRestart() {
+    const std::set<std::uint32_t>& lost = resumed_->restarted();
+    std::string episodes;
+    for (const std::uint32_t e : lost) episodes += (episodes.empty() ? "" : ", ") + std::to_string(e);
+    faults_.insert(faults_.begin(),
+                   emulator::faultEntry(
+                       "restarted", kProcess, std::nullopt,
+                       lost.empty() ? std::nullopt : std::optional<std::uint32_t>(*lost.rbegin()),
+                       std::nullopt,
+                       "the fusion center was restarted and resumed from " +
+                           std::to_string(resumed_->entries().size()) + " logged episodes; " +
+                           (lost.empty() ? std::string("no episode was lost")
+                                         : "not fused (incomplete, " +
+                                               std::string(emulator::kRestartedReason) +
+                                               "): episode " + episodes)));
   }
 
   void writeReport(const std::string& status) {
@@ -689,6 +806,13 @@ class FusionCenter {
   std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
   std::map<std::uint32_t, std::vector<sensornet_EpisodeTally>> early_tallies_;
   std::vector<emulator::SensorFailure> failures_;  // the coordinator's notices, in order
+  std::optional<emulator::ResumedRun> resumed_;    // with --resume
+  std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
+  struct SensorProcess {
+    std::int32_t id = 0;
+    sensornet_SensorState state = sensornet_SENSOR_STARTING;
+  };
+  std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses
   std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
@@ -736,6 +860,10 @@ Subcommand addServeCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");
+  cmd->add_flag("--resume", options->resume,
+                "restarted after a death (the launcher adds it): start the report from the "
+                "episode log beside --report and append to it; an episode that began before this "
+                "process and is not in the log is recorded incomplete (fusion_center_restarted)");
   return {cmd, [options] {
             (void)options->run.domainConfig();
             emulator::installStopSignals();

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "sensornet/core/student_t.hpp"
@@ -33,7 +35,12 @@ json optionalJson(const std::optional<bool>& value) {
   return value ? json(*value) : json(nullptr);
 }
 
-json bracketJson(const CostBracket& b) { return {{"info", b.info}, {"cov", b.cov}}; }
+// A number, or null when it is not finite (an episode that could not be fused).
+json numberOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+json bracketJson(const CostBracket& b) {
+  return {{"info", numberOrNull(b.info)}, {"cov", numberOrNull(b.cov)}};
+}
 
 void addBracket(CostBracket& sum, const json& b) {
   sum.info += b.at("info").get<double>();
@@ -65,13 +72,13 @@ std::uint64_t RunSummary::rejectedTotal() const {
 
 json episodeEntry(const EpisodeResult& r) {
   return {{"episode", r.episode},
-          {"realized_cost", r.realized_cost},
-          {"realtime_cost", r.realtime_cost},
+          {"realized_cost", numberOrNull(r.realized_cost)},
+          {"realtime_cost", numberOrNull(r.realtime_cost)},
           {"bracket", bracketJson(r.bracket)},
           {"delivered_bracket", bracketJson(r.delivered_bracket)},
           {"schedule_versions", r.versions},
           {"switch_time_s", r.switch_time_s},
-          {"nees", r.nees},
+          {"nees", numberOrNull(r.nees)},
           {"complete", r.complete},
           {"incomplete_reason", r.complete ? json(nullptr) : json(r.incomplete_reason)},
           {"failed_sensors", r.failed_sensors},
@@ -88,6 +95,18 @@ json episodeEntry(const EpisodeResult& r) {
           {"backlog", r.backlog},
           {"latency_median_s", quantile(r.latencies_s, 0.5)},
           {"latency_p99_s", quantile(r.latencies_s, 0.99)}};
+}
+
+EpisodeResult restartedEpisode(std::uint32_t episode, int sensor_count) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EpisodeResult r;
+  r.episode = episode;
+  r.realized_cost = r.realtime_cost = r.nees = nan;
+  r.bracket = r.delivered_bracket = {nan, nan};
+  r.sensors.resize(static_cast<std::size_t>(std::max(sensor_count, 0)));
+  r.complete = false;
+  r.incomplete_reason = kRestartedReason;
+  return r;
 }
 
 RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor_count,
@@ -265,9 +284,28 @@ std::filesystem::path episodeLogPath(const std::filesystem::path& report_path) {
   return log += ".jsonl";
 }
 
-EpisodeLog::EpisodeLog(const std::filesystem::path& path)
-    : path_(path), out_(path, std::ios::trunc) {
+namespace {
+
+// The file is not empty and its last byte is not a newline: a line torn by a crash.
+bool endsInTornLine(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in || in.tellg() <= 0) return false;
+  in.seekg(-1, std::ios::end);
+  char last = '\n';
+  in.get(last);
+  return last != '\n';
+}
+
+}  // namespace
+
+EpisodeLog::EpisodeLog(const std::filesystem::path& path, Mode mode) : path_(path) {
+  const bool torn = mode == Mode::Append && endsInTornLine(path);
+  out_.open(path, mode == Mode::Append ? std::ios::app : std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write the episode log " + path.string());
+  if (torn) {
+    out_ << '\n';  // the torn line stays a line of its own, which readEpisodeLog skips
+    out_.flush();
+  }
 }
 
 void EpisodeLog::append(const json& entry) {
@@ -285,6 +323,67 @@ std::vector<json> readEpisodeLog(const std::filesystem::path& path) {
     if (entry.is_object() && entry.contains("episode")) entries.push_back(std::move(entry));
   }
   return entries;
+}
+
+ResumedRun::ResumedRun(std::vector<json> log_entries, std::int64_t joined_wall_ns)
+    : joined_wall_ns_(joined_wall_ns) {
+  std::map<std::uint32_t, json> by_episode;
+  for (json& entry : log_entries) {
+    const json& number = entry.at("episode");
+    if (!number.is_number_unsigned()) continue;
+    by_episode.emplace(number.get<std::uint32_t>(), std::move(entry));
+  }
+  for (auto& [episode, entry] : by_episode) {
+    logged_.insert(episode);
+    entries_.push_back(std::move(entry));
+  }
+}
+
+bool ResumedRun::ignores(std::uint32_t episode) const {
+  return logged_.count(episode) > 0 || restarted_.count(episode) > 0;
+}
+
+std::vector<std::uint32_t> ResumedRun::restartBefore(std::uint32_t episode) {
+  std::vector<std::uint32_t> restarted;
+  if (heard_any_) return restarted;
+  heard_any_ = true;
+  for (std::uint32_t k = 0; k < episode; ++k) {
+    if (!ignores(k)) {
+      restarted_.insert(k);
+      restarted.push_back(k);
+    }
+  }
+  return restarted;
+}
+
+std::vector<std::uint32_t> ResumedRun::heardStart(std::uint32_t episode,
+                                                  std::int64_t start_wall_ns) {
+  std::vector<std::uint32_t> restarted = restartBefore(episode);
+  if (start_wall_ns < joined_wall_ns_ && !ignores(episode)) {
+    restarted_.insert(episode);
+    restarted.push_back(episode);
+  }
+  return restarted;
+}
+
+std::vector<std::uint32_t> ResumedRun::heardOfRunning(std::uint32_t episode) {
+  std::vector<std::uint32_t> restarted = restartBefore(episode);
+  if (!ignores(episode)) {
+    restarted_.insert(episode);
+    restarted.push_back(episode);
+  }
+  return restarted;
+}
+
+std::vector<std::uint32_t> ResumedRun::heardEnd(std::uint32_t episodes_run) {
+  std::vector<std::uint32_t> restarted;
+  for (std::uint32_t k = 0; k < episodes_run; ++k) {
+    if (!ignores(k)) {
+      restarted_.insert(k);
+      restarted.push_back(k);
+    }
+  }
+  return restarted;
 }
 
 json reportFromEpisodes(const std::string& run_id, int sensor_count,

@@ -22,6 +22,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -57,8 +58,15 @@ struct RunSummary {
   [[nodiscard]] std::uint64_t rejectedTotal() const;
 };
 
-// The per_episode entry of an episode's result (and one line of the episode log).
+// The per_episode entry of an episode's result (and one line of the episode log). A cost or
+// bracket that is not a finite number is null.
 [[nodiscard]] nlohmann::json episodeEntry(const EpisodeResult& result);
+
+// The incomplete_reason of an episode the fusion center could not fuse: it restarted during it.
+inline constexpr const char* kRestartedReason = "fusion_center_restarted";
+// Such an episode's result: incomplete for kRestartedReason, costs and NEES NaN (null in its
+// entry), counts zero for `sensor_count` sensors; the caller may fill in versions and brackets.
+[[nodiscard]] EpisodeResult restartedEpisode(std::uint32_t episode, int sensor_count);
 
 class RunReport {
  public:
@@ -105,7 +113,11 @@ class RunReport {
 // line it appended. Throws std::runtime_error when the file cannot be opened or written.
 class EpisodeLog {
  public:
-  explicit EpisodeLog(const std::filesystem::path& path);  // truncates
+  enum class Mode {
+    Truncate,  // a new run
+    Append     // a restarted fusion center: after what is there (a torn last line stays alone)
+  };
+  explicit EpisodeLog(const std::filesystem::path& path, Mode mode = Mode::Truncate);
   void append(const nlohmann::json& entry);
 
  private:
@@ -115,6 +127,48 @@ class EpisodeLog {
 
 // The entries of an episode log, in order; a torn last line (a crash mid-write) is skipped.
 [[nodiscard]] std::vector<nlohmann::json> readEpisodeLog(const std::filesystem::path& path);
+
+// What a restarted fusion center (`serve --resume`) makes of the episodes it hears of. Those in
+// its episode log are done: their entries start the report, and their late measurements and
+// tallies are ignored. An episode that started before this process joined and is not in the log
+// (the one it died in, and any other it cannot have seen whole) cannot be fused: it is recorded
+// as restarted (restartedEpisode). Each episode is handed out once.
+//
+//   ResumedRun resumed(readEpisodeLog(log_path), wallNowNs());
+//   for (const auto& entry : resumed.entries()) report.add(entry);
+//   for (std::uint32_t e : resumed.heardStart(start.episode, start.clock.start_wall_ns)) ...;
+//   if (resumed.ignores(episode)) ...;    // logged or restarted: not fused here
+class ResumedRun {
+ public:
+  ResumedRun(std::vector<nlohmann::json> log_entries, std::int64_t joined_wall_ns);
+
+  // The log's entries, one per episode (the first of repeated ones), in episode order.
+  [[nodiscard]] const std::vector<nlohmann::json>& entries() const { return entries_; }
+  // The episode is in the log or was recorded as restarted: nothing of it is fused here.
+  [[nodiscard]] bool ignores(std::uint32_t episode) const;
+  // The start of `episode` was heard: the episodes to record as restarted now (it, if it began
+  // before the join and is not logged; the first time, also every earlier one not logged).
+  [[nodiscard]] std::vector<std::uint32_t> heardStart(std::uint32_t episode,
+                                                      std::int64_t start_wall_ns);
+  // A notice about `episode`, which this process never saw start: it is under way and began
+  // before the join. The episodes to record as restarted now.
+  [[nodiscard]] std::vector<std::uint32_t> heardOfRunning(std::uint32_t episode);
+  // The run ended after `episodes_run` episodes: every one not logged nor restarted yet.
+  [[nodiscard]] std::vector<std::uint32_t> heardEnd(std::uint32_t episodes_run);
+  // This process fused `episode` and logged it.
+  void noteFused(std::uint32_t episode) { logged_.insert(episode); }
+  // Every episode recorded as restarted so far.
+  [[nodiscard]] const std::set<std::uint32_t>& restarted() const { return restarted_; }
+  [[nodiscard]] std::int64_t joinedWallNs() const { return joined_wall_ns_; }
+
+ private:
+  std::vector<std::uint32_t> restartBefore(std::uint32_t episode);
+  std::vector<nlohmann::json> entries_;
+  std::set<std::uint32_t> logged_;
+  std::set<std::uint32_t> restarted_;
+  std::int64_t joined_wall_ns_;
+  bool heard_any_ = false;
+};
 
 // A whole report from episode entries (the launcher's rebuild after a fusion center death),
 // with the same keys and statistics as the fusion center's.

@@ -708,5 +708,72 @@ TEST(RunReport, RebuildsTheSameReportFromItsEpisodeLog) {
   std::filesystem::remove_all(dir);
 }
 
+// A restarted fusion center: the log it died with (episodes 0, 2 and 3 finished, 1 was still
+// waiting for a tally, a line torn mid-write) starts its report; it appends after it; episode 4,
+// under way when it joined, and episode 1 are recorded as restarted; the rebuilt report has each
+// episode once, the restarted ones incomplete with null costs.
+TEST(ResumedRun, StartsFromTheEpisodeLogAndRecordsWhatItCouldNotFuse) {
+  char pattern[] = "/tmp/sensornet-resume-test-XXXXXX";
+  ASSERT_NE(::mkdtemp(pattern), nullptr);
+  const std::filesystem::path dir = pattern;
+  const std::filesystem::path log_path = dir / "report.jsonl";
+  {
+    EpisodeLog log(log_path);
+    for (const std::uint32_t i : {0u, 2u, 3u}) log.append(episodeEntry(episodeWith(i, 2.0 + i, 1.0, true)));
+  }
+  std::ofstream(log_path, std::ios::app) << "{\"episode\": 4, \"realiz";  // torn by the death
+
+  const std::int64_t joined_ns = 1'000'000'000;
+  ResumedRun resumed(readEpisodeLog(log_path), joined_ns);
+  ASSERT_EQ(resumed.entries().size(), 3u);
+  EXPECT_TRUE(resumed.ignores(2));
+  EXPECT_FALSE(resumed.ignores(1));
+  // The durable start heard on joining: episode 4 began before the join.
+  EXPECT_EQ(resumed.heardStart(4, joined_ns - 500), (std::vector<std::uint32_t>{1, 4}));
+  EXPECT_TRUE(resumed.ignores(4));
+  EXPECT_TRUE(resumed.ignores(1));
+  // The next episode starts after the join: fused here, and noted once it is.
+  EXPECT_TRUE(resumed.heardStart(5, joined_ns + 10).empty());
+  EXPECT_FALSE(resumed.ignores(5));
+  resumed.noteFused(5);
+  EXPECT_TRUE(resumed.heardEnd(7) == std::vector<std::uint32_t>{6});  // never heard of: lost too
+  EXPECT_EQ(resumed.restarted(), (std::set<std::uint32_t>{1, 4, 6}));
+
+  {
+    EpisodeLog log(log_path, EpisodeLog::Mode::Append);
+    EpisodeResult restarted = restartedEpisode(4, 2);
+    restarted.versions = {1};
+    restarted.bracket = {1.0, 20.0};
+    log.append(episodeEntry(restarted));
+    log.append(episodeEntry(episodeWith(5, 7.0, 1.0, true)));
+  }
+  const std::vector<nlohmann::json> entries = readEpisodeLog(log_path);
+  ASSERT_EQ(entries.size(), 5u);  // 0, 2, 3, the restarted 4 and 5: the torn line is skipped
+  const nlohmann::json& four = entries[3];
+  EXPECT_EQ(four.at("episode"), 4);
+  EXPECT_EQ(four.at("complete"), false);
+  EXPECT_EQ(four.at("incomplete_reason"), kRestartedReason);
+  EXPECT_TRUE(four.at("realized_cost").is_null());
+  EXPECT_TRUE(four.at("realtime_cost").is_null());
+  EXPECT_TRUE(four.at("delivered_bracket").at("info").is_null());
+  EXPECT_EQ(four.at("bracket").at("cov"), 20.0);
+  EXPECT_EQ(four.at("sent"), nlohmann::json({0, 0}));
+
+  const nlohmann::json rebuilt = reportFromEpisodes("r", 2, entries, "degraded", nlohmann::json::array());
+  EXPECT_EQ(rebuilt.at("summary").at("episodes"), 5);
+  EXPECT_EQ(rebuilt.at("summary").at("episodes_complete"), 4);
+  EXPECT_DOUBLE_EQ(rebuilt.at("summary").at("mean").get<double>(), (2.0 + 4.0 + 5.0 + 7.0) / 4.0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ResumedRun, AnEpisodeUnderWayThatItNeverSawStartIsRestartedOnce) {
+  ResumedRun resumed({episodeEntry(episodeWith(0, 1.0, 1.0, true))}, 100);
+  EXPECT_EQ(resumed.heardOfRunning(2), (std::vector<std::uint32_t>{1, 2}));
+  EXPECT_TRUE(resumed.heardOfRunning(2).empty());
+  EXPECT_TRUE(resumed.heardStart(2, 50).empty());  // its start, replayed later: already recorded
+  EXPECT_TRUE(resumed.heardStart(3, 150).empty());
+  EXPECT_FALSE(resumed.ignores(3));
+}
+
 }  // namespace
 }  // namespace sensornet::emulator
