@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
@@ -11,6 +12,7 @@
 
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/network.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/dds/participant.hpp"
@@ -19,7 +21,9 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/coordinator_journal.hpp"
 #include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/replanner.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
@@ -31,6 +35,9 @@ namespace {
 
 using namespace std::chrono_literals;
 using emulator::wallNowNs;
+
+// What to do when the launcher reports that sensors died (COMMAND_SENSORS_FAILED).
+enum class FailurePolicy { Replan, Continue, Stop };
 
 struct ServeOptions {
   emulator::RunOptions run;
@@ -44,20 +51,38 @@ struct ServeOptions {
   double start_lead_s = 0.2;     // wall seconds between announcing an episode and its start
   double switch_margin_s = 0.3;  // wall seconds between a re-plan and its effective time
   double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
+  FailurePolicy on_sensor_failure = FailurePolicy::Replan;
+  bool network_aware = false;
+  std::string state_path;  // the journal (empty: none)
+  bool resume = false;     // start from the journal
   bool json = false;
 };
 
 std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
 
+std::string listed(const std::set<int>& sensors) {
+  std::string text;
+  for (const int id : sensors) text += (text.empty() ? "" : ", ") + std::to_string(id);
+  return text;
+}
+
+// What the coordinator answers to one command: new versions to publish (and settings to adopt)
+// or none, and the reply's reason.
+struct Answer {
+  std::optional<emulator::Replan> replan;
+  std::string reason;
+};
+
 class Coordinator {
  public:
+  // `journal` is where the run stands: a fresh one (version 1, nothing announced) or one read
+  // back with --resume.
   Coordinator(const ServeOptions& options, emulator::RunScenario run,
-              emulator::ScheduleVersion initial)
+              const emulator::CoordinatorJournal& journal)
       : options_(options),
         run_(std::move(run)),
         plant_(run_.scenario, run_.seed),
-        constraints_(run_.scenario.constraints),
-        surrogate_(initial.surrogate == "file" ? PlanSurrogate::Information : options.surrogate),
+        replanner_(run_.scenario, plant_, journal.settings, replannerOptions(options, run_)),
         domain_(options.run.domainConfig()),
         participant_(domain_),
         scenario_topic_(participant_),
@@ -79,67 +104,105 @@ class Coordinator {
         waitset_(participant_),
         command_ready_(command_reader_),
         status_ready_(status_reader_),
-        report_ready_(report_reader_) {
+        report_ready_(report_reader_),
+        reported_(journal.episodes_reported),
+        announced_(journal.announced),
+        answered_(journal.answered),
+        stopping_(journal.shutdown_requested),
+        abort_detail_(journal.abort_detail) {
     waitset_.attach(command_ready_, 1);
     waitset_.attach(status_ready_, 2);
     waitset_.attach(report_ready_, 3);
-    book_.add(std::move(initial));
+    for (const emulator::ScheduleVersion& v : journal.versions) book_.add(v);
+    if (announced_) {  // resumed: the episode announced last runs on without us
+      current_episode_ = announced_->episode;
+      next_episode_ = current_episode_ + 1;
+      clock_ = {announced_->start_wall_ns, options_.time_scale};
+      running_ = !reported_.count(current_episode_);
+    }
   }
 
   int run() {
+    saveState();
     mustWrite(emulator::publishScenario(scenario_writer_, options_.run.run_id, run_), "scenario");
-    mustWrite(emulator::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest,
-                                        book_.latest()),
-              "schedule");
-    spdlog::info("run {}: scenario {} and schedule v1 ({}) published; waiting for {} sensors "
+    for (const emulator::ScheduleVersion& v : book_.versions()) publishVersion(v);
+    spdlog::info("run {}: scenario {} and schedule v1..v{} published; waiting for {} sensors "
                  "and the fusion center",
-                 options_.run.run_id, run_.digest, book_.latest().surrogate,
-                 run_.scenario.sensorCount());
-    if (!waitUntilReady()) return kExitFailure;
-
-    for (std::uint32_t e = 0; e < static_cast<std::uint32_t>(options_.episodes) && !stopping_;
-         ++e) {
-      if (!runEpisode(e)) {
-        shutDown(emulator::stopRequested() ? "the coordinator was stopped by a signal"
-                                           : "no report of episode " + std::to_string(e));
-        return kExitFailure;
-      }
+                 options_.run.run_id, run_.digest, book_.latest().version, sensorsInService());
+    if (!abort_detail_.empty()) return abort();
+    if (!waitUntilReady()) return abort_detail_.empty() ? kExitFailure : abort();
+    if (running_ && !resumeAnnouncedEpisode()) return fail();
+    for (std::uint32_t e = next_episode_;
+         e < static_cast<std::uint32_t>(options_.episodes) && !stopping_; ++e) {
+      if (!runEpisode(e)) return fail();
     }
     shutDown("");
     if (emulator::stopRequested()) return kExitFailure;
     if (options_.json) {
       printJson({{"run_id", options_.run.run_id},
-                 {"episodes", episodes_done_},
+                 {"episodes", episodesDone()},
                  {"schedule_versions", book_.latest().version}});
     }
     return kExitOk;
   }
 
  private:
+  static emulator::ReplannerOptions replannerOptions(const ServeOptions& options,
+                                                     const emulator::RunScenario& run) {
+    emulator::ReplannerOptions r;
+    r.switch_margin_s = options.switch_margin_s;
+    r.time_scale = options.time_scale;
+    if (options.network_aware) r.delivery = deliveryFactors(run.scenario);
+    return r;
+  }
+
   static void mustWrite(dds::WriteResult result, const char* what) {
     if (result == dds::WriteResult::TimedOut) {
       throw std::runtime_error(std::string("publishing the ") + what + " timed out");
     }
   }
 
+  // Ends an unfinished run: why, in the RUN_SHUTDOWN detail.
+  int fail() {
+    if (!abort_detail_.empty()) return abort();
+    shutDown(emulator::stopRequested() ? "the coordinator was stopped by a signal"
+                                       : "no report of episode " + std::to_string(current_episode_));
+    return kExitFailure;
+  }
+  int abort() {
+    shutDown(abort_detail_);
+    return kExitFailure;
+  }
+
+  [[nodiscard]] int episodesDone() const { return static_cast<int>(reported_.size()); }
+  [[nodiscard]] int sensorsInService() const {
+    return run_.scenario.sensorCount() - static_cast<int>(replanner_.settings().failed.size());
+  }
+  [[nodiscard]] int readySensorsInService() const {
+    const std::set<int>& failed = replanner_.settings().failed;
+    return static_cast<int>(std::count_if(ready_sensors_.begin(), ready_sensors_.end(),
+                                          [&](int id) { return !failed.count(id); }));
+  }
+
+  // Every sensor that has not failed, and the fusion center. At a resume the sensors' durable
+  // statuses (READY, RUNNING, EXCLUDED) count.
   bool waitUntilReady() {
     const std::int64_t deadline = wallNowNs() + toNs(options_.ready_timeout_s);
     for (;;) {
       pump(20ms);
-      const bool sensors_ready = static_cast<int>(ready_sensors_.size()) ==
-                                 run_.scenario.sensorCount();
+      const bool sensors_ready = readySensorsInService() == sensorsInService();
       const bool fusion_ready = report_reader_.matchedWriters() > 0 &&
                                 state_reader_.matchedWriters() > 0;
       if (sensors_ready && fusion_ready) {
-        spdlog::info("all {} sensors and the fusion center are ready", ready_sensors_.size());
+        spdlog::info("all {} sensors and the fusion center are ready", readySensorsInService());
         std::this_thread::sleep_for(100ms);  // let the last discovery settle
         return true;
       }
-      if (emulator::stopRequested()) return false;
+      if (emulator::stopRequested() || !abort_detail_.empty()) return false;
       if (wallNowNs() > deadline) {
         spdlog::error("not ready after {} s: {} of {} sensors ready, fusion center {}",
-                      options_.ready_timeout_s, ready_sensors_.size(),
-                      run_.scenario.sensorCount(), fusion_ready ? "present" : "missing");
+                      options_.ready_timeout_s, readySensorsInService(), sensorsInService(),
+                      fusion_ready ? "present" : "missing");
         return false;
       }
     }
@@ -148,17 +211,26 @@ class Coordinator {
   bool runEpisode(std::uint32_t episode) {
     current_episode_ = episode;
     clock_ = {wallNowNs() + toNs(options_.start_lead_s), options_.time_scale};
-    const emulator::ScheduleVersion* v = book_.inForce(episode, 0.0);
-    sensornet_EpisodeControl c{};
-    c.run_id = dds::borrowString(options_.run.run_id);
-    c.episode = episode;
-    c.command = sensornet_EPISODE_START;
+    announced_ = emulator::AnnouncedEpisode{episode, clock_.start_wall_ns};
+    saveState();
+    const std::vector<std::uint32_t> failed = failedIds();
+    sensornet_EpisodeControl c = control(sensornet_EPISODE_START, episode);
     c.start_wall_time_ns = clock_.start_wall_ns;
-    c.time_scale = options_.time_scale;
-    c.seed = run_.seed;
-    c.schedule_version = v->version;
-    c.episodes_planned = static_cast<std::uint32_t>(options_.episodes);
+    c.schedule_version = book_.inForce(episode, 0.0)->version;
+    dds::borrowSequence(c.failed_sensors, failed);
     mustWrite(control_writer_.write(c), "episode control");
+    return awaitReport(episode);
+  }
+
+  // After a restart: the episode announced last runs without us (the sensors run it to its
+  // end, the fusion center closes it); wait for its report.
+  bool resumeAnnouncedEpisode() {
+    spdlog::info("resuming: episode {} was announced before the restart; waiting for its report",
+                 current_episode_);
+    return awaitReport(current_episode_);
+  }
+
+  bool awaitReport(std::uint32_t episode) {
     running_ = true;
     // The fusion center closes the episode once every sensor's count is in, which after a
     // stall can take a while; it publishes its state meanwhile. Give up only when it has shown
@@ -168,7 +240,7 @@ class Coordinator {
     fusion_heard_ns_ = end_ns;
     while (!reported_.count(episode)) {
       pump(10ms);
-      if (emulator::stopRequested()) return false;
+      if (emulator::stopRequested() || !abort_detail_.empty()) return false;
       const std::int64_t now = wallNowNs();
       const std::int64_t from = std::max(end_ns, fusion_heard_ns_);
       if (now > from && 1e-9 * static_cast<double>(now - from) -
@@ -180,21 +252,34 @@ class Coordinator {
       }
     }
     running_ = false;
-    ++episodes_done_;
+    next_episode_ = episode + 1;
     return true;
   }
 
-  // Ends the run; `failure` empty when every episode ran.
-  void shutDown(const std::string& failure) {
+  [[nodiscard]] sensornet_EpisodeControl control(sensornet_EpisodeCommand command,
+                                                 std::uint32_t episode) const {
     sensornet_EpisodeControl c{};
     c.run_id = dds::borrowString(options_.run.run_id);
-    c.episode = current_episode_;
-    c.command = sensornet_RUN_SHUTDOWN;
+    c.episode = episode;
+    c.command = command;
     c.start_wall_time_ns = wallNowNs();
     c.time_scale = options_.time_scale;
     c.seed = run_.seed;
     c.schedule_version = book_.latest().version;
-    c.episodes_planned = static_cast<std::uint32_t>(episodes_done_);
+    c.episodes_planned = static_cast<std::uint32_t>(options_.episodes);
+    c.detail = dds::borrowString(kEmpty);
+    return c;
+  }
+
+  [[nodiscard]] std::vector<std::uint32_t> failedIds() const {
+    const std::set<int>& failed = replanner_.settings().failed;
+    return {failed.begin(), failed.end()};
+  }
+
+  // Ends the run; `failure` empty when every episode ran.
+  void shutDown(const std::string& failure) {
+    sensornet_EpisodeControl c = control(sensornet_RUN_SHUTDOWN, current_episode_);
+    c.episodes_planned = static_cast<std::uint32_t>(episodesDone());
     c.aborted = !failure.empty();
     c.detail = dds::borrowString(failure);
     if (control_writer_.write(c) == dds::WriteResult::TimedOut) {
@@ -202,7 +287,8 @@ class Coordinator {
     }
     (void)control_writer_.waitForAcks(3s);
     (void)reply_writer_.waitForAcks(1s);
-    spdlog::info("run {} shut down after {} episodes", options_.run.run_id, episodes_done_);
+    spdlog::info("run {} shut down after {} episodes{}", options_.run.run_id, episodesDone(),
+                 failure.empty() ? "" : ": " + failure);
   }
 
   // Waits up to `timeout` for something to read, then reads everything.
@@ -237,7 +323,9 @@ class Coordinator {
     for (auto& received : report_reader_.take(16).samples) {
       const sensornet_Report& r = *received.sample;
       fusion_heard_ns_ = std::max(fusion_heard_ns_, wallNowNs());
+      if (r.episode >= static_cast<std::uint32_t>(options_.episodes)) continue;
       if (!reported_.insert(r.episode).second) continue;
+      saveState();
       spdlog::info("[{}/{}] episode {}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} "
                    "in [{:.6g}, {:.6g}] (95%)",
                    r.summary.episodes, options_.episodes, r.episode, r.realized_cost,
@@ -255,7 +343,7 @@ class Coordinator {
       Eigen::MatrixXd P = Eigen::Map<const Eigen::MatrixXd>(values.data(),
                                                             static_cast<Eigen::Index>(n),
                                                             static_cast<Eigen::Index>(n));
-      fused_ = FusedEstimate{s.episode, s.emulated_time_s, 0.5 * (P + P.transpose())};
+      fused_ = emulator::FusedCovariance{s.episode, s.emulated_time_s, 0.5 * (P + P.transpose())};
       fusion_heard_ns_ = std::max(fusion_heard_ns_, wallNowNs());
     }
   }
@@ -264,292 +352,195 @@ class Coordinator {
     for (auto& received : command_reader_.take(8).samples) {
       const sensornet_Command& c = *received.sample;
       if (dds::viewString(c.run_id) != options_.run.run_id) continue;
-      std::uint32_t version = 0;
-      std::string reason;
-      bool accepted = false;
-      try {
-        std::tie(version, reason) = execute(c);
-        accepted = true;
-      } catch (const InputError& error) {
-        reason = error.what();
-      } catch (const std::exception& error) {
-        reason = std::string("failed: ") + error.what();
+      // A command that comes again (the launcher resends until it sees a reply) was answered.
+      if (const auto it = answered_.find(c.command_id); it != answered_.end()) {
+        sendReply(c.command_id, it->second);
+        continue;
       }
+      emulator::AnsweredCommand reply = answer(c);
       spdlog::info("command {} from '{}': {} ({})", c.command_id, dds::viewString(c.issuer),
-                   accepted ? "accepted" : "refused", reason);
-      sensornet_CommandReply reply{};
-      reply.run_id = dds::borrowString(options_.run.run_id);
-      reply.command_id = c.command_id;
-      reply.accepted = accepted;
-      reply.schedule_version = version;
-      reply.reason = dds::borrowString(reason);
-      if (reply_writer_.write(reply) == dds::WriteResult::TimedOut) {
-        spdlog::warn("the reply to command {} timed out", c.command_id);
-      }
+                   reply.accepted ? "accepted" : "refused", reply.reason);
+      sendReply(c.command_id, reply);
     }
   }
 
-  // Returns (new version or 0, one-line summary); throws InputError to refuse. A change of
-  // settings (surrogate, excluded sensors, budget) holds only once its plans are published: a
-  // refused or failed re-plan leaves them as they were.
-  std::pair<std::uint32_t, std::string> execute(const sensornet_Command& c) {
-    const std::string source = "command " + std::to_string(c.command_id);
-    const auto replanWith = [&](PlanSurrogate surrogate, std::set<int> excluded,
-                                ResourceConstraints constraints) {
-      const PlanSurrogate kept_surrogate = surrogate_;
-      std::set<int> kept_excluded = excluded_;
-      ResourceConstraints kept_constraints = constraints_;
-      surrogate_ = surrogate;
-      excluded_ = std::move(excluded);
-      constraints_ = std::move(constraints);
-      try {
-        return replan(c.command_id, std::nullopt);
-      } catch (...) {
-        surrogate_ = kept_surrogate;
-        excluded_ = std::move(kept_excluded);
-        constraints_ = std::move(kept_constraints);
-        throw;
+  // Decides, records (journal first) and publishes what command `c` changes; returns the reply.
+  emulator::AnsweredCommand answer(const sensornet_Command& c) {
+    emulator::AnsweredCommand reply;
+    try {
+      Answer a = execute(c);
+      reply.accepted = true;
+      reply.reason = std::move(a.reason);
+      if (a.replan) {
+        reply.schedule_version = a.replan->replyVersion();
+        for (const emulator::ScheduleVersion& v : a.replan->versions) book_.add(v);
+        replanner_.adopt(*a.replan);
       }
+      answered_[c.command_id] = reply;
+      saveState();
+      if (a.replan) {
+        for (const emulator::ScheduleVersion& v : a.replan->versions) publishVersion(v);
+      }
+    } catch (const InputError& error) {
+      reply = {false, 0, error.what()};
+      answered_[c.command_id] = reply;
+      saveState();
+    } catch (const std::exception& error) {
+      // Not recorded: the same command may succeed when it comes again.
+      reply = {false, 0, std::string("failed: ") + error.what()};
+      answered_.erase(c.command_id);
+    }
+    return reply;
+  }
+
+  void sendReply(std::uint64_t command_id, const emulator::AnsweredCommand& answered) {
+    sensornet_CommandReply reply{};
+    reply.run_id = dds::borrowString(options_.run.run_id);
+    reply.command_id = command_id;
+    reply.accepted = answered.accepted;
+    reply.schedule_version = answered.schedule_version;
+    reply.reason = dds::borrowString(answered.reason);
+    if (reply_writer_.write(reply) == dds::WriteResult::TimedOut) {
+      spdlog::warn("the reply to command {} timed out", command_id);
+    }
+  }
+
+  // Plans (nothing is published or adopted here); throws InputError to refuse. A change of
+  // settings (surrogate, excluded sensors, budget) holds only once its plans are published.
+  Answer execute(const sensornet_Command& c) {
+    const emulator::RunMoment now = moment();
+    const emulator::ScheduleBook& book = book_;
+    const auto replanned = [](emulator::Replan r) {
+      std::string reason = r.summary;
+      return Answer{std::move(r), std::move(reason)};
     };
     switch (c.kind) {
       case sensornet_COMMAND_STATUS:
-        return {0, "running episode " + std::to_string(current_episode_) + ", schedule v" +
-                       std::to_string(book_.latest().version)};
+        return {std::nullopt, "running episode " + std::to_string(current_episode_) +
+                                  ", schedule v" + std::to_string(book_.latest().version)};
       case sensornet_COMMAND_SENSORS_FAILED:
-        throw InputError(source, "kind", "a command kind this coordinator handles");
+        return onSensorsFailed(c);
       case sensornet_COMMAND_SHUTDOWN:
         stopping_ = true;
-        return {0, "the run ends after the current episode"};
-      case sensornet_COMMAND_REPLAN: {
-        const std::string s(dds::viewString(c.surrogate));
-        PlanSurrogate surrogate = PlanSurrogate::Uniform;
-        if (s == "info") {
-          surrogate = PlanSurrogate::Information;
-        } else if (s == "cov") {
-          surrogate = PlanSurrogate::Covariance;
-        } else if (s != "uniform") {
-          throw InputError(source, "surrogate", "info, cov or uniform, got '" + s + "'");
-        }
-        return replanWith(surrogate, excluded_, constraints_);
-      }
-      case sensornet_COMMAND_EXCLUDE_SENSORS: {
-        std::set<int> excluded = excluded_;
-        for (const std::uint32_t id : dds::viewSequence(c.sensor_ids)) {
-          if (id >= static_cast<std::uint32_t>(run_.scenario.sensorCount())) {
-            throw InputError(source, "sensor_ids",
-                             "ids below M = " + std::to_string(run_.scenario.sensorCount()));
-          }
-          excluded.insert(static_cast<int>(id));
-        }
-        if (static_cast<int>(excluded.size()) == run_.scenario.sensorCount()) {
-          throw InputError(source, "sensor_ids", "at least one sensor left in service");
-        }
-        return replanWith(surrogate_, std::move(excluded), constraints_);
-      }
-      case sensornet_COMMAND_SET_BUDGET: {
-        const auto b = dds::viewSequence(c.budget);
-        if (b.size() != static_cast<std::size_t>(constraints_.b.size())) {
-          throw InputError(source, "budget",
-                           std::to_string(constraints_.b.size()) + " values (one per row of C)");
-        }
-        for (const double value : b) {
-          if (!(value > 0.0) || !std::isfinite(value)) {
-            throw InputError(source, "budget", "finite values > 0, got " + formatNumber(value));
-          }
-        }
-        ResourceConstraints constraints = constraints_;
-        constraints.b = Eigen::Map<const Eigen::VectorXd>(b.data(), constraints_.b.size());
-        // The rules of a scenario file hold for a live budget too (at most
-        // kMaxMeasurementsPerHorizon expected measurements per sensor and horizon, ...).
-        Scenario check = run_.scenario;
-        check.constraints = constraints;
-        try {
-          validateScenario(check, source);
-        } catch (const InputError& e) {
-          throw InputError(source, "budget", e.expected());
-        }
-        return replanWith(surrogate_, excluded_, std::move(constraints));
-      }
-      case sensornet_COMMAND_SCHEDULE_FILE: {
-        RateSchedule schedule =
-            parseScheduleJson(std::string(dds::viewString(c.schedule_json)), source);
-        Scenario check = run_.scenario;
-        check.constraints = constraints_;
-        const Feasibility feasibility = checkFeasibility(schedule, check, 1e-9);
-        if (!feasibility.feasible) throw InputError(source, "rates", feasibility.reason);
-        return replan(c.command_id, std::move(schedule));
-      }
+        return {std::nullopt, "the run ends after the current episode"};
+      case sensornet_COMMAND_REPLAN:
+        return replanned(replanner_.changeSurrogate(dds::viewString(c.surrogate), book, now,
+                                                    c.command_id));
+      case sensornet_COMMAND_EXCLUDE_SENSORS:
+        return replanned(replanner_.exclude(dds::viewSequence(c.sensor_ids), book, now,
+                                            c.command_id));
+      case sensornet_COMMAND_SET_BUDGET:
+        return replanned(
+            replanner_.setBudget(dds::viewSequence(c.budget), book, now, c.command_id));
+      case sensornet_COMMAND_SCHEDULE_FILE:
+        return replanned(replanner_.adoptScheduleFile(std::string(dds::viewString(c.schedule_json)),
+                                                      book, now, c.command_id));
     }
-    throw InputError(source, "kind", "a known command kind");
+    throw InputError("command " + std::to_string(c.command_id), "kind", "a known command kind");
   }
 
-  // Plans (or adopts `given`) and publishes the next version, effective as soon as every
-  // process can switch: switch_margin_s of wall time from now in the running episode (planned
-  // over the rest of the horizon from the fused covariance; later if planning overran, so that
-  // half a margin is always left for the version to reach everyone), else at the start of the
-  // next episode. A mid-episode change publishes a second version for the episodes after it,
-  // planned over the whole horizon from P0 with the same settings.
-  //
-  // Both plans are made, and both must be ones the planner reports as optimal ("acceptable"
-  // is taken and named in the summary; "not_optimized" is the uniform schedule), before either
-  // is published: otherwise this throws InputError and nothing is published. A projected
-  // quasi-Newton solve that "stalled" (no step decreases the cost in floating point) at a point
-  // whose scale-free KKT residual is at most kStationaryResidual (every planned rate within
-  // 0.1% of its projected-gradient step) is taken too, and named so in the reply: the fused
-  // covariance a mid-episode plan starts from often leaves the cost too flat for the 1e-6
-  // tolerance.
-  static constexpr double kStationaryResidual = 1e-3;
-  static bool stalledAtAStationaryPoint(const PlanResult& plan) {
-    return plan.status == "stalled" && plan.kkt_residual <= kStationaryResidual;
-  }
-
-  std::pair<std::uint32_t, std::string> replan(std::uint64_t command_id,
-                                               std::optional<RateSchedule> given) {
-    Scenario planned_for = run_.scenario;
-    planned_for.constraints = constraints_;
-    const std::uint32_t next_episode = running_ || episodes_done_ > 0 ? current_episode_ + 1 : 0;
-    const std::string surrogate(describe(surrogate_));
-
-    if (given) {
-      emulator::ScheduleVersion v =
-          makeVersion(planned_for, std::move(*given), "file", command_id, next_episode, 0.0);
-      return {publish(std::move(v)), "schedule file"};
+  // The failure policy: the failed sensors are recorded and announced whatever the policy,
+  // then re-planned without (replan), left alone (continue) or the run ends (stop).
+  Answer onSensorsFailed(const sensornet_Command& c) {
+    std::set<int> sensors;
+    for (const std::uint32_t id : dds::viewSequence(c.sensor_ids)) {
+      sensors.insert(static_cast<int>(id));
     }
-    const auto requireOptimal = [&](const PlanResult& plan, const std::string& which) {
-      if (plan.status == "optimal" || plan.status == "acceptable" ||
-          plan.status == "not_optimized" || stalledAtAStationaryPoint(plan)) {
-        return;
-      }
-      throw InputError("command " + std::to_string(command_id), "plan",
-                       "a plan the planner reports as optimal, but the " + which + " " + surrogate +
-                           " plan ended '" + plan.status + "' (kkt residual " +
-                           formatNumber(plan.kkt_residual) + " after " +
-                           std::to_string(plan.iterations) +
-                           " iterations); nothing was published, the settings are unchanged");
-    };
-    const auto describePlan = [](const PlanResult& plan) {
-      if (plan.status == "acceptable") return std::string("acceptable: IPOPT's looser tolerance");
-      if (stalledAtAStationaryPoint(plan)) {
-        return "stalled, accepted: kkt residual " + formatNumber(plan.kkt_residual) + " <= " +
-               formatNumber(kStationaryResidual);
-      }
-      return plan.status;
-    };
-    // Mid-episode: the rest of this episode, from the latest fused covariance.
-    std::string summary;
-    const auto notInThisEpisode = [this](const char* why) {
-      return "not in episode " + std::to_string(current_episode_) + ": " + why + "; ";
-    };
-    std::optional<PlanResult> tail_plan;
-    double at = 0.0;
-    const double margin = options_.switch_margin_s * options_.time_scale;
-    if (running_ && !(fused_ && fused_->episode == current_episode_)) {
-      summary = notInThisEpisode("no fused covariance of it yet");
-    } else if (running_) {
-      at = plant_.timeOf(plant_.tickAt(emulatedNow() + margin));
-      if (at >= run_.scenario.horizon_s) {
-        summary = notInThisEpisode("it ends within the switch margin");
-      } else {
-        PlanRequest request = planRequest();
-        request.start_time = at;
-        request.start_covariance = covarianceExpectedAt(at);
-        tail_plan = planSchedule(planned_for, request);
-        requireOptimal(*tail_plan, "mid-episode");
-      }
+    if (std::includes(replanner_.settings().failed.begin(), replanner_.settings().failed.end(),
+                      sensors.begin(), sensors.end())) {
+      return {std::nullopt, "sensor(s) " + listed(sensors) + " had failed before: nothing new"};
     }
-    const PlanResult plan = planSchedule(planned_for, planRequest());
-    requireOptimal(plan, "full-horizon");
-    std::optional<emulator::ScheduleVersion> tail;
-    if (tail_plan) {
-      tail = makeVersion(planned_for, tail_plan->schedule, surrogate, command_id, current_episode_,
-                         at);
+    replanner_.noteFailed(dds::viewSequence(c.sensor_ids), c.command_id);
+    const std::string detail(dds::viewString(c.detail));
+    spdlog::warn("sensor(s) {} failed ({}); policy {}", listed(sensors), detail,
+                 policyName(options_.on_sensor_failure));
+    saveState();
+    announceFailure(detail);
+    switch (options_.on_sensor_failure) {
+      case FailurePolicy::Continue:
+        return {std::nullopt, "policy continue: schedule unchanged"};
+      case FailurePolicy::Stop:
+        abort_detail_ = "sensor(s) " + listed(sensors) + " failed; --on-sensor-failure stop";
+        return {std::nullopt, "policy stop: the run ends (" + abort_detail_ + ")"};
+      case FailurePolicy::Replan:
+        break;
     }
-    emulator::ScheduleVersion full =
-        makeVersion(planned_for, plan.schedule, surrogate, command_id, next_episode, 0.0);
-
-    // Planning took time. Every process must still hear of the version before it takes
-    // effect: if less than half the margin is left, it takes effect later, at the first tick
-    // half a margin from now (the plan's rates from there on; they stay feasible).
-    std::uint32_t first_version = 0;
-    if (tail) {
-      const double earliest = plant_.timeOf(plant_.tickAt(emulatedNow() + 0.5 * margin) + 1);
-      tail->effective_time_s = std::max(at, earliest);
-      if (tail->effective_time_s < run_.scenario.horizon_s) {
-        const double effective = tail->effective_time_s;
-        first_version = publish(std::move(*tail));
-        summary = "version " + std::to_string(first_version) + " from " +
-                  std::to_string(effective) + " s of episode " + std::to_string(current_episode_) +
-                  " (" + describePlan(*tail_plan) + ", planned from the fused covariance at " +
-                  std::to_string(fused_->time_s) + " s carried to " + std::to_string(at) + " s); ";
-      } else {
-        summary = notInThisEpisode("planning outlasted it");
-      }
+    try {
+      emulator::Replan r = replanner_.replanAsIs(book_, moment(), c.command_id);
+      std::string reason = "policy replan: " + r.versionsInBrief();
+      return {std::move(r), std::move(reason)};
+    } catch (const std::exception& refused) {  // not optimal, or no sensor left to plan for
+      const bool none_left = static_cast<int>(replanner_.settings().outOfService().size()) ==
+                             run_.scenario.sensorCount();
+      return {std::nullopt, "policy replan fell back to continue (" +
+                                (none_left ? std::string("no sensor left in service")
+                                           : std::string(refused.what())) +
+                                "): schedule unchanged"};
     }
-    full.version = book_.latest().version + 1;  // after the mid-episode version, if any
-    const std::uint32_t full_version = publish(std::move(full));
-    summary += "version " + std::to_string(full_version) + " from episode " +
-               std::to_string(next_episode) + " (" + surrogate + ", " + describePlan(plan) + ")";
-    return {first_version != 0 ? first_version : full_version, summary};
   }
 
-  // The latest fused covariance carried forward to `at` (what arrives in between is not fused
-  // yet) by the surrogate of the plan's form under the version in force: the plan of the rest
-  // of the episode starts from the covariance expected when it takes effect.
-  [[nodiscard]] Eigen::MatrixXd covarianceExpectedAt(double at) const {
-    const emulator::ScheduleVersion* v = book_.inForce(current_episode_, fused_->time_s);
-    if (v == nullptr || !(fused_->time_s < at)) return fused_->covariance;
-    RolloutOptions carry;
-    carry.start_time = fused_->time_s;
-    carry.end_time = at;
-    carry.start_covariance = fused_->covariance;
-    return rollout(formOf(surrogate_), run_.scenario, v->schedule, carry).covariances.back();
+  static const char* policyName(FailurePolicy policy) {
+    switch (policy) {
+      case FailurePolicy::Replan: return "replan";
+      case FailurePolicy::Continue: return "continue";
+      case FailurePolicy::Stop: return "stop";
+    }
+    return "?";
   }
 
-  [[nodiscard]] double emulatedNow() const { return std::max(0.0, clock_.emulatedNow()); }
-
-  [[nodiscard]] PlanRequest planRequest() const {
-    PlanRequest request;
-    request.surrogate = surrogate_;
-    request.excluded_sensors.assign(excluded_.begin(), excluded_.end());
-    request.warm_start = book_.latest().schedule;
-    request.max_seconds = 30.0;
-    return request;
+  // EPISODE_SENSORS_FAILED: every failed sensor, from now in the running episode (from the
+  // start of the next one between episodes).
+  void announceFailure(const std::string& detail) {
+    const std::vector<std::uint32_t> failed = failedIds();
+    sensornet_EpisodeControl c =
+        control(sensornet_EPISODE_SENSORS_FAILED, running_ ? current_episode_ : next_episode_);
+    c.failed_at_s =
+        running_ ? std::clamp(clock_.emulatedNow(), 0.0, run_.scenario.horizon_s) : 0.0;
+    c.detail = dds::borrowString(detail);
+    dds::borrowSequence(c.failed_sensors, failed);
+    mustWrite(control_writer_.write(c), "failure notice");
   }
 
-  emulator::ScheduleVersion makeVersion(const Scenario& planned_for, RateSchedule schedule,
-                                        std::string surrogate, std::uint64_t command_id,
-                                        std::uint32_t episode, double at) const {
-    emulator::ScheduleVersion v;
-    v.version = book_.latest().version + 1;
-    v.effective_episode = episode;
-    v.effective_time_s = at;
-    v.bracket = computeBracket(planned_for, schedule);
-    v.schedule = std::move(schedule);
-    v.surrogate = std::move(surrogate);
-    v.command_id = command_id;
-    return v;
+  [[nodiscard]] emulator::RunMoment moment() const {
+    emulator::RunMoment now;
+    now.running = running_;
+    now.episode = running_ ? current_episode_ : next_episode_;
+    now.fused = fused_;
+    const emulator::EpisodeClock clock = clock_;
+    now.emulated_now = [clock] { return clock.emulatedNow(); };
+    return now;
   }
 
-  std::uint32_t publish(emulator::ScheduleVersion v) {
+  void publishVersion(const emulator::ScheduleVersion& v) {
     mustWrite(emulator::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest, v),
               "schedule");
-    const std::uint32_t number = v.version;
-    book_.add(std::move(v));
-    return number;
   }
 
-  struct FusedEstimate {
-    std::uint32_t episode = 0;
-    double time_s = 0.0;
-    Eigen::MatrixXd covariance;
-  };
+  // Writes the journal (--state) as the run stands now; before the DDS write it records.
+  void saveState() const {
+    if (options_.state_path.empty()) return;
+    emulator::CoordinatorJournal journal;
+    journal.run_id = options_.run.run_id;
+    journal.scenario_digest = run_.digest;
+    journal.seed = run_.seed;
+    journal.episodes_planned = static_cast<std::uint32_t>(options_.episodes);
+    journal.time_scale = options_.time_scale;
+    journal.settings = replanner_.settings();
+    journal.versions = book_.versions();
+    journal.episodes_reported = reported_;
+    journal.announced = announced_;
+    journal.answered = answered_;
+    journal.shutdown_requested = stopping_;
+    journal.abort_detail = abort_detail_;
+    emulator::saveJournal(options_.state_path, journal);
+  }
+
+  static inline const std::string kEmpty;
 
   ServeOptions options_;
   emulator::RunScenario run_;
   EmulatedPlant plant_;  // only for its tick grid: effective times fall on ticks
-  ResourceConstraints constraints_;
-  PlanSurrogate surrogate_;
-  std::set<int> excluded_;
+  emulator::Replanner replanner_;
   emulator::ScheduleBook book_;
 
   dds::Domain domain_;
@@ -577,24 +568,22 @@ class Coordinator {
 
   std::set<int> ready_sensors_;
   std::set<std::uint32_t> reported_;
+  std::optional<emulator::AnnouncedEpisode> announced_;
+  std::map<std::uint64_t, emulator::AnsweredCommand> answered_;
   std::int64_t fusion_heard_ns_ = 0;  // the fusion center's latest state or report
   emulator::StallWatch stall_watch_;
-  std::optional<FusedEstimate> fused_;
-  std::uint32_t current_episode_ = 0;
-  emulator::EpisodeClock clock_;  // of the current episode
+  std::optional<emulator::FusedCovariance> fused_;
+  std::uint32_t current_episode_ = 0;  // announced last
+  std::uint32_t next_episode_ = 0;     // to announce next
+  emulator::EpisodeClock clock_;       // of the current episode
   bool running_ = false;
   bool stopping_ = false;
-  int episodes_done_ = 0;
+  std::string abort_detail_;  // the run ends as failed (--on-sensor-failure stop)
 };
 
-int runServe(const ServeOptions& options) {
-  emulator::RunScenario run;
-  run.yaml = readTextFile(options.scenario_path, "scenario");  // read once: parsed and sent
-  run.scenario = parseScenarioYaml(run.yaml, options.scenario_path);
-  run.digest = emulator::digestOf(run.yaml);
-  run.seed = options.seed;
-  (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning
-
+// Plans version 1 (or adopts --schedule), as a fresh journal.
+emulator::CoordinatorJournal freshJournal(const ServeOptions& options,
+                                          const emulator::RunScenario& run) {
   emulator::ScheduleVersion initial;
   initial.version = 1;
   if (!options.schedule_path.empty()) {
@@ -603,8 +592,10 @@ int runServe(const ServeOptions& options) {
   } else {
     PlanRequest request;
     request.surrogate = options.surrogate;
+    if (options.network_aware) request.delivery = deliveryFactors(run.scenario);
     const PlanResult plan = planSchedule(run.scenario, request);
-    spdlog::info("initial {} schedule: {} after {} iterations in {:.3f} s", describe(options.surrogate),
+    spdlog::info("initial {}{} schedule: {} after {} iterations in {:.3f} s",
+                 describe(options.surrogate), options.network_aware ? " network-aware" : "",
                  plan.status, plan.iterations, plan.solve_seconds);
     initial.schedule = plan.schedule;
     initial.surrogate = std::string(describe(options.surrogate));
@@ -612,8 +603,64 @@ int runServe(const ServeOptions& options) {
   initial.bracket = computeBracket(run.scenario, initial.schedule);
   spdlog::info("bracket of schedule v1: [{:.6g}, {:.6g}]", initial.bracket.info,
                initial.bracket.cov);
+  emulator::CoordinatorJournal journal;
+  journal.run_id = options.run.run_id;
+  journal.scenario_digest = run.digest;
+  journal.seed = run.seed;
+  journal.episodes_planned = static_cast<std::uint32_t>(options.episodes);
+  journal.time_scale = options.time_scale;
+  journal.settings = emulator::initialSettings(
+      run.scenario,
+      initial.surrogate == "file" ? PlanSurrogate::Information : options.surrogate);
+  journal.versions.push_back(std::move(initial));
+  return journal;
+}
+
+// The journal of --state, checked against this run (exit 2 when it belongs to another).
+emulator::CoordinatorJournal resumedJournal(ServeOptions& options,
+                                            const emulator::RunScenario& run) {
+  emulator::CoordinatorJournal journal = emulator::loadJournal(options.state_path, run.scenario);
+  const auto mismatch = [&](const char* field, const std::string& journal_value,
+                            const std::string& ours) {
+    throw InputError(options.state_path, field,
+                     "the journal's " + journal_value + ", got " + ours +
+                         " (resume with the run's own --scenario and --seed)");
+  };
+  if (journal.scenario_digest != run.digest) {
+    mismatch("scenario_digest", journal.scenario_digest,
+             run.digest + " from --scenario " + options.scenario_path);
+  }
+  if (journal.seed != run.seed) {
+    mismatch("seed", std::to_string(journal.seed), "--seed " + std::to_string(run.seed));
+  }
+  if (journal.run_id != options.run.run_id) {
+    spdlog::warn("resuming run {} from the journal of run {}", options.run.run_id,
+                 journal.run_id);
+  }
+  // The run's own episode count and time scale, whatever the command line says.
+  options.episodes = static_cast<int>(journal.episodes_planned);
+  options.time_scale = journal.time_scale;
+  spdlog::info("resuming from {}: schedule v{}, {} episodes reported, {} failed sensor(s)",
+               options.state_path, journal.versions.back().version,
+               journal.episodes_reported.size(), journal.settings.failed.size());
+  return journal;
+}
+
+int runServe(ServeOptions options) {
+  emulator::RunScenario run;
+  run.yaml = readTextFile(options.scenario_path, "scenario");  // read once: parsed and sent
+  run.scenario = parseScenarioYaml(run.yaml, options.scenario_path);
+  run.digest = emulator::digestOf(run.yaml);
+  run.seed = options.seed;
+  (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning
+  if (options.network_aware && !run.scenario.network) {
+    throw InputError(options.scenario_path, "network",
+                     "a network: section (--network-aware plans for the rates it delivers)");
+  }
+  const emulator::CoordinatorJournal journal =
+      options.resume ? resumedJournal(options, run) : freshJournal(options, run);
   emulator::installStopSignals();
-  Coordinator coordinator(options, std::move(run), std::move(initial));
+  Coordinator coordinator(options, std::move(run), journal);
   return coordinator.run();
 }
 
@@ -625,8 +672,10 @@ Subcommand addServeCommand(CLI::App& app) {
       "serve",
       "Coordinate one emulation run over DDS: publish the scenario and the planned schedule, "
       "wait for every sensor and the fusion center, run the episodes on the emulated clock, "
-      "re-plan live on command (sensornet replan), then shut the run down. Example:\n"
-      "  coordinator serve --scenario scenarios/default.yaml --run-id demo --episodes 20");
+      "re-plan live on command (sensornet replan) and when sensors die, then shut the run "
+      "down. Example:\n"
+      "  coordinator serve --scenario scenarios/default.yaml --run-id demo --episodes 20\n"
+      "After a crash, the same command with --state FILE --resume carries the run on.");
   emulator::addRunOptions(*cmd, options->run);
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
   const std::map<std::string, PlanSurrogate> surrogates = {
@@ -657,6 +706,31 @@ Subcommand addServeCommand(CLI::App& app) {
                   "wall seconds between a live re-plan and the time it takes effect")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
+  const std::map<std::string, FailurePolicy> policies = {{"replan", FailurePolicy::Replan},
+                                                          {"continue", FailurePolicy::Continue},
+                                                          {"stop", FailurePolicy::Stop}};
+  cmd->add_option("--on-sensor-failure", options->on_sensor_failure,
+                  "when the launcher reports that sensors died: replan = re-plan the rest of "
+                  "the horizon among the survivors (rate zero for the dead from a switch tick "
+                  "on, a full-horizon version from the next episode), continue = keep the "
+                  "schedule, stop = end the run as failed (exit 1). Either way the dead "
+                  "sensors are announced and nobody waits for them")
+      ->transform(CLI::CheckedTransformer(policies, CLI::ignore_case))
+      ->default_str("replan");
+  cmd->add_flag("--network-aware", options->network_aware,
+                "plan the initial schedule and every re-plan for the rates the scenario's "
+                "network: section delivers (loss thins them, outages of every episode zero "
+                "them), with C lambda <= b on the planned rates; needs a network: section");
+  CLI::Option* state =
+      cmd->add_option("--state", options->state_path,
+                      "keep a journal of the run in FILE (JSON, replaced atomically after every "
+                      "change, before the change goes out): settings, schedule versions, "
+                      "episodes reported and announced, commands answered");
+  cmd->add_flag("--resume", options->resume,
+                "start from the journal in --state instead of planning (after a crash): the "
+                "scenario and --seed must be the run's; republishes the scenario and every "
+                "version, waits for the report of the episode announced last, then goes on")
+      ->needs(state);
   cmd->add_flag("--json", options->json, "print a one-line JSON summary at the end");
   return {cmd, [options] { return runServe(*options); }};
 }
