@@ -4,9 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
+#include <cstdio>
 #include <chrono>
 #include <map>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "sensornet/core/emulated_plant.hpp"
@@ -18,6 +21,7 @@
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/network_emulation.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
@@ -32,6 +36,12 @@ using emulator::wallNowNs;
 
 constexpr auto kIdleWait = 20ms;
 
+// A scripted crash (the scenario's `faults:`) of a hosted sensor in this episode.
+struct ScriptedCrash {
+  int sensor = 0;
+  double at_s = 0.0;
+};
+
 // The episode being emulated.
 struct Episode {
   std::uint32_t number = 0;
@@ -39,8 +49,12 @@ struct Episode {
   std::vector<emulator::TimedArrival> timeline;
   std::size_t next = 0;  // first arrival not yet published
   double last_published_s = -1.0;
-  std::map<int, std::uint64_t> sent;  // per hosted sensor
-  double max_lag_s = 0.0;             // behind the emulated clock, own stalls left out
+  std::map<int, std::uint64_t> sent;  // per live hosted sensor: every drawn arrival (its seq)
+  std::map<int, std::uint64_t> dropped_by_network;     // of sent: never written
+  std::map<int, std::uint64_t> duplicated_by_network;  // of sent: written twice
+  emulator::DelayLine held;  // delayed by the emulated network, not yet written
+  std::optional<ScriptedCrash> crash;
+  double max_lag_s = 0.0;  // behind the emulated clock, own stalls left out
   std::uint64_t write_timeouts_at_start = 0;
 };
 
@@ -64,7 +78,7 @@ class Agent {
   int run() {
     publishStatus(sensornet_SENSOR_STARTING, "waiting for scenario and schedule");
     while (!emulator::stopRequested()) {
-      const auto wait = untilNextArrival();
+      const auto wait = untilNextEvent();
       (void)waitset_.wait(wait);
       noteOwnStall();
       if (follow()) {
@@ -88,10 +102,17 @@ class Agent {
     }
   }
 
-  std::chrono::nanoseconds untilNextArrival() const {
-    if (!episode_ || episode_->next >= episode_->timeline.size()) return kIdleWait;
-    const double t = episode_->timeline[episode_->next].time_s;
-    const auto due_ns = episode_->clock.wallAt(t);
+  // Until the next arrival, held-back measurement or scripted crash falls due (at most the idle
+  // wait).
+  std::chrono::nanoseconds untilNextEvent() const {
+    if (!episode_) return kIdleWait;
+    const Episode& e = *episode_;
+    std::int64_t due_ns = wallNowNs() + std::chrono::nanoseconds(kIdleWait).count();
+    if (e.next < e.timeline.size()) {
+      due_ns = std::min(due_ns, e.clock.wallAt(e.timeline[e.next].time_s));
+    }
+    if (const auto held = e.held.nextDueWallNs()) due_ns = std::min(due_ns, *held);
+    if (e.crash) due_ns = std::min(due_ns, e.clock.wallAt(e.crash->at_s));
     return std::clamp(std::chrono::nanoseconds(due_ns - wallNowNs()), std::chrono::nanoseconds(0),
                       std::chrono::nanoseconds(kIdleWait));
   }
@@ -108,6 +129,8 @@ class Agent {
                                std::to_string(id));
         }
       }
+      const auto& network = inputs_.scenario().network;
+      network_ = network && emulator::impairs(*network) ? &*network : nullptr;
     }
     const auto& versions = inputs_.book().versions();
     for (auto v = versions.end() - static_cast<std::ptrdiff_t>(update.new_versions);
@@ -139,16 +162,43 @@ class Agent {
 
   [[nodiscard]] std::vector<emulator::TimedArrival> timelineOf(std::uint32_t episode) const {
     return emulator::sensorTimeline(inputs_.book(), inputs_.plant(), inputs_.run().seed, episode,
-                                    options_.sensors, inputs_.scenario().horizon_s);
+                                    live_sensors_, inputs_.scenario().horizon_s);
+  }
+
+  // The hosted sensors the coordinator has not declared dead (they publish nothing, no tally).
+  void noteFailedSensors(const std::set<int>& failed) {
+    live_sensors_.clear();
+    for (const int id : options_.sensors) {
+      if (failed.count(id) == 0) {
+        live_sensors_.push_back(id);
+      } else {
+        spdlog::warn("sensor {} was declared failed: it publishes nothing more", id);
+      }
+    }
+  }
+
+  // The earliest scripted crash of a live hosted sensor in `episode`.
+  [[nodiscard]] std::optional<ScriptedCrash> crashIn(std::uint32_t episode) const {
+    std::optional<ScriptedCrash> first;
+    for (const CrashFault& fault : inputs_.scenario().faults) {
+      const bool hosted = std::find(live_sensors_.begin(), live_sensors_.end(), fault.sensor) !=
+                          live_sensors_.end();
+      if (hosted && fault.episode == episode && (!first || fault.at_s < first->at_s)) {
+        first = ScriptedCrash{fault.sensor, fault.at_s};
+      }
+    }
+    return first;
   }
 
   void startEpisode(const emulator::EpisodeStart& start) {
     if (episode_) finishEpisode("overtaken by the next episode");
+    noteFailedSensors(start.failed_sensors);
     Episode e;
     e.number = start.episode;
     e.clock = start.clock;
     e.timeline = timelineOf(start.episode);
-    for (const int id : options_.sensors) e.sent[id] = 0;
+    for (const int id : live_sensors_) e.sent[id] = 0;
+    e.crash = crashIn(start.episode);
     e.write_timeouts_at_start = write_timeouts_;
     episode_ = std::move(e);
     publishStatus(sensornet_SENSOR_RUNNING, "");
@@ -157,19 +207,64 @@ class Agent {
   void publishDue() {
     Episode& e = *episode_;
     const double now = e.clock.emulatedNow();
-    const EmulatedPlant& plant = inputs_.plant();
     while (e.next < e.timeline.size() && e.timeline[e.next].time_s <= now) {
       const emulator::TimedArrival& a = e.timeline[e.next];
-      const std::uint64_t seq = e.sent[a.sensor]++;
-      const Eigen::VectorXd z =
-          plant.measure(plant.stateAt(e.number, a.tick), a.sensor, e.number, seq);
-      publishMeasurement(a.sensor, e.number, seq, a.time_s, a.version, z);
+      crashIfDue(e, a.time_s);  // a crash at or before this arrival comes first
+      transmit(e, a);
       noteLag(e, a.time_s);
       e.last_published_s = a.time_s;
       ++e.next;
       ++sent_total_;
     }
-    if (now >= inputs_.scenario().horizon_s && e.next >= e.timeline.size()) finishEpisode("");
+    crashIfDue(e, now);
+    writeHeld(e.held.takeDue(wallNowNs()));
+    if (now >= inputs_.scenario().horizon_s && e.next >= e.timeline.size() && e.held.empty()) {
+      finishEpisode("");
+    }
+  }
+
+  // One drawn arrival through the emulated network: it takes its seq whatever happens to it;
+  // dropped, it is only counted; delayed, it waits in the delay line; otherwise it is written
+  // now (twice when duplicated). Without a network it is written now, as always.
+  void transmit(Episode& e, const emulator::TimedArrival& a) {
+    const std::uint64_t seq = e.sent[a.sensor]++;
+    const emulator::NetworkDecision fate =
+        network_ != nullptr ? emulator::decideDelivery(*network_, inputs_.run().seed, a.sensor,
+                                                       e.number, seq, a.time_s)
+                            : emulator::NetworkDecision{};
+    if (fate.dropped()) {
+      ++e.dropped_by_network[a.sensor];
+      return;
+    }
+    const EmulatedPlant& plant = inputs_.plant();
+    emulator::HeldMeasurement m{a.sensor, seq, a.time_s, a.version,
+                                plant.measure(plant.stateAt(e.number, a.tick), a.sensor,
+                                              e.number, seq),
+                                fate.delay_s};
+    const int copies = fate.duplicated ? 2 : 1;
+    if (fate.duplicated) ++e.duplicated_by_network[a.sensor];
+    if (fate.delay_s > 0.0) {
+      e.held.hold(e.clock.wallAt(a.time_s + fate.delay_s), std::move(m), copies);
+      return;
+    }
+    for (int copy = 0; copy < copies; ++copy) publishMeasurement(e.number, m);
+  }
+
+  void writeHeld(const std::vector<emulator::HeldMeasurement>& due) {
+    for (const emulator::HeldMeasurement& m : due) publishMeasurement(episode_->number, m);
+  }
+
+  // The scenario's scripted crash, once its instant has come by `time_s`: what the network
+  // held until then goes out, one line is logged, and the process dies like kill -9 (no clean
+  // DDS exit, no tally).
+  void crashIfDue(Episode& e, double time_s) {
+    if (!e.crash || e.crash->at_s > time_s) return;
+    writeHeld(e.held.takeDue(e.clock.wallAt(e.crash->at_s)));
+    spdlog::error("scripted crash of sensor {} at {} s of episode {}", e.crash->sensor,
+                  e.crash->at_s, e.number);
+    spdlog::default_logger()->flush();
+    std::fflush(stderr);
+    ::kill(::getpid(), SIGKILL);
   }
 
   // How far behind the emulated clock a measurement went out, leaving out the time this
@@ -186,6 +281,11 @@ class Agent {
   // Publishes each hosted sensor's tally of the episode (`why` empty: it ran to T).
   void finishEpisode(const char* why) {
     Episode& e = *episode_;
+    if (!e.held.empty()) {  // ended early: what the network still held goes out now
+      spdlog::info("episode {}: writing {} measurements the network still held", e.number,
+                   e.held.size());
+      writeHeld(e.held.takeAll());
+    }
     const std::int64_t now = wallNowNs();
     const double stalled_s = stall_watch_.stalledBetween(e.clock.start_wall_ns, now);
     for (const auto& [sensor, count] : e.sent) {
@@ -194,6 +294,8 @@ class Agent {
       t.run_id = dds::borrowString(options_.run.run_id);
       t.episode = e.number;
       t.sent = count;
+      t.dropped_by_network = e.dropped_by_network[sensor];
+      t.duplicated_by_network = e.duplicated_by_network[sensor];
       t.finished = *why == '\0';
       t.write_timeouts = write_timeouts_ - e.write_timeouts_at_start;
       t.max_lag_s = e.max_lag_s;
@@ -212,17 +314,18 @@ class Agent {
     publishStatus(sensornet_SENSOR_READY, "");
   }
 
-  // A reliable write that timed out is retried: a measurement is never dropped.
-  void publishMeasurement(int sensor, std::uint32_t episode, std::uint64_t seq, double t,
-                          std::uint32_t version, const Eigen::VectorXd& z) {
+  // A reliable write that timed out is retried: a measurement is never dropped (by DDS).
+  void publishMeasurement(std::uint32_t episode, const emulator::HeldMeasurement& held) {
     sensornet_Measurement m{};
-    m.sensor_id = static_cast<std::uint32_t>(sensor);
+    m.sensor_id = static_cast<std::uint32_t>(held.sensor);
     m.run_id = dds::borrowString(options_.run.run_id);
     m.episode = episode;
-    m.seq = seq;
-    m.emulated_time_s = t;
-    m.schedule_version = version;
-    dds::borrowSequence(m.z, std::span<const double>(z.data(), static_cast<std::size_t>(z.size())));
+    m.seq = held.seq;
+    m.emulated_time_s = held.time_s;
+    m.schedule_version = held.version;
+    m.network_delay_s = held.delay_s;
+    dds::borrowSequence(
+        m.z, std::span<const double>(held.z.data(), static_cast<std::size_t>(held.z.size())));
     for (;;) {
       m.publish_wall_time_ns = wallNowNs();
       if (measurement_writer_.write(m) == dds::WriteResult::Written) return;
@@ -275,7 +378,8 @@ class Agent {
       s.episode = episode;
       s.schedule_version = v != nullptr ? v->version : 0;
       s.current_rate_hz = rate;
-      s.sent_in_episode = episode_ ? episode_->sent.at(id) : 0;
+      const bool counted = episode_ && episode_->sent.count(id) > 0;
+      s.sent_in_episode = counted ? episode_->sent.at(id) : 0;
       s.sent_total = sent_total_;
       s.write_timeouts = write_timeouts_;
       s.process_id = static_cast<std::int32_t>(::getpid());
@@ -299,6 +403,8 @@ class Agent {
   emulator::StallWatch stall_watch_;
 
   std::optional<Episode> episode_;
+  std::vector<int> live_sensors_ = options_.sensors;
+  const NetworkSpec* network_ = nullptr;  // the scenario's, when it impairs anything
   std::uint64_t sent_total_ = 0;
   std::uint64_t write_timeouts_ = 0;
   std::int64_t next_status_ns_ = 0;

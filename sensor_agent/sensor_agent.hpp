@@ -7,6 +7,14 @@
 // checks its receipts against. A stalled agent (SIGSTOP) publishes what fell due meanwhile as
 // soon as it runs again; the measurements keep their emulated instants, so nothing changes for
 // the filter, and the lag it reports leaves its own stall out.
+//
+// With a `network:` section in the scenario, every drawn arrival still takes its seq, and the
+// emulated network (network_emulation.hpp, keyed by the run seed) drops it (counted in the
+// tally's dropped_by_network, never written), holds it back until wall time
+// clock.wallAt(t + delay) (Measurement.network_delay_s), or writes it twice with the same seq
+// (duplicated_by_network). The tally goes out only once everything held back is written. A
+// scripted crash (`faults:`) of a hosted sensor logs one line and kills the process with SIGKILL
+// at its emulated instant.
 
 #include <vector>
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include "sensornet/core/random.hpp"
 
@@ -61,6 +63,29 @@ bool impairs(const NetworkSpec& network) {
   return !network.outages.empty() ||
          std::any_of(network.links.begin(), network.links.end(),
                      [](const LinkSpec& link) { return !link.perfect(); });
+}
+
+void DelayLine::hold(std::int64_t due_wall_ns, HeldMeasurement measurement, int copies) {
+  for (int copy = 1; copy < copies; ++copy) queue_.push({due_wall_ns, next_order_++, measurement});
+  if (copies > 0) queue_.push({due_wall_ns, next_order_++, std::move(measurement)});
+}
+
+std::vector<HeldMeasurement> DelayLine::takeDue(std::int64_t wall_ns) {
+  std::vector<HeldMeasurement> due;
+  while (!queue_.empty() && queue_.top().due_wall_ns <= wall_ns) {
+    due.push_back(queue_.top().measurement);
+    queue_.pop();
+  }
+  return due;
+}
+
+std::vector<HeldMeasurement> DelayLine::takeAll() {
+  return takeDue(std::numeric_limits<std::int64_t>::max());
+}
+
+std::optional<std::int64_t> DelayLine::nextDueWallNs() const {
+  if (queue_.empty()) return std::nullopt;
+  return queue_.top().due_wall_ns;
 }
 
 }  // namespace sensornet::emulator

@@ -177,5 +177,33 @@ TEST(NetworkEmulation, APerfectOrAbsentNetworkChangesNothing) {
   }
 }
 
+HeldMeasurement held(std::uint64_t seq) {
+  HeldMeasurement m;
+  m.seq = seq;
+  m.z = Eigen::VectorXd::Constant(1, static_cast<double>(seq));
+  return m;
+}
+
+TEST(DelayLine, ReleasesWhatIsDueEarliestFirstAndCopiesTwice) {
+  DelayLine line;
+  EXPECT_TRUE(line.empty());
+  EXPECT_FALSE(line.nextDueWallNs().has_value());
+  line.hold(300, held(0), 1);
+  line.hold(100, held(1), 2);  // duplicated
+  line.hold(200, held(2), 1);
+  line.hold(100, held(3), 1);  // same time as seq 1: after it, in the order held
+  EXPECT_EQ(line.size(), 5U);
+  EXPECT_EQ(line.nextDueWallNs(), 100);
+  EXPECT_TRUE(line.takeDue(99).empty());
+  std::vector<std::uint64_t> seqs;
+  for (const HeldMeasurement& m : line.takeDue(200)) seqs.push_back(m.seq);
+  EXPECT_EQ(seqs, (std::vector<std::uint64_t>{1, 1, 3, 2}));
+  EXPECT_EQ(line.nextDueWallNs(), 300);
+  const std::vector<HeldMeasurement> rest = line.takeAll();
+  ASSERT_EQ(rest.size(), 1U);
+  EXPECT_EQ(rest[0].z(0), 0.0);
+  EXPECT_TRUE(line.empty());
+}
+
 }  // namespace
 }  // namespace sensornet::emulator
