@@ -440,7 +440,8 @@ class Coordinator {
   }
 
   // The failure policy: the failed sensors are recorded and announced whatever the policy,
-  // then re-planned without (replan), left alone (continue) or the run ends (stop).
+  // then re-planned without (replan), left alone (continue) or the run ends (stop). When every
+  // sensor has failed the run ends as failed under any policy: there is nothing left to run.
   Answer onSensorsFailed(const sensornet_Command& c) {
     std::set<int> sensors;
     for (const std::uint32_t id : dds::viewSequence(c.sensor_ids)) {
@@ -456,6 +457,10 @@ class Coordinator {
                  policyName(options_.on_sensor_failure));
     saveState();
     announceFailure(detail);
+    if (sensorsInService() == 0) {  // nothing left to emulate, whatever the policy
+      abort_detail_ = "every sensor has failed (the last: sensor(s) " + listed(sensors) + ")";
+      return {std::nullopt, "no policy applies: " + abort_detail_ + "; the run ends"};
+    }
     switch (options_.on_sensor_failure) {
       case FailurePolicy::Continue:
         return {std::nullopt, "policy continue: schedule unchanged"};
