@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/network.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
@@ -26,8 +27,21 @@ struct PlanOptions {
   double tolerance = PlanRequest{}.tolerance;
   int max_iterations = 500;
   double max_seconds = 120.0;
+  bool network_aware = false;
   bool json = false;
 };
+
+// The bracket of what the scenario's network delivers of `schedule` in episode 0 (outages of
+// other episodes left out); the schedule's own bracket without a network.
+CostBracket deliveredBracket(const Scenario& scenario, const RateSchedule& schedule,
+                             const CostBracket& planned) {
+  if (!scenario.network) return planned;
+  return computeBracket(scenario, deliveredSchedule(schedule, *scenario.network, 0));
+}
+
+nlohmann::json toJson(const CostBracket& bracket) {
+  return {{"info", bracket.info}, {"cov", bracket.cov}};
+}
 
 int runPlan(const PlanOptions& options) {
   const Scenario scenario = loadScenarioFile(options.scenario_path);
@@ -45,6 +59,14 @@ int runPlan(const PlanOptions& options) {
     }
   }
   request.excluded_sensors = options.excluded;
+  if (options.network_aware) {
+    if (!scenario.network) {
+      throw InputError(options.scenario_path, "network",
+                       "a network: section for --network-aware (the scenario has none; see "
+                       "scenarios/lossy.yaml)");
+    }
+    request.delivery = deliveryFactors(scenario);
+  }
   if (!options.warm_start_path.empty()) {
     request.warm_start = loadScheduleFile(options.warm_start_path, scenario);
   }
@@ -60,11 +82,14 @@ int runPlan(const PlanOptions& options) {
   };
 
   const PlanResult plan = planSchedule(scenario, request);
+  const CostBracket delivered = deliveredBracket(scenario, plan.schedule, plan.bracket);
   const std::string surrogate{describe(options.surrogate)};
   writeScheduleFile(options.out_path, plan.schedule,
                     {{"surrogate", surrogate},
                      {"objective", plan.objective},
-                     {"bracket", {{"info", plan.bracket.info}, {"cov", plan.bracket.cov}}},
+                     {"bracket", toJson(plan.bracket)},
+                     {"delivered_bracket", toJson(delivered)},
+                     {"network_aware", options.network_aware},
                      {"status", plan.status}});
   const bool solved = plan.status == "optimal" || plan.status == "acceptable" ||
                       plan.status == "not_optimized";
@@ -73,7 +98,9 @@ int runPlan(const PlanOptions& options) {
   if (options.json) {
     nlohmann::json doc = {{"surrogate", surrogate},
                           {"objective", plan.objective},
-                          {"bracket", {{"info", plan.bracket.info}, {"cov", plan.bracket.cov}}},
+                          {"bracket", toJson(plan.bracket)},
+                          {"delivered_bracket", toJson(delivered)},
+                          {"network_aware", options.network_aware},
                           {"iterations", plan.iterations},
                           {"solve_seconds", plan.solve_seconds},
                           {"status", plan.status},
@@ -91,6 +118,12 @@ int runPlan(const PlanOptions& options) {
               plan.solve_seconds);
   std::printf("bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n", plan.bracket.info,
               plan.bracket.cov);
+  if (scenario.network) {
+    std::printf("delivered  J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g (%s)\n", delivered.info,
+                delivered.cov,
+                options.network_aware ? "planned for the network"
+                                      : "the network was not planned for");
+  }
   std::printf("written    %s\n", options.out_path.c_str());
   return kExitOk;
 }
@@ -140,8 +173,13 @@ Subcommand addPlanCommand(CLI::App& app) {
   cmd->add_option("--max-seconds", options->max_seconds, "wall-time limit of the solve")
       ->capture_default_str()
       ->check(positiveNumber());
+  cmd->add_flag("--network-aware", options->network_aware,
+                "plan for the rates the scenario's network: section delivers (loss thins them, "
+                "outages of every episode zero them) while C λ <= b binds the planned rates; "
+                "refused without a network: section");
   cmd->add_flag("--json", options->json,
-                "print {\"surrogate\", \"objective\", \"bracket\", \"iterations\", "
+                "print {\"surrogate\", \"objective\", \"bracket\", \"delivered_bracket\" "
+                "(of what the network delivers in episode 0), \"network_aware\", \"iterations\", "
                 "\"solve_seconds\", \"status\"} as one JSON line");
   return {cmd, [options] { return runPlan(*options); }};
 }

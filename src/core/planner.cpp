@@ -25,6 +25,18 @@ void checkRequest(const Scenario& scenario, const PlanRequest& request) {
     throw InputError(kSource, "max_seconds",
                      "a number > 0, got " + std::to_string(request.max_seconds));
   }
+  if (request.delivery) {
+    const Eigen::MatrixXd& delivery = *request.delivery;
+    if (delivery.rows() != scenario.intervals || delivery.cols() != scenario.sensorCount()) {
+      throw InputError(kSource, "delivery",
+                       "an " + std::to_string(scenario.intervals) + " x " +
+                           std::to_string(scenario.sensorCount()) + " matrix (intervals x sensors)");
+    }
+    if (!delivery.allFinite() || (delivery.array() < 0.0).any() ||
+        (delivery.array() > 1.0).any()) {
+      throw InputError(kSource, "delivery", "factors in [0, 1]");
+    }
+  }
   if (request.warm_start) {
     const RateSchedule& warm = *request.warm_start;
     if (warm.intervals() != scenario.intervals || warm.sensorCount() != scenario.sensorCount() ||
@@ -112,6 +124,11 @@ PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request) {
   accurate.start_covariance = request.start_covariance;
   result.bracket = computeBracket(scenario, result.schedule, accurate);
   result.objective = form == SurrogateForm::Covariance ? result.bracket.cov : result.bracket.info;
+  if (request.delivery) {  // what the planner minimized: the cost at the delivered rates
+    const RateSchedule delivered(scenario.horizon_s,
+                                 result.schedule.rates().cwiseProduct(*request.delivery));
+    result.objective = rollout(form, scenario, delivered, accurate).cost;
+  }
   return result;
 }
 

@@ -12,6 +12,7 @@ TranscriptionOptions transcriptionOptions(const PlanRequest& request) {
   options.substeps = request.substeps;
   options.start_time = request.start_time;
   options.start_covariance = request.start_covariance;
+  options.delivery = request.delivery;
   return options;
 }
 

@@ -557,12 +557,35 @@ struct SurrogateTranscription::Impl {
   SurrogateForm form;
   std::optional<Shooting<InformationDynamics>> information;
   std::optional<Shooting<CovarianceDynamics>> covariance;
+  std::optional<MatrixXd> delivery;
 };
+
+namespace {
+
+std::optional<MatrixXd> checkedDelivery(const Scenario& scenario,
+                                        const TranscriptionOptions& options) {
+  if (!options.delivery) return std::nullopt;
+  const MatrixXd& delivery = *options.delivery;
+  if (delivery.rows() != scenario.intervals || delivery.cols() != scenario.sensorCount()) {
+    throw InputError(kSource, "delivery",
+                     "an " + std::to_string(scenario.intervals) + " x " +
+                         std::to_string(scenario.sensorCount()) + " matrix, got " +
+                         std::to_string(delivery.rows()) + " x " +
+                         std::to_string(delivery.cols()));
+  }
+  if (!delivery.allFinite() || (delivery.array() < 0.0).any() || (delivery.array() > 1.0).any()) {
+    throw InputError(kSource, "delivery", "factors in [0, 1]");
+  }
+  return delivery;
+}
+
+}  // namespace
 
 SurrogateTranscription::SurrogateTranscription(SurrogateForm form, const Scenario& scenario,
                                                const TranscriptionOptions& options)
     : impl_(std::make_unique<Impl>()) {
   impl_->form = form;
+  impl_->delivery = checkedDelivery(scenario, options);
   WhitenedRows rows = whitenedRows(scenario);
   if (form == SurrogateForm::Information) {
     impl_->information.emplace(scenario, options, scenario, std::move(rows));
@@ -584,12 +607,27 @@ int SurrogateTranscription::firstInterval() const {
 }
 
 double SurrogateTranscription::cost(const Eigen::Ref<const Eigen::MatrixXd>& rates) {
+  if (impl_->delivery && rates.rows() == impl_->delivery->rows() &&
+      rates.cols() == impl_->delivery->cols()) {
+    const MatrixXd delivered = rates.cwiseProduct(*impl_->delivery);
+    return impl_->information ? impl_->information->forward(delivered)
+                              : impl_->covariance->forward(delivered);
+  }
   return impl_->information ? impl_->information->forward(rates)
                             : impl_->covariance->forward(rates);
 }
 
 CostGradient SurrogateTranscription::costAndGradient(
     const Eigen::Ref<const Eigen::MatrixXd>& rates) {
+  if (impl_->delivery && rates.rows() == impl_->delivery->rows() &&
+      rates.cols() == impl_->delivery->cols()) {
+    // μ = D ⊙ λ, so ∂cost/∂λ = D ⊙ ∂cost/∂μ.
+    const MatrixXd delivered = rates.cwiseProduct(*impl_->delivery);
+    CostGradient cg = impl_->information ? impl_->information->costAndGradient(delivered)
+                                         : impl_->covariance->costAndGradient(delivered);
+    cg.gradient = cg.gradient.cwiseProduct(*impl_->delivery);
+    return cg;
+  }
   return impl_->information ? impl_->information->costAndGradient(rates)
                             : impl_->covariance->costAndGradient(rates);
 }

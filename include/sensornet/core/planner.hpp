@@ -86,7 +86,8 @@ struct PlanResult {
   // Full N x M: intervals before start_time keep warm_start's rates (or 0).
   RateSchedule schedule;
   // The planned surrogate's accurate cost of `schedule` over [start_time, T] (for Uniform, the
-  // information-form cost, the lower end of the bracket).
+  // information-form cost, the lower end of the bracket); with `delivery`, of the delivered
+  // rates delivery ⊙ λ that it minimized (the bracket below stays that of `schedule`).
   double objective = 0.0;
   CostBracket bracket;                  // info and cov of `schedule` over [start_time, T]
   double discretized_objective = 0.0;   // the same cost under the planner's RK4 transcription

@@ -33,6 +33,10 @@ struct TranscriptionOptions {
   double start_time = 0.0;  // the cost is over [start_time, T] ...
   // ... from this covariance at start_time (P0 when absent; required when start_time > 0).
   std::optional<Eigen::MatrixXd> start_covariance;
+  // Network-aware planning (PlanRequest::delivery): the surrogate is evaluated at the delivered
+  // rates μ = delivery ⊙ λ (N x M, entries in [0, 1]), so the gradient in λ is
+  // delivery ⊙ ∂cost/∂μ (chain rule). Absent: μ = λ.
+  std::optional<Eigen::MatrixXd> delivery;
 };
 
 struct CostGradient {

@@ -4,6 +4,12 @@
 
 #include <cmath>
 
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/planner.hpp"
+#include "sensornet/core/random.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/core/surrogate_transcription.hpp"
+
 namespace sensornet {
 namespace {
 
@@ -124,6 +130,134 @@ TEST(DeliveryFactors, AreTheDeliveredFractionOfEachInterval) {
   EXPECT_NEAR(f(7, 0), 0.8 * 0.5, 1e-12);
   EXPECT_NEAR(f(8, 0), 0.8, 1e-12);
   EXPECT_EQ(f.col(1), Eigen::VectorXd::Ones(10));
+}
+
+// Network-aware planning (PlanRequest::delivery): the surrogate sees delivery ⊙ λ while C λ <= b
+// binds λ.
+
+Scenario planningScenario(std::uint64_t seed = 3) {
+  RandomPlantSpec spec;
+  spec.state_dim = 3;
+  spec.sensor_count = 4;
+  spec.intervals = 10;
+  spec.horizon_s = 2.0;
+  spec.budget = 6.0;  // one budget row 1'λ <= 6
+  spec.seed = seed;
+  return generateRandomScenario(spec);
+}
+
+NetworkSpec withLoss(const Scenario& s, const std::vector<double>& loss) {
+  NetworkSpec network = lossEverywhere(0.0, s.sensorCount());
+  for (std::size_t j = 0; j < loss.size(); ++j) network.links[j].loss = loss[j];
+  return network;
+}
+
+CostBracket deliveredBracket(const Scenario& s, const RateSchedule& plan,
+                             const NetworkSpec& network) {
+  return computeBracket(s, deliveredSchedule(plan, network, 0));
+}
+
+// Central differences of the transcription's cost in λ, against its adjoint gradient with the
+// chain rule through the delivery factors (step 1e-5: truncation and rounding far below 1e-6).
+TEST(NetworkAwareTranscription, GradientIsTheDeliveryTimesTheGradientInDeliveredRates) {
+  const Scenario s = planningScenario();
+  Rng rng = Rng::keyed(5, 11);
+  Eigen::MatrixXd delivery(s.intervals, s.sensorCount());
+  Eigen::MatrixXd rates(s.intervals, s.sensorCount());
+  for (int k = 0; k < s.intervals; ++k) {
+    for (int j = 0; j < s.sensorCount(); ++j) {
+      delivery(k, j) = 0.2 + 0.8 * rng.uniform();
+      rates(k, j) = 0.3 + 2.0 * rng.uniform();
+    }
+  }
+  for (const auto form : {SurrogateForm::Information, SurrogateForm::Covariance}) {
+    TranscriptionOptions options;
+    options.delivery = delivery;
+    SurrogateTranscription aware(form, s, options);
+    SurrogateTranscription plain(form, s);
+    // The cost is the plain cost at the delivered rates.
+    EXPECT_EQ(aware.cost(rates), plain.cost(rates.cwiseProduct(delivery)));
+    const CostGradient cg = aware.costAndGradient(rates);
+    Eigen::MatrixXd fd(rates.rows(), rates.cols());
+    for (int k = 0; k < rates.rows(); ++k) {
+      for (int j = 0; j < rates.cols(); ++j) {
+        const double step = 1e-5 * std::max(1.0, rates(k, j));
+        Eigen::MatrixXd plus = rates, minus = rates;
+        plus(k, j) += step;
+        minus(k, j) -= step;
+        fd(k, j) = (aware.cost(plus) - aware.cost(minus)) / (2.0 * step);
+      }
+    }
+    EXPECT_LE((cg.gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * fd.cwiseAbs().maxCoeff())
+        << "adjoint\n" << cg.gradient << "\nfinite differences\n" << fd;
+  }
+}
+
+TEST(NetworkAwarePlanning, FactorsOfOneChangeNothing) {
+  const Scenario s = planningScenario();
+  PlanRequest plain;
+  PlanRequest ones = plain;
+  ones.delivery = Eigen::MatrixXd::Ones(s.intervals, s.sensorCount());
+  const PlanResult a = planSchedule(s, plain);
+  const PlanResult b = planSchedule(s, ones);
+  EXPECT_EQ(a.schedule.rates(), b.schedule.rates());
+  EXPECT_EQ(a.objective, b.objective);
+}
+
+TEST(NetworkAwarePlanning, UniformLossPlanDeliversNoWorseBracketThanThePlainPlan) {
+  const Scenario s = planningScenario();
+  for (const double p : {0.3, 0.6}) {
+    const NetworkSpec network = withLoss(s, std::vector<double>(4, p));
+    Scenario lossy = s;
+    lossy.network = network;
+    for (const auto surrogate : {PlanSurrogate::Information, PlanSurrogate::Covariance}) {
+      PlanRequest request;
+      request.surrogate = surrogate;
+      const PlanResult plain = planSchedule(s, request);
+      request.delivery = deliveryFactors(lossy);
+      const PlanResult aware = planSchedule(s, request);
+      EXPECT_TRUE(checkFeasibility(aware.schedule, s).feasible);
+      const CostBracket plain_delivered = deliveredBracket(s, plain.schedule, network);
+      const CostBracket aware_delivered = deliveredBracket(s, aware.schedule, network);
+      // Each plan is judged by the surrogate it minimized; 1e-4 relative covers the planner's
+      // RK4 transcription (it optimizes a cost within O(h^4) of the accurate one).
+      const bool info = surrogate == PlanSurrogate::Information;
+      const double plain_cost = info ? plain_delivered.info : plain_delivered.cov;
+      const double aware_cost = info ? aware_delivered.info : aware_delivered.cov;
+      EXPECT_LE(aware_cost, plain_cost * (1.0 + 1e-4)) << "p = " << p;
+      // With uniform loss the planner's objective is the delivered cost itself.
+      EXPECT_NEAR(aware.objective, aware_cost, 1e-8 * aware_cost);
+    }
+  }
+}
+
+TEST(NetworkAwarePlanning, ALossyLinkGetsLessRateThanInThePlainPlan) {
+  const Scenario s = planningScenario();
+  Scenario lossy = s;
+  lossy.network = withLoss(s, {0.9});
+  for (const PlanMethod method : {PlanMethod::ProjectedGradient, PlanMethod::Ipopt}) {
+    PlanRequest request;
+    request.method = method;
+    const PlanResult plain = planSchedule(s, request);
+    request.delivery = deliveryFactors(lossy);
+    const PlanResult aware = planSchedule(s, request);
+    const double plain_rate = plain.schedule.rates().col(0).sum();
+    const double aware_rate = aware.schedule.rates().col(0).sum();
+    EXPECT_GT(plain_rate, 0.5) << "the plain plan uses sensor 0, so the test can fail";
+    EXPECT_LT(aware_rate, 0.8 * plain_rate) << (method == PlanMethod::Ipopt ? "ipopt" : "pqn");
+    const CostBracket plain_delivered = deliveredBracket(s, plain.schedule, *lossy.network);
+    const CostBracket aware_delivered = deliveredBracket(s, aware.schedule, *lossy.network);
+    EXPECT_LE(aware_delivered.info, plain_delivered.info * (1.0 + 1e-4));
+  }
+}
+
+TEST(NetworkAwarePlanning, RefusesDeliveryFactorsThatDoNotFit) {
+  const Scenario s = planningScenario();
+  PlanRequest request;
+  request.delivery = Eigen::MatrixXd::Ones(3, 4);
+  EXPECT_THROW((void)planSchedule(s, request), InputError);
+  request.delivery = Eigen::MatrixXd::Constant(s.intervals, s.sensorCount(), 1.5);
+  EXPECT_THROW((void)planSchedule(s, request), InputError);
 }
 
 }  // namespace
