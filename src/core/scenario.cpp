@@ -273,7 +273,8 @@ void checkOutages(const Scenario& s, const std::string& source) {
       throw InputError(source, field,
                        "edges on the rate grid (T/N = " + number(s.intervalLength()) +
                            " s) divided into at most " + std::to_string(kMaxOutageRefinement) +
-                           " equal steps, together with the outages before it");
+                           " equal steps, together with the outages before it, got from " +
+                           number(outage.from_s) + ", to " + number(outage.to_s));
     }
   }
 }

@@ -79,7 +79,10 @@ void readDelay(const YamlReader& in, const YAML::Node& delay, const std::string&
     draft.link.jitter_sigma = sigma;
     draft.has_sigma = true;
     if (draft.link.jitter != Jitter::Lognormal) {
-      in.fail(delay["sigma"], field + ".sigma", "sigma only with jitter: lognormal");
+      in.fail(delay["sigma"], field + ".sigma",
+              std::string("no sigma with jitter: ") +
+                  (draft.link.jitter == Jitter::None ? "none" : "exponential") +
+                  " (sigma is the spread of jitter: lognormal)");
     }
   }
 }
