@@ -540,7 +540,11 @@ class FusionCenter {
     const json entry = emulator::episodeEntry(result);
     if (episode_log_) episode_log_->append(entry);
     report_->add(entry);
-    spdlog::warn("episode {}: not fused (the fusion center restarted during it)", episode);
+    spdlog::warn(
+        "episode {}: not fused (the fusion center restarted during it); answered {:.3g} s after "
+        "joining, with {} sensor processes' measurement writers matched",
+        episode, 1e-9 * static_cast<double>(wallNowNs() - resumed_->joinedWallNs()),
+        measurement_reader_.matchedWriters());
     publishReport(result, report_->summary());
   }
 
