@@ -165,8 +165,9 @@ class Coordinator {
   // Ends an unfinished run: why, in the RUN_SHUTDOWN detail.
   int fail() {
     if (!abort_detail_.empty()) return abort();
-    shutDown(emulator::stopRequested() ? "the coordinator was stopped by a signal"
-                                       : "no report of episode " + std::to_string(current_episode_));
+    shutDown(emulator::stopRequested()
+                 ? "the coordinator was stopped by a signal"
+                 : "no report of episode " + std::to_string(current_episode_));
     return kExitFailure;
   }
   int abort() {

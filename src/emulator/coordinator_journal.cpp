@@ -82,7 +82,8 @@ class Fields {
   }
   template <typename Unsigned>
   Unsigned unsignedAt(const json& value, const std::string& field) const {
-    if (!value.is_number_unsigned() && !(value.is_number_integer() && value.get<std::int64_t>() >= 0)) {
+    if (!value.is_number_unsigned() &&
+        !(value.is_number_integer() && value.get<std::int64_t>() >= 0)) {
       fail(field, "a non-negative integer");
     }
     const auto number = value.get<std::uint64_t>();

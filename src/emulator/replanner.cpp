@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "sensornet/core/input_error.hpp"
@@ -14,19 +14,17 @@
 namespace sensornet::emulator {
 namespace {
 
-std::string sourceOf(std::uint64_t command_id) {
-  return "command " + std::to_string(command_id);
-}
+std::string sourceOf(std::uint64_t command_id) { return "command " + std::to_string(command_id); }
 
 bool stalledAtAStationaryPoint(const PlanResult& plan) {
   return plan.status == "stalled" && plan.kkt_residual <= Replanner::kStationaryResidual;
 }
 
 // Throws unless the planner reports the plan as one to publish (see the header).
-void requireOptimal(const PlanResult& plan, const std::string& which,
-                    const std::string& surrogate, std::uint64_t command_id) {
-  if (plan.status == "optimal" || plan.status == "acceptable" ||
-      plan.status == "not_optimized" || stalledAtAStationaryPoint(plan)) {
+void requireOptimal(const PlanResult& plan, const std::string& which, const std::string& surrogate,
+                    std::uint64_t command_id) {
+  if (plan.status == "optimal" || plan.status == "acceptable" || plan.status == "not_optimized" ||
+      stalledAtAStationaryPoint(plan)) {
     return;
   }
   throw InputError(sourceOf(command_id), "plan",
@@ -40,8 +38,8 @@ void requireOptimal(const PlanResult& plan, const std::string& which,
 std::string describePlan(const PlanResult& plan) {
   if (plan.status == "acceptable") return "acceptable: IPOPT's looser tolerance";
   if (stalledAtAStationaryPoint(plan)) {
-    return "stalled, accepted: kkt residual " + formatNumber(plan.kkt_residual) + " <= " +
-           formatNumber(Replanner::kStationaryResidual);
+    return "stalled, accepted: kkt residual " + formatNumber(plan.kkt_residual) +
+           " <= " + formatNumber(Replanner::kStationaryResidual);
   }
   return plan.status;
 }
@@ -168,8 +166,8 @@ Replan Replanner::adoptScheduleFile(const std::string& schedule_json, const Sche
   const Feasibility feasibility = checkFeasibility(schedule, planned_for, 1e-9);
   if (!feasibility.feasible) throw InputError(source, "rates", feasibility.reason);
   Replan r;
-  r.versions.push_back(makeVersion(planned_for, std::move(schedule), "file", command_id,
-                                   now.nextEpisode(), 0.0));
+  r.versions.push_back(
+      makeVersion(planned_for, std::move(schedule), "file", command_id, now.nextEpisode(), 0.0));
   r.versions.back().version = book.latest().version + 1;
   r.summary = "schedule file";
   r.settings = settings_;
@@ -224,16 +222,15 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
                                        now.episode, effective));
       r.versions.back().version = ++number;
       summary = "version " + std::to_string(number) + " from " + std::to_string(effective) +
-                " s of episode " + std::to_string(now.episode) + " (" +
-                describePlan(*tail_plan) + ", planned from the fused covariance at " +
-                std::to_string(now.fused->time_s) + " s carried to " + std::to_string(at) +
-                " s); ";
+                " s of episode " + std::to_string(now.episode) + " (" + describePlan(*tail_plan) +
+                ", planned from the fused covariance at " + std::to_string(now.fused->time_s) +
+                " s carried to " + std::to_string(at) + " s); ";
     } else {
       summary = notInThisEpisode("planning outlasted it");
     }
   }
-  r.versions.push_back(makeVersion(planned_for, full_plan.schedule, surrogate, command_id,
-                                   now.nextEpisode(), 0.0));
+  r.versions.push_back(
+      makeVersion(planned_for, full_plan.schedule, surrogate, command_id, now.nextEpisode(), 0.0));
   r.versions.back().version = ++number;
   r.summary = summary + "version " + std::to_string(number) + " from episode " +
               std::to_string(now.nextEpisode()) + " (" + surrogate + ", " +
@@ -242,8 +239,7 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
   return r;
 }
 
-PlanRequest Replanner::planRequest(const ReplanSettings& settings,
-                                   const ScheduleBook& book) const {
+PlanRequest Replanner::planRequest(const ReplanSettings& settings, const ScheduleBook& book) const {
   PlanRequest request;
   request.surrogate = settings.surrogate;
   const std::set<int> out = settings.outOfService();

@@ -25,8 +25,9 @@ bool identical(const ScheduleVersion& a, const ScheduleVersion& b) {
 
 ScheduleBook::Outcome ScheduleBook::add(ScheduleVersion v) {
   if (!versions_.empty() && v.version <= versions_.back().version) {
-    const auto held = std::find_if(versions_.begin(), versions_.end(),
-                                   [&](const ScheduleVersion& h) { return h.version == v.version; });
+    const auto held =
+        std::find_if(versions_.begin(), versions_.end(),
+                     [&](const ScheduleVersion& h) { return h.version == v.version; });
     return held != versions_.end() && identical(*held, v) ? Outcome::Duplicate : Outcome::Stale;
   }
   versions_.push_back(std::move(v));

@@ -56,16 +56,15 @@ struct CoordinatorJournal {
   std::set<std::uint32_t> episodes_reported;
   std::optional<AnnouncedEpisode> announced;
   std::map<std::uint64_t, AnsweredCommand> answered;  // by command id
-  bool shutdown_requested = false;        // COMMAND_SHUTDOWN: the run ends after the episode
-  std::string abort_detail;               // not empty: the run ends as failed, for this reason
+  bool shutdown_requested = false;  // COMMAND_SHUTDOWN: the run ends after the episode
+  std::string abort_detail;         // not empty: the run ends as failed, for this reason
 };
 
 // The journal as JSON text, and back. journalFromJson checks every field against `scenario`
 // (sensor ids below M, budget of one value per row of C, N x M rates, increasing versions) and
 // throws InputError naming `source` and the field.
 [[nodiscard]] std::string journalToJson(const CoordinatorJournal& journal);
-[[nodiscard]] CoordinatorJournal journalFromJson(const std::string& text,
-                                                 const std::string& source,
+[[nodiscard]] CoordinatorJournal journalFromJson(const std::string& text, const std::string& source,
                                                  const Scenario& scenario);
 
 // Writes `path` atomically (path + ".tmp", then rename); throws std::runtime_error naming the

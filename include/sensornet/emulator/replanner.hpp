@@ -72,7 +72,7 @@ struct FusedCovariance {
 
 // Where the run is when a change comes.
 struct RunMoment {
-  bool running = false;     // an episode runs
+  bool running = false;       // an episode runs
   std::uint32_t episode = 0;  // the running episode, else the next one to start
   std::optional<FusedCovariance> fused;
   // Emulated seconds into the running episode now (read before and after planning).
@@ -130,21 +130,20 @@ class Replanner {
   [[nodiscard]] Replan setBudget(std::span<const double> budget, const ScheduleBook& book,
                                  const RunMoment& now, std::uint64_t command_id) const;
   // A schedule file's text (JSON), feasible under the budget in force, from the next episode.
-  [[nodiscard]] Replan adoptScheduleFile(const std::string& schedule_json,
-                                         const ScheduleBook& book, const RunMoment& now,
-                                         std::uint64_t command_id) const;
+  [[nodiscard]] Replan adoptScheduleFile(const std::string& schedule_json, const ScheduleBook& book,
+                                         const RunMoment& now, std::uint64_t command_id) const;
   // Plans again with the settings in force (after noteFailed: without the failed sensors).
   [[nodiscard]] Replan replanAsIs(const ScheduleBook& book, const RunMoment& now,
                                   std::uint64_t command_id) const;
 
  private:
-  [[nodiscard]] Replan plan(ReplanSettings settings, const ScheduleBook& book,
-                            const RunMoment& now, std::uint64_t command_id) const;
+  [[nodiscard]] Replan plan(ReplanSettings settings, const ScheduleBook& book, const RunMoment& now,
+                            std::uint64_t command_id) const;
   [[nodiscard]] PlanRequest planRequest(const ReplanSettings& settings,
                                         const ScheduleBook& book) const;
   [[nodiscard]] Eigen::MatrixXd covarianceExpectedAt(const ReplanSettings& settings,
-                                                     const ScheduleBook& book,
-                                                     const RunMoment& now, double at) const;
+                                                     const ScheduleBook& book, const RunMoment& now,
+                                                     double at) const;
   [[nodiscard]] Scenario plannedFor(const ReplanSettings& settings) const;
   [[nodiscard]] ScheduleVersion makeVersion(const Scenario& planned_for, RateSchedule schedule,
                                             std::string surrogate, std::uint64_t command_id,

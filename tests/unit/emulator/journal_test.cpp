@@ -38,8 +38,8 @@ RateSchedule awkwardSchedule(const Scenario& s, double scale) {
   return RateSchedule(s.horizon_s, rates);
 }
 
-ScheduleVersion versionOf(const Scenario& s, std::uint32_t number, std::uint32_t episode,
-                          double at, double scale) {
+ScheduleVersion versionOf(const Scenario& s, std::uint32_t number, std::uint32_t episode, double at,
+                          double scale) {
   ScheduleVersion v;
   v.version = number;
   v.effective_episode = episode;

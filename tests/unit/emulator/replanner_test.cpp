@@ -3,6 +3,8 @@
 // mid-episode plan starts from, each checked against a direct computation with the math core
 // (the tick grid, validateScenario, a rollout and a plan made here).
 
+#include "sensornet/emulator/replanner.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +14,6 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/emulator/replanner.hpp"
 
 namespace sensornet::emulator {
 namespace {
