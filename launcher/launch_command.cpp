@@ -284,8 +284,8 @@ std::vector<int> sensorsOf(const LaunchPlan& plan, const std::string& process) {
 }
 
 // How the run answers a child that ended badly while it runs (issue 11, "process deaths are
-// survived"): a dead sensor agent's sensors are reported to the coordinator, which applies the
-// --on-sensor-failure policy; a killed fusion center or coordinator is started again with
+// survived"): the sensors of a sensor agent that died once the run was under way (an episode
+// announced) are reported to the coordinator, which applies the --on-sensor-failure policy; a killed fusion center or coordinator is started again with
 // --resume (at most kMaxRestarts times each). Anything else fails the run.
 class FaultResponse {
  public:
@@ -293,12 +293,14 @@ class FaultResponse {
                 FailureNotices& notices)
       : group_(group), plan_(plan), scenario_(scenario), notices_(notices) {}
 
-  bool operator()(const ChildExit& exit, const RunPosition& at) {
+  bool operator()(const ChildExit& exit, const RunPosition& at) {  // true: the run goes on
     if (exit.name == kCoordinator) return restart(exit, at);
     if (!group_.isRunning(kCoordinator)) return false;  // the run is over or ending
     if (exit.name == kFusionCenter) return restart(exit, at);
     const std::vector<int> sensors = sensorsOf(plan_, exit.name);
-    if (sensors.empty()) return false;
+    // Before the first episode a sensor agent that ends is a launch that failed (a bad program,
+    // a bad option): its log is shown and the run stops.
+    if (sensors.empty() || !at.episode) return false;
     std::fprintf(stderr, "sensornet: %s (sensor%s %s) %s; the coordinator applies the failure "
                  "policy\n", exit.name.c_str(), sensors.size() == 1 ? "" : "s",
                  listed(sensors).c_str(), exit.describe().c_str());
