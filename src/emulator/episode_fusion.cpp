@@ -155,6 +155,11 @@ class RealtimeCost {
 
 }  // namespace
 
+double realtimeCost(const Scenario& scenario, double switch_time_s,
+                    const std::vector<FusedMeasurement>& measurements) {
+  return RealtimeCost(scenario, switch_time_s).of(measurements);
+}
+
 std::uint64_t faultyRejections(const RejectionCounts& rejected) {
   std::uint64_t total = 0;
   for (const auto& [reason, count] : rejected) {
@@ -367,7 +372,11 @@ EpisodeResult EpisodeFusion::finish() {
   EpisodeResult result;
   result.episode = episode_;
   result.realized_cost = filter_.cost();
-  result.realtime_cost = RealtimeCost(scenario_, switch_time_s_).of(all_);
+  // Without delay the two costs are the same number (realtimeCost takes the hindsight steps).
+  const bool delayed = std::any_of(all_.begin(), all_.end(), [](const FusedMeasurement& m) {
+    return m.network_delay_s > 0.0;
+  });
+  result.realtime_cost = delayed ? realtimeCost(scenario_, switch_time_s_, all_) : result.realized_cost;
   for (const ScheduleSegment& segment : segments_) result.versions.push_back(segment.version->version);
   result.switch_time_s = switch_time_s_;
   if (at_switch_) {

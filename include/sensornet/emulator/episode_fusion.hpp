@@ -25,8 +25,11 @@
 // a = time_s + network_delay_s (after T: never). The covariance depends only on which
 // measurements and when, so finish() computes it exactly: in arrival order, the set is fixed on
 // [a_i, a_i+1) and its covariance at a_i is the filter over that set in timestamp order, re-run
-// from the covariance kept after the last measurement before the inserted one. It takes the
-// steps the hindsight filter takes, so with every delay 0 the two costs are the same number.
+// from the covariance kept after the last measurement before the inserted one (realtimeCost
+// below). It takes the steps the hindsight filter takes, so with every delay 0 the two costs are
+// the same number; finish() then takes the hindsight cost as it is. The work is one filter step
+// per measurement plus one per measurement it overtakes: about N (1 + λ d) steps for N
+// measurements at a total rate λ with delays around d.
 //
 // Accounting, per sensor (DESIGN.md): sent = received + lost + dropped_by_network. `sent` is the
 // sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
@@ -137,6 +140,11 @@ struct EpisodeResult {
   double drain_s = 0.0;
   std::uint64_t backlog = 0;
 };
+
+// The real-time cost of an episode's measurements (see above) for `scenario`, stepping as
+// EpisodeFusion's filter does with its last switch point at switch_time_s (0: none).
+[[nodiscard]] double realtimeCost(const Scenario& scenario, double switch_time_s,
+                                  const std::vector<FusedMeasurement>& measurements);
 
 class EpisodeFusion {
  public:
