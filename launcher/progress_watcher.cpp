@@ -1,5 +1,6 @@
 #include "progress_watcher.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <thread>
 
@@ -35,6 +36,13 @@ std::string formatProgress(const sensornet_Report& report, int episodes_planned)
     for (std::size_t i = 0; i < versions.size(); ++i) {
       text += (i == 0 ? "v" : "\u2192v") + std::to_string(versions[i]);
     }
+  }
+  if (!std::isfinite(report.realized_cost)) {
+    // No cost at all: the fusion center was not there to fuse it (it died and was restarted).
+    const std::string head = line;
+    text = head.substr(0, head.find(": realized")) +
+           ": NOT FUSED (the fusion center restarted during it; left out of the statistics)";
+    return text;
   }
   if (!report.complete) {
     std::uint64_t sent = 0, received = 0;

@@ -89,7 +89,8 @@ class Agent {
         return kExitOk;
       }
       if (episode_) publishDue();
-      if (wallNowNs() >= next_status_ns_) publishStatus(currentState(), "");
+      const sensornet_SensorState state = currentState();
+      if (wallNowNs() >= next_status_ns_ || state != last_state_) publishStatus(state, "");
     }
     publishStatus(sensornet_SENSOR_STOPPED, "stopped by a signal");
     return kExitFailure;
@@ -335,13 +336,20 @@ class Agent {
     }
   }
 
+  // Ready once it has the scenario and a schedule and its measurement and tally writers have
+  // matched a reader (the fusion center's): a measurement written before the match would not
+  // reach a volatile reader. (On a lossy link discovery can lag the scenario by seconds.)
   [[nodiscard]] sensornet_SensorState currentState() const {
     if (episode_) return sensornet_SENSOR_RUNNING;
-    if (inputs_.hasScenario() && !inputs_.book().empty()) return sensornet_SENSOR_READY;
+    if (inputs_.hasScenario() && !inputs_.book().empty() &&
+        measurement_writer_.matchedReaders() > 0 && tally_writer_.matchedReaders() > 0) {
+      return sensornet_SENSOR_READY;
+    }
     return sensornet_SENSOR_STARTING;
   }
 
   void publishStatus(sensornet_SensorState state, const std::string& detail) {
+    last_state_ = state;
     next_status_ns_ = wallNowNs() + static_cast<std::int64_t>(1e9 * options_.status_period_s);
     // The version in force now, or between episodes the one the next episode starts with (the
     // same for every hosted sensor).
@@ -408,6 +416,7 @@ class Agent {
   std::uint64_t sent_total_ = 0;
   std::uint64_t write_timeouts_ = 0;
   std::int64_t next_status_ns_ = 0;
+  sensornet_SensorState last_state_ = sensornet_SENSOR_STARTING;
 };
 
 }  // namespace
