@@ -23,29 +23,13 @@
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 
+#include "emulator_test_support.hpp"
+
 namespace sensornet::emulator {
 namespace {
 
-Scenario smallScenario() {
-  RandomPlantSpec spec;
-  spec.state_dim = 3;
-  spec.sensor_count = 4;
-  spec.seed = 9;
-  spec.intervals = 6;
-  spec.budget = 8.0;
-  return generateRandomScenario(spec);
-}
-
-ScheduleVersion versionOf(std::uint32_t number, const RateSchedule& schedule,
-                          std::uint32_t episode = 0, double at = 0.0) {
-  ScheduleVersion v;
-  v.version = number;
-  v.effective_episode = episode;
-  v.effective_time_s = at;
-  v.schedule = schedule;
-  v.surrogate = "test";
-  return v;
-}
+using test::smallScenario;
+using test::versionOf;
 
 // Sensor 0 taken out of service: the other three share the budget.
 RateSchedule withoutSensorZero(const Scenario& s) {

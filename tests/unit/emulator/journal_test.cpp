@@ -15,18 +15,12 @@
 #include "sensornet/emulator/coordinator_journal.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
+#include "emulator_test_support.hpp"
+
 namespace sensornet::emulator {
 namespace {
 
-Scenario smallScenario() {
-  RandomPlantSpec spec;
-  spec.state_dim = 3;
-  spec.sensor_count = 4;
-  spec.seed = 9;
-  spec.intervals = 6;
-  spec.budget = 8.0;
-  return generateRandomScenario(spec);
-}
+using test::smallScenario;
 
 // Rates with digits that only survive a round trip if every bit does.
 RateSchedule awkwardSchedule(const Scenario& s, double scale) {

@@ -16,19 +16,12 @@
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 
+#include "emulator_test_support.hpp"
+
 namespace sensornet::emulator {
 namespace {
 
-ScheduleVersion versionOf(std::uint32_t number, const RateSchedule& schedule,
-                          std::uint32_t episode = 0, double at = 0.0) {
-  ScheduleVersion v;
-  v.version = number;
-  v.effective_episode = episode;
-  v.effective_time_s = at;
-  v.schedule = schedule;
-  v.surrogate = "test";
-  return v;
-}
+using test::versionOf;
 
 // A random plant with a running weight, so that every instant's covariance counts.
 Scenario weightedScenario() {

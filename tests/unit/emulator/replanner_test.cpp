@@ -15,19 +15,12 @@
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 
+#include "emulator_test_support.hpp"
+
 namespace sensornet::emulator {
 namespace {
 
-// n = 3, M = 4, N = 6 intervals of 0.5 s: plans take milliseconds.
-Scenario smallScenario() {
-  RandomPlantSpec spec;
-  spec.state_dim = 3;
-  spec.sensor_count = 4;
-  spec.seed = 9;
-  spec.intervals = 6;
-  spec.budget = 8.0;
-  return generateRandomScenario(spec);
-}
+using test::smallScenario;
 
 class Replanning : public ::testing::Test {
  protected:
