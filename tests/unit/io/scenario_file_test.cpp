@@ -103,6 +103,9 @@ struct BadScenarioCase {
   const char* expected;  // must appear in the message
 };
 
+// Names the case in test output and in ctest's test list ("loss one", not its bytes).
+void PrintTo(const BadScenarioCase& c, std::ostream* os) { *os << c.what; }
+
 class BadScenario : public testing::TestWithParam<BadScenarioCase> {};
 
 TEST_P(BadScenario, IsRejectedWithAMessageNamingFileFieldAndExpectation) {
