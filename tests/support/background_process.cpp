@@ -91,6 +91,12 @@ bool processExists(pid_t pid) {
 }
 
 std::vector<pid_t> processesMentioning(const std::string& token) {
+  // A short token matches processes that are not the test's: LeftoverGuard would kill them.
+  if (token.size() < kMinProcessToken) {
+    throw std::invalid_argument("processesMentioning: a token of at least " +
+                                std::to_string(kMinProcessToken) + " characters, got '" + token +
+                                "'");
+  }
   std::vector<pid_t> found;
   for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
     const std::string name = entry.path().filename();
@@ -105,6 +111,10 @@ std::vector<pid_t> processesMentioning(const std::string& token) {
     if (cmdline.find(token) != std::string::npos) found.push_back(pid);
   }
   return found;
+}
+
+LeftoverGuard::LeftoverGuard(std::string token) : token_(std::move(token)) {
+  (void)processesMentioning(token_);  // refuses a token that would match other processes
 }
 
 LeftoverGuard::~LeftoverGuard() {

@@ -43,6 +43,10 @@ class BackgroundProcess {
 // True while a process with this pid exists (and is not a zombie we own).
 [[nodiscard]] bool processExists(pid_t pid);
 
+// Tokens shorter than this are refused (std::invalid_argument): every command line contains ""
+// (a guard with an empty run id once killed every process on the machine).
+inline constexpr std::size_t kMinProcessToken = 8;
+
 // Processes (other than this one) whose command line contains `token` (a run id, say).
 [[nodiscard]] std::vector<pid_t> processesMentioning(const std::string& token);
 
@@ -50,7 +54,8 @@ class BackgroundProcess {
 // away, pass or fail, so that a failing test never leaves processes for the next one.
 class LeftoverGuard {
  public:
-  explicit LeftoverGuard(std::string token) : token_(std::move(token)) {}
+  // Throws std::invalid_argument for a token shorter than kMinProcessToken.
+  explicit LeftoverGuard(std::string token);
   LeftoverGuard(const LeftoverGuard&) = delete;
   LeftoverGuard& operator=(const LeftoverGuard&) = delete;
   ~LeftoverGuard();

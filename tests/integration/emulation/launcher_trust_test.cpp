@@ -76,9 +76,6 @@ class LauncherTrust : public sensornet::testing::LaunchTest {
     EXPECT_FALSE(fs::exists(dir_ / "logs")) << why << ": nothing may be created";
     EXPECT_TRUE(processesMentioning(run_id_).empty()) << why;
   }
-
-  fs::path dir_;
-  std::string run_id_;
 };
 
 TEST_F(LauncherTrust, HelpTeachesTheExitCodesAndTheSeed) {
