@@ -66,6 +66,18 @@ std::string listed(const std::set<int>& sensors) {
   return text;
 }
 
+// The journal's fixed part: which run it belongs to (what --resume checks) and its length.
+emulator::CoordinatorJournal journalHeader(const ServeOptions& options,
+                                           const emulator::RunScenario& run) {
+  emulator::CoordinatorJournal journal;
+  journal.run_id = options.run.run_id;
+  journal.scenario_digest = run.digest;
+  journal.seed = run.seed;
+  journal.episodes_planned = static_cast<std::uint32_t>(options.episodes);
+  journal.time_scale = options.time_scale;
+  return journal;
+}
+
 // What the coordinator answers to one command: new versions to publish (and settings to adopt)
 // or none, and the reply's reason.
 struct Answer {
@@ -525,12 +537,7 @@ class Coordinator {
   // Writes the journal (--state) as the run stands now; before the DDS write it records.
   void saveState() const {
     if (options_.state_path.empty()) return;
-    emulator::CoordinatorJournal journal;
-    journal.run_id = options_.run.run_id;
-    journal.scenario_digest = run_.digest;
-    journal.seed = run_.seed;
-    journal.episodes_planned = static_cast<std::uint32_t>(options_.episodes);
-    journal.time_scale = options_.time_scale;
+    emulator::CoordinatorJournal journal = journalHeader(options_, run_);
     journal.settings = replanner_.settings();
     journal.versions = book_.versions();
     journal.episodes_reported = reported_;
@@ -609,12 +616,7 @@ emulator::CoordinatorJournal freshJournal(const ServeOptions& options,
   initial.bracket = computeBracket(run.scenario, initial.schedule);
   spdlog::info("bracket of schedule v1: [{:.6g}, {:.6g}]", initial.bracket.info,
                initial.bracket.cov);
-  emulator::CoordinatorJournal journal;
-  journal.run_id = options.run.run_id;
-  journal.scenario_digest = run.digest;
-  journal.seed = run.seed;
-  journal.episodes_planned = static_cast<std::uint32_t>(options.episodes);
-  journal.time_scale = options.time_scale;
+  emulator::CoordinatorJournal journal = journalHeader(options, run);
   journal.settings = emulator::initialSettings(
       run.scenario,
       initial.surrogate == "file" ? PlanSurrogate::Information : options.surrogate);
