@@ -70,6 +70,7 @@ struct LaunchOptions {
   bool json = false;
   std::string on_sensor_failure = "replan";
   std::string network_aware = "auto";  // auto: when the scenario has a network: section
+  std::string require;  // --require criteria (run_requirements.hpp), checked after the run
 };
 
 // What one launch starts, decided before anything starts.
@@ -84,6 +85,21 @@ struct LaunchPlan {
   std::map<std::string, std::vector<int>> sensors_of;  // sensor agent -> the sensors it hosts
   fs::path coordinator_state;  // the coordinator's journal, what a restarted one resumes from
 };
+
+// --require as parseRequirements() takes it, so that an unknown criterion is refused before
+// anything starts.
+CLI::Validator requirementList() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        try {
+          (void)emulator::parseRequirements(input);
+        } catch (const InputError& e) {
+          return (e.field().empty() ? "" : e.field() + ": ") + "expected " + e.expected();
+        }
+        return {};
+      },
+      "CRITERIA");
+}
 
 // A run seed as the coordinator takes it: a decimal integer that fits 64 bits unsigned.
 // (CLI11 would read "-1" as 2^64 - 1 and "010" as octal.)
@@ -484,7 +500,9 @@ int runLaunch(LaunchOptions options) {
       scenario.sensorCount(),
       options.episodes,
       launcherFaults(supervisor, plan, options.timeout_s, response, notices),
-      supervisor.failure() && supervisor.failure()->kind == RunFailureKind::Interrupted};
+      supervisor.failure() && supervisor.failure()->kind == RunFailureKind::Interrupted,
+      options.require.empty() ? std::vector<emulator::Requirement>{}
+                              : emulator::parseRequirements(options.require)};
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
@@ -508,7 +526,10 @@ constexpr const char* kLaunchFooter =
     "survives, --on-sensor-failure stop, every sensor dead, --timeout, "
     "or Ctrl-C/SIGTERM/SIGHUP, which exit 1 too, not 130)\n"
     "  2  bad input, refused before any process starts: a bad option or file, a report path "
-    "that is not a regular file in a writable folder, a run id already in use on this host\n"
+    "that is not a regular file in a writable folder, a run id already in use on this host, "
+    "an unknown --require criterion\n"
+    "  4  the run completed or was degraded, but a --require criterion failed (a failed run "
+    "stays 1)\n"
     "Files: <log dir>/<process>.log, the report (--report) and its episode log beside it "
     "(report.json -> report.jsonl, one line per finished episode). The default log folder "
     "is /tmp/sensornet-<uid>/<run id>/ ($SENSORNET_SCRATCH_DIR replaces /tmp/sensornet-<uid>), "
@@ -581,6 +602,15 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "section")
       ->check(CLI::IsMember({"auto", "yes", "no"}))
       ->capture_default_str();
+  cmd->add_option("--require", options->require,
+                  "make the run a CI gate: comma-separated criteria checked against the report "
+                  "after the run, each printed as pass or FAIL with the value measured; any "
+                  "failure exits 4. Example: --require "
+                  "meets-bracket,no-loss,latency-p99<=5ms,episodes-complete. A criterion is a "
+                  "property, or a quantity with <=, <, >=, > or = and a limit (durations in us, "
+                  "ms or s). Known:\n" +
+                      emulator::requirementsHelp())
+      ->check(requirementList());
   cmd->add_flag("--json", options->json,
                 "print one JSON line at the end: the report's summary with \"run_id\", "
                 "\"status\", \"faults\", \"report\" and \"exit_code\"");

@@ -213,6 +213,14 @@ RunOutcome settleRun(const RunEnd& end) {
       listed.insert(listed.end(), seen.begin(), seen.end());
     }
     (*report)["faults"] = std::move(listed);
+  }
+  if (!end.requirements.empty()) {  // against the settled report: its status and faults
+    outcome.checks = emulator::checkRequirements(end.requirements, *report);
+    (*report)["requirements"] = emulator::toJson(outcome.checks);
+    outcome.exit_code = emulator::gatedExitCode(outcome.exit_code, outcome.checks);
+    outcome.amended = true;
+  }
+  if (outcome.amended) {
     try {
       replaceFileAtomically(end.report_path, report->dump(2) + "\n");
     } catch (const std::exception& e) {
@@ -259,6 +267,9 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   std::printf("latency publish-to-fusion: median %s ms, p99 %s ms\n",
               shown(ms(field(latency, "median"))).c_str(),
               shown(ms(field(latency, "p99"))).c_str());
+  for (const emulator::RequirementCheck& check : outcome.checks) {
+    std::printf("%s\n", emulator::describe(check).c_str());
+  }
   if (outcome.write_problem) {
     std::printf("report: NOT WRITTEN: %s\n", outcome.write_problem->c_str());
   } else {
@@ -281,6 +292,7 @@ void printOutcomeJson(const RunOutcome& outcome, const fs::path& report_path) {
   line["report"] = report_path.string();
   if (outcome.rebuilt) line["rebuilt_from"] = field(outcome.report, "rebuilt_from");
   if (outcome.write_problem) line["report_error"] = *outcome.write_problem;
+  if (!outcome.checks.empty()) line["requirements"] = emulator::toJson(outcome.checks);
   line["exit_code"] = outcome.exit_code;
   printJson(line);
 }

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "progress_watcher.hpp"
+#include "sensornet/emulator/run_requirements.hpp"
 
 namespace sensornet::launcher {
 
@@ -66,6 +67,7 @@ struct RunEnd {
   int episodes_planned = 0;
   std::vector<Fault> faults;  // the launcher's own
   bool interrupted = false;   // a signal stopped the run
+  std::vector<emulator::Requirement> requirements;  // --require: checked against the report
 };
 
 struct RunOutcome {
@@ -75,18 +77,21 @@ struct RunOutcome {
   bool amended = false;  // the launcher rewrote the report
   bool rebuilt = false;  // ... from the episode log, the fusion center's being missing
   std::optional<std::string> write_problem;  // the amended report could not be written
+  std::vector<emulator::RequirementCheck> checks;  // of RunEnd::requirements, in order
 };
 
-// Reads the fusion center's report (or rebuilds it), decides status and exit code, and rewrites
-// the report when the launcher changed it.
+// Reads the fusion center's report (or rebuilds it), decides status and exit code, checks the
+// --require criteria against the settled report (recorded in it as `requirements`; a failed one
+// makes the exit code 4, the status stays what the run was), and rewrites the report when the
+// launcher changed it.
 [[nodiscard]] RunOutcome settleRun(const RunEnd& end);
 
 // The closing lines on standard output: status and fault count, each fault, episodes complete
 // and incomplete, the realized cost against the bracket with meets_bracket (true, false or
-// undetermined), sent/received/lost, the report's path and the exit code.
+// undetermined), sent/received/lost, each --require check, the report's path and the exit code.
 void printOutcome(const RunOutcome& outcome, const std::filesystem::path& report_path);
 // The same as one JSON line: the report's summary with run_id, status, faults, episodes,
-// report and exit_code.
+// report, requirements (when given) and exit_code.
 void printOutcomeJson(const RunOutcome& outcome, const std::filesystem::path& report_path);
 
 }  // namespace sensornet::launcher

@@ -326,9 +326,10 @@ std::string requirementsHelp() {
     if (p.kind == Kind::Duration) usage += "<=DURATION";
     if (p.kind == Kind::Count) usage += "<=COUNT";
     if (p.kind == Kind::Number) usage += "<=NUMBER";
-    help += "  " + usage + std::string(usage.size() < 26 ? 26 - usage.size() : 1, ' ') +
+    help += "  " + usage + std::string(usage.size() < 28 ? 28 - usage.size() : 1, ' ') +
             p.meaning + "\n";
   }
+  help.pop_back();  // the caller ends the last line
   return help;
 }
 

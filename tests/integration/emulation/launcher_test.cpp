@@ -213,6 +213,43 @@ TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
   EXPECT_FALSE(fs::exists(dir_ / "sensornet" / "current-run"));
 }
 
+// --require makes a run a CI gate: each criterion is judged from the report (recomputed here
+// from the report's own numbers), a failed one exits 4 while the status stays the run's.
+TEST_F(Launcher, RequireJudgesTheRunAndAFailedCriterionExitsFour) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(3, 10);
+  argv.insert(argv.end(), {"--require", "episodes-complete,latency-p99<=10s,mean<=0,lost<=0"});
+  const ProcessResult r = runProcess(argv, 60s);
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object()) << r.err;
+  ASSERT_EQ(report["status"], "completed") << r.out;  // the run itself was clean
+  const double mean = report["summary"]["mean"].get<double>();
+  const double p99 = report["latency_s"]["p99"].get<double>();
+  ASSERT_GT(mean, 0.0);  // a trace of a positive definite covariance: mean<=0 must fail
+  EXPECT_EQ(r.exit_code, 4) << r.out;
+
+  const json& checks = report["requirements"];
+  ASSERT_EQ(checks.size(), 4u) << report.dump();
+  EXPECT_EQ(checks[0]["pass"],
+            report["summary"]["episodes_complete"] == report["episodes_planned"]);
+  EXPECT_EQ(checks[1]["pass"], p99 <= 10.0);
+  EXPECT_EQ(checks[2]["pass"], false);
+  EXPECT_EQ(checks[3]["pass"], report["summary"]["lost"] == 0);
+  EXPECT_NE(r.out.find("require mean<=0: FAIL (measured "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("require latency-p99<=10s: pass"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("exit code 4"), std::string::npos) << r.out;
+}
+
+TEST_F(Launcher, UnknownRequirementIsRefusedBeforeAnythingStarts) {
+  std::vector<std::string> argv = launchArgs(3, 10);
+  argv.insert(argv.end(), {"--require", "no-loss,latency-p99<=5"});
+  const ProcessResult r = runProcess(argv, 10s);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("latency-p99<=5: expected a duration with its unit"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "logs")) << "nothing may start on bad input";
+}
+
 TEST_F(Launcher, SensorsPerProcessPutsBlocksOfSensorsInOneAgent) {
   const LeftoverGuard guard(run_id_);
   std::vector<std::string> argv = launchArgs(2, 10);
