@@ -2,6 +2,7 @@
 //   sensornet launch SCENARIO [...]   run coordinator, fusion center and sensors; show progress
 //   sensornet replan [...]            change the schedule of the running emulation
 //   sensornet status [...]            show its sensors and schedule
+//   sensornet watch [...]             follow it live (a terminal view, or lines for a log)
 
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "replan_command.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "status_command.hpp"
+#include "watch_command.hpp"
 
 int main(int argc, char** argv) {
   return sensornet::runProgram("sensornet", [&] {
@@ -22,7 +24,7 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     const std::vector<sensornet::Subcommand> subcommands = {
         sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
-        sensornet::launcher::addStatusCommand(app)};
+        sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -34,6 +35,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using sensornet::testing::BackgroundProcess;
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
 using sensornet::testing::RunningProgram;
@@ -248,6 +250,53 @@ TEST_F(Launcher, UnknownRequirementIsRefusedBeforeAnythingStarts) {
   EXPECT_NE(r.err.find("latency-p99<=5: expected a duration with its unit"), std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "logs")) << "nothing may start on bad input";
+}
+
+std::string printedAs(const char* pattern, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, pattern, value);
+  return text;
+}
+
+// `sensornet watch` with its output to a pipe prints one plain line per change and exits 0 when
+// the run ends; what it printed is checked against the run's report.
+TEST_F(Launcher, WatchFollowsARunInPlainLinesAndExitsWithIt) {
+  const LeftoverGuard guard(run_id_);
+  BackgroundProcess launch(launchArgs(3, 10), (dir_ / "launch.log").string());
+  const ProcessResult watch = runProcess({kLauncher, "watch", "--run-id", run_id_}, 60s);
+  ASSERT_EQ(launch.waitForExit(30s), std::optional<int>(0)) << launch.log();
+  EXPECT_EQ(watch.exit_code, 0) << watch.err;
+
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object());
+  const json& v1 = report["schedule_versions"][0];
+  EXPECT_NE(watch.out.find("schedule v1 (" + v1["surrogate"].get<std::string>() +
+                           ") from episode 0 at t = 0 s, bracket [" +
+                           printedAs("%.4g", v1["bracket"]["info"].get<double>()) + ", " +
+                           printedAs("%.4g", v1["bracket"]["cov"].get<double>()) + "]"),
+            std::string::npos)
+      << watch.out;
+  for (const json& e : report["per_episode"]) {
+    const int k = e["episode"].get<int>();
+    EXPECT_NE(watch.out.find("episode " + std::to_string(k) + " of 3 started"), std::string::npos)
+        << watch.out;
+    EXPECT_NE(watch.out.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
+                             ": realized " +
+                             printedAs("%.4g", e["realized_cost"].get<double>())),
+              std::string::npos)
+        << watch.out;
+  }
+  EXPECT_NE(watch.out.find("run ended: 3 episode(s), 3 reported"), std::string::npos)
+      << watch.out;
+  EXPECT_EQ(watch.out.find("\x1b["), std::string::npos) << "no terminal codes into a pipe";
+}
+
+TEST_F(Launcher, WatchWithoutARunGivesUpAfterWait) {
+  const ProcessResult r =
+      runProcess({kLauncher, "watch", "--run-id", run_id_, "--wait", "1"}, 20s);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("nothing of run " + run_id_ + " answered within 1 s"), std::string::npos)
+      << r.err;
 }
 
 TEST_F(Launcher, SensorsPerProcessPutsBlocksOfSensorsInOneAgent) {
