@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   coinor-libipopt-dev
   libgtest-dev libgmock-dev docker-compose
+  fastddsgen libfastrtps-dev  # a second DDS vendor: the interoperability test (Fast DDS 2.9)
 )
 
 missing=()
