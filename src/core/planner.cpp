@@ -6,6 +6,7 @@
 
 #include "planning_problem.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/mc_planner.hpp"
 
 namespace sensornet {
 namespace {
@@ -67,6 +68,8 @@ std::string_view describe(PlanSurrogate surrogate) {
       return "cov";
     case PlanSurrogate::Uniform:
       return "uniform";
+    case PlanSurrogate::MonteCarlo:
+      return "mc";
   }
   return "unknown";
 }
@@ -84,6 +87,7 @@ double kktResidual(const Scenario& scenario, const RateSchedule& schedule, Surro
 
 PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request) {
   checkRequest(scenario, request);
+  if (request.surrogate == PlanSurrogate::MonteCarlo) return planForRealizedCost(scenario, request);
   const auto start = planning::Clock::now();
   const SurrogateForm form = formOf(request.surrogate);
   planning::PlanningProblem problem(scenario, request, form);

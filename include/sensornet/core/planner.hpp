@@ -2,7 +2,8 @@
 // The planner: the rate schedule λ(t), piecewise constant on the scenario's N intervals, that
 // minimizes a surrogate cost (eq. 12 of the first paper) under C λ_k <= b, λ_k >= 0 (eq. 8), for
 // the information-form surrogate (eq. 11, the paper's Info-NLP) or the covariance-form surrogate
-// (eq. 15, Cov-NLP), or the uniform baseline. It also plans the rest of a running episode, from
+// (eq. 15, Cov-NLP), or the uniform baseline, or (PlanSurrogate::MonteCarlo, mc_planner.hpp)
+// the expected realized cost E[J(P)] itself, by a stochastic method. It also plans the rest of a running episode, from
 // the fused covariance at some time, with sensors taken out of service, warm-started from the
 // schedule in force (the live re-planning of the coordinator).
 //
@@ -30,6 +31,7 @@
 // O(h^4)).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -42,9 +44,12 @@
 
 namespace sensornet {
 
-enum class PlanSurrogate { Information, Covariance, Uniform };
+// MonteCarlo ("mc") minimizes E[J(P)] of the exact CD-KF by Monte Carlo (mc_planner.hpp);
+// planSchedule dispatches to planForRealizedCost.
+enum class PlanSurrogate { Information, Covariance, Uniform, MonteCarlo };
 
-// The surrogate form a plan of this kind rolls out (a uniform plan uses the information form).
+// The surrogate form a plan of this kind rolls out (uniform and mc plans use the information
+// form: their bracket is still [info, cov] of the schedule).
 [[nodiscard]] SurrogateForm formOf(PlanSurrogate surrogate);
 
 // The optimizer: a spectral projected gradient method of our own (the default, see
@@ -55,6 +60,20 @@ struct PlanProgress {
   int iteration = 0;
   double objective = 0.0;       // the discretized surrogate cost at the current iterate
   double elapsed_seconds = 0.0;
+};
+
+// Options of the Monte Carlo planner (PlanSurrogate::MonteCarlo; mc_planner.hpp describes the
+// method). Episode counts are per stage; the plan stops refining at max_seconds (wall time of
+// the whole plan, warm starts included) or when the next stage would exceed max_episodes.
+struct RealizedCostOptions {
+  std::uint64_t seed = 1;
+  int threads = 0;                   // 0 = std::thread::hardware_concurrency()
+  int screening_episodes = 1000;     // the common-random-number sample that compares candidates
+  int gradient_episodes = 64;        // episodes per gradient estimate
+  int gradient_sensors = 8;          // sensors sampled per interval and episode (0 = all)
+  int acceptance_episodes = 4000;    // fresh paired test: refined schedule vs its warm start
+  int report_episodes = 4000;        // fresh episodes that score the returned schedule
+  long long max_episodes = 2000000;  // all stages together
 };
 
 struct PlanRequest {
@@ -74,12 +93,13 @@ struct PlanRequest {
   // Stop when kkt_residual (below) <= tolerance; for IPOPT, its scaled KKT tolerance.
   double tolerance = 1e-6;
   int max_iterations = 500;
-  double max_seconds = 120.0;  // wall time of the solve
+  double max_seconds = 120.0;  // wall time of the solve (mc: of the whole plan)
   int substeps = 2;  // RK4 steps per interval of the transcription (bench/README.md: 2 suffice)
   PlanMethod method = PlanMethod::ProjectedGradient;
   // Optional; called after every solver iteration from the calling thread. Returning false
   // stops the solve (status "stopped"). An exception it throws propagates.
   std::function<bool(const PlanProgress&)> progress;
+  RealizedCostOptions realized;  // used by PlanSurrogate::MonteCarlo only
 };
 
 struct PlanResult {
@@ -88,7 +108,11 @@ struct PlanResult {
   // The planned surrogate's accurate cost of `schedule` over [start_time, T] (for Uniform, the
   // information-form cost, the lower end of the bracket); with `delivery`, of the delivered
   // rates delivery ⊙ λ that it minimized (the bracket below stays that of `schedule`).
+  // For MonteCarlo: the Monte Carlo mean of J(P) over fresh episodes (not those that chose the
+  // schedule), with its 95% half-width below.
   double objective = 0.0;
+  double objective_half_width = 0.0;  // MonteCarlo only (0 otherwise)
+  long long episodes = 0;             // MonteCarlo only: episodes simulated in all stages
   CostBracket bracket;                  // info and cov of `schedule` over [start_time, T]
   double discretized_objective = 0.0;   // the same cost under the planner's RK4 transcription
   int iterations = 0;
@@ -98,6 +122,8 @@ struct PlanResult {
   // "stalled" (no step decreases the cost any more),
   // "stopped" (progress returned false), "not_optimized" (Uniform, or nothing to plan), or
   // "failed: <IPOPT status>" (the best point found is still returned, projected and scored).
+  // MonteCarlo: "improved" (the refined schedule passed the paired test against its warm start)
+  // or "kept_start" (it did not, or no refinement was found: the warm start is returned).
   std::string status;
   // First-order optimality at the returned point, scale-free: with rates measured in units of
   // the largest λ̄_j and the cost in units of the cost itself, the largest change of a planned
@@ -116,6 +142,6 @@ struct PlanResult {
 [[nodiscard]] double kktResidual(const Scenario& scenario, const RateSchedule& schedule,
                                  SurrogateForm form, const PlanRequest& request);
 
-[[nodiscard]] std::string_view describe(PlanSurrogate surrogate);  // "info", "cov", "uniform"
+[[nodiscard]] std::string_view describe(PlanSurrogate surrogate);  // "info", "cov", "uniform", "mc"
 
 }  // namespace sensornet

@@ -1,0 +1,237 @@
+// Planning for the realized cost: the acceptance sweep of the Monte Carlo planner
+// (PlanSurrogate::MonteCarlo, mc_planner.hpp) on the first paper's Fig. 1 instances (sensor
+// sweep n = 5, M = 30..100; state sweep M = 30, n = 2..20; generateRandomScenario with the seeds
+// of planner_bench). Per instance: the info, cov, uniform and mc plans, each scored by an
+// independent Monte Carlo run (evaluateSchedule, its own generator and seed, the same episodes
+// for the four plans), and the verdict of mc against the best of the other three on those
+// episodes: a paired two-sided 95% t interval of E[J_mc - J_best] entirely above 0 is
+// "significantly worse", entirely below 0 "better", else "not significantly different".
+//
+//   mc_planner_bench [--sweep sensors|states|both] [--instances 10] [--eval-runs 4000]
+//                    [--max-seconds 8] [--n N] [--m M] [--verbose] [--markdown]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "sensornet/core/mc_planner.hpp"
+#include "sensornet/core/monte_carlo.hpp"
+#include "sensornet/core/planner.hpp"
+#include "sensornet/core/rate_schedule.hpp"
+#include "sensornet/core/scenario.hpp"
+#include "sensornet/core/student_t.hpp"
+
+namespace {
+
+using sensornet::PlanSurrogate;
+
+struct Options {
+  std::string sweep = "both";
+  int instances = 10;
+  int eval_runs = 4000;
+  double max_seconds = 8.0;
+  int only_n = 0;
+  int only_m = 0;
+  bool verbose = false;
+  bool markdown = false;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t h = v.size() / 2;
+  return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+struct Point {
+  int n = 0, m = 0;
+  int better = 0, same = 0, worse = 0, improved = 0;
+  std::vector<double> mc_seconds, episodes, ratio, info, cov, uniform, mc, best_of_three;
+};
+
+std::vector<double> evaluate(const sensornet::Scenario& scenario,
+                             const sensornet::RateSchedule& schedule, int runs,
+                             std::uint64_t seed) {
+  sensornet::MonteCarloOptions options;
+  options.runs = runs;
+  options.seed = seed;
+  options.threads = 0;
+  options.simulate_plant = false;
+  return sensornet::evaluateSchedule(scenario, schedule, options).episode_costs;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+void runInstance(Point& point, int i, const Options& options) {
+  sensornet::RandomPlantSpec spec;
+  spec.state_dim = point.n;
+  spec.sensor_count = point.m;
+  spec.seed = 1000u * static_cast<std::uint64_t>(point.n) +
+              10u * static_cast<std::uint64_t>(point.m) + static_cast<std::uint64_t>(i);
+  const sensornet::Scenario scenario = sensornet::generateRandomScenario(spec);
+  const double normalizer = scenario.plant.P0.trace();
+  std::vector<sensornet::RateSchedule> schedules;
+  for (PlanSurrogate s :
+       {PlanSurrogate::Information, PlanSurrogate::Covariance, PlanSurrogate::Uniform}) {
+    sensornet::PlanRequest request;
+    request.surrogate = s;
+    request.max_iterations = 3000;
+    schedules.push_back(sensornet::planSchedule(scenario, request).schedule);
+  }
+  sensornet::PlanRequest request;
+  request.surrogate = PlanSurrogate::MonteCarlo;
+  request.max_seconds = options.max_seconds;
+  request.realized.seed = spec.seed;
+  const auto start = std::chrono::steady_clock::now();
+  const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
+  point.mc_seconds.push_back(secondsSince(start));
+  point.episodes.push_back(static_cast<double>(plan.episodes));
+  if (plan.status == "improved") ++point.improved;
+  schedules.push_back(plan.schedule);
+
+  // The independent evaluation: another generator (thinning, evaluateSchedule) and seed.
+  const std::uint64_t eval_seed = spec.seed * 7919u + 12345u;
+  std::vector<std::vector<double>> costs;
+  std::vector<double> means;
+  for (const auto& s : schedules) {
+    costs.push_back(evaluate(scenario, s, options.eval_runs, eval_seed));
+    means.push_back(mean(costs.back()) / normalizer);
+  }
+  const auto best = static_cast<std::size_t>(std::min_element(means.begin(), means.begin() + 3) -
+                                             means.begin());
+  std::vector<double> d(costs[3].size());
+  for (std::size_t e = 0; e < d.size(); ++e) d[e] = (costs[3][e] - costs[best][e]) / normalizer;
+  const double md = mean(d);
+  double sq = 0.0;
+  for (double x : d) sq += (x - md) * (x - md);
+  const double runs = static_cast<double>(d.size());
+  const double half =
+      sensornet::studentTQuantile(0.975, runs - 1.0) * std::sqrt(sq / (runs - 1.0) / runs);
+  const char* verdict = md - half > 0.0 ? "WORSE" : (md + half < 0.0 ? "better" : "n.s.");
+  if (md - half > 0.0) {
+    ++point.worse;
+  } else if (md + half < 0.0) {
+    ++point.better;
+  } else {
+    ++point.same;
+  }
+  point.info.push_back(means[0]);
+  point.cov.push_back(means[1]);
+  point.uniform.push_back(means[2]);
+  point.mc.push_back(means[3]);
+  point.best_of_three.push_back(means[best]);
+  point.ratio.push_back(means[3] / means[best]);
+  if (options.verbose) {
+    std::printf("  n=%d M=%d #%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
+                "%lld episodes, %.1f s) mc-best %+.5f +- %.5f %s\n",
+                point.n, point.m, i, means[0], means[1], means[2], means[3],
+                plan.objective / normalizer, plan.objective_half_width / normalizer,
+                plan.status.c_str(), plan.episodes, point.mc_seconds.back(), md, half, verdict);
+    std::fflush(stdout);
+  }
+}
+
+void printHeader(bool markdown) {
+  if (markdown) {
+    std::printf("| n | M | info MC/trP0 | cov MC/trP0 | uniform MC/trP0 | mc MC/trP0 | mc / best "
+                "(median) | mc / best (mean) | better / n.s. / worse | refined kept | mc s | "
+                "episodes |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  } else {
+    std::printf("%3s %4s | %8s %8s %8s %8s | %7s %7s | %8s | %4s | %6s %9s\n", "n", "M", "info",
+                "cov", "unif", "mc", "mc/best", "mean", "b/ns/w", "kept", "mc s", "episodes");
+  }
+}
+
+void printPoint(const Point& p, bool markdown) {
+  const char* format = markdown
+                           ? "| %d | %d | %.4f | %.4f | %.4f | %.4f | %.3f | %.3f | %d / %d / %d "
+                             "| %d | %.1f | %.0f |\n"
+                           : "%3d %4d | %8.4f %8.4f %8.4f %8.4f | %7.3f %7.3f | %2d/%2d/%2d | %4d "
+                             "| %6.1f %9.0f\n";
+  std::printf(format, p.n, p.m, median(p.info), median(p.cov), median(p.uniform), median(p.mc),
+              median(p.ratio), mean(p.ratio), p.better, p.same, p.worse, p.improved,
+              median(p.mc_seconds), median(p.episodes));
+  std::fflush(stdout);
+}
+
+Point runPoint(int n, int m, const Options& options) {
+  Point point;
+  point.n = n;
+  point.m = m;
+  for (int i = 0; i < options.instances; ++i) runInstance(point, i, options);
+  return point;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "mc_planner_bench: %s needs a value\n", arg.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (arg == "--sweep") {
+      options.sweep = value();
+    } else if (arg == "--instances") {
+      options.instances = std::max(1, std::atoi(value().c_str()));
+    } else if (arg == "--eval-runs") {
+      options.eval_runs = std::max(2, std::atoi(value().c_str()));
+    } else if (arg == "--max-seconds") {
+      options.max_seconds = std::max(0.1, std::atof(value().c_str()));
+    } else if (arg == "--n") {
+      options.only_n = std::atoi(value().c_str());
+    } else if (arg == "--m") {
+      options.only_m = std::atoi(value().c_str());
+    } else if (arg == "--verbose") {
+      options.verbose = true;
+    } else if (arg == "--markdown") {
+      options.markdown = true;
+    } else {
+      std::fprintf(stderr,
+                   "usage: mc_planner_bench [--sweep sensors|states|both] [--instances K] "
+                   "[--eval-runs R] [--max-seconds S] [--n N] [--m M] [--verbose] [--markdown]\n");
+      return arg == "--help" ? 0 : 2;
+    }
+  }
+  if (options.sweep != "sensors" && options.sweep != "states" && options.sweep != "both") {
+    std::fprintf(stderr, "mc_planner_bench: --sweep expects sensors, states or both\n");
+    return 2;
+  }
+  std::printf("mc_planner_bench: %d instances per point, independent evaluation %d episodes, mc "
+              "planner max %.1f s; costs / tr(P0), medians over instances\n",
+              options.instances, options.eval_runs, options.max_seconds);
+  const auto start = std::chrono::steady_clock::now();
+  if (options.sweep != "states") {
+    std::printf("\nsensor sweep (n = 5)\n");
+    printHeader(options.markdown);
+    for (int m = 30; m <= 100; m += 10) {
+      if (options.only_m == 0 || options.only_m == m) printPoint(runPoint(5, m, options), options.markdown);
+    }
+  }
+  if (options.sweep != "sensors") {
+    std::printf("\nstate sweep (M = 30)\n");
+    printHeader(options.markdown);
+    for (int n = 2; n <= 20; n += 2) {
+      if (options.only_n == 0 || options.only_n == n) printPoint(runPoint(n, 30, options), options.markdown);
+    }
+  }
+  std::printf("\ntotal %.0f s\n", secondsSince(start));
+  return 0;
+}
