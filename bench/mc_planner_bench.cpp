@@ -8,7 +8,8 @@
 // "significantly worse", entirely below 0 "better", else "not significantly different".
 //
 //   mc_planner_bench [--sweep sensors|states|both] [--instances 10] [--eval-runs 4000]
-//                    [--max-seconds 8] [--n N] [--m M] [--verbose] [--markdown]
+//                    [--max-seconds 8] [--n N] [--m M] [--gradient-episodes G]
+//                    [--screening-episodes S] [--gradient-sensors K] [--verbose] [--markdown]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -37,6 +38,7 @@ struct Options {
   int only_m = 0;
   bool verbose = false;
   bool markdown = false;
+  sensornet::RealizedCostOptions realized;
 };
 
 double median(std::vector<double> v) {
@@ -92,6 +94,7 @@ void runInstance(Point& point, int i, const Options& options) {
   sensornet::PlanRequest request;
   request.surrogate = PlanSurrogate::MonteCarlo;
   request.max_seconds = options.max_seconds;
+  request.realized = options.realized;
   request.realized.seed = spec.seed;
   const auto start = std::chrono::steady_clock::now();
   const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
@@ -199,6 +202,12 @@ int main(int argc, char** argv) {
       options.only_n = std::atoi(value().c_str());
     } else if (arg == "--m") {
       options.only_m = std::atoi(value().c_str());
+    } else if (arg == "--gradient-episodes") {
+      options.realized.gradient_episodes = std::atoi(value().c_str());
+    } else if (arg == "--screening-episodes") {
+      options.realized.screening_episodes = std::atoi(value().c_str());
+    } else if (arg == "--gradient-sensors") {
+      options.realized.gradient_sensors = std::atoi(value().c_str());
     } else if (arg == "--verbose") {
       options.verbose = true;
     } else if (arg == "--markdown") {
@@ -206,7 +215,8 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: mc_planner_bench [--sweep sensors|states|both] [--instances K] "
-                   "[--eval-runs R] [--max-seconds S] [--n N] [--m M] [--verbose] [--markdown]\n");
+                   "[--eval-runs R] [--max-seconds S] [--n N] [--m M] [--gradient-episodes G] [--screening-episodes S] "
+                   "[--gradient-sensors K] [--verbose] [--markdown]\n");
       return arg == "--help" ? 0 : 2;
     }
   }

@@ -31,6 +31,7 @@ constexpr std::uint64_t kScreeningStage = 1;
 constexpr std::uint64_t kAcceptanceStage = 2;
 constexpr std::uint64_t kReportStage = 3;
 constexpr std::uint64_t kGradientStage = 100;
+constexpr int kMaxFailures = 4;  // unsuccessful gradient steps in a row that end the refinement
 constexpr int kBlock = 8;  // episodes per unit of parallel work (fixed: results do not depend
                            // on the thread count)
 
@@ -378,13 +379,53 @@ class RealizedCostSearch {
   [[nodiscard]] int iterations() const { return iterations_; }
   [[nodiscard]] int gradients() const { return gradients_; }
 
-  std::vector<double> screen(const Eigen::MatrixXd& rates) {
-    return sample(rates, stageSeed(options_.seed, kScreeningStage), options_.screening_episodes);
+  // The screening sample: the same episodes for every candidate. Its size is fixed by the first
+  // call: screening_episodes, unless screening `candidates` schedules at the episode time of a
+  // pilot (the first 200 episodes) would take more than 30% of max_seconds; then it shrinks to
+  // fit, to no less than 200 episodes.
+  std::vector<double> screen(const Eigen::MatrixXd& rates, int candidates = 1) {
+    const std::uint64_t seed = stageSeed(options_.seed, kScreeningStage);
+    if (screening_size_ > 0) return sample(rates, seed, screening_size_);
+    const int pilot = std::min(200, options_.screening_episodes);
+    std::vector<double> costs = sample(rates, seed, pilot);
+    const double affordable =
+        0.3 * request_.max_seconds / (std::max(1, candidates) * std::max(episodeSeconds(), 1e-9));
+    screening_size_ = std::clamp(static_cast<int>(affordable), pilot, options_.screening_episodes);
+    if (screening_size_ > pilot) {
+      episodes_ += screening_size_ - pilot;
+      const std::vector<double> rest =
+          sampler_.episodeCosts(rates, seed, pilot, screening_size_ - pilot);
+      costs.insert(costs.end(), rest.begin(), rest.end());
+    }
+    return costs;
   }
 
   std::vector<double> sample(const Eigen::MatrixXd& rates, std::uint64_t seed, int count) {
+    const auto begin = planning::Clock::now();
     episodes_ += count;
-    return sampler_.episodeCosts(rates, seed, 0, count);
+    std::vector<double> costs = sampler_.episodeCosts(rates, seed, 0, count);
+    sampled_ += count;
+    sample_seconds_ += planning::secondsSince(begin);
+    return costs;
+  }
+
+  // Wall time of one sampled episode so far (0 before any).
+  [[nodiscard]] double episodeSeconds() const {
+    return sampled_ > 0 ? sample_seconds_ / static_cast<double>(sampled_) : 0.0;
+  }
+
+  // The acceptance and report sample sizes: as configured, unless their predicted time exceeds
+  // a quarter of max_seconds; then both shrink in proportion, to no less than 1000 episodes.
+  [[nodiscard]] std::pair<int, int> finalSizes() const {
+    const double predicted =
+        (2.0 * options_.acceptance_episodes + options_.report_episodes) * episodeSeconds();
+    const double budget = 0.25 * request_.max_seconds;
+    if (!(predicted > budget)) return {options_.acceptance_episodes, options_.report_episodes};
+    const double f = budget / predicted;
+    auto shrink = [f](int count) {
+      return std::min(count, std::max(1000, static_cast<int>(f * count)));
+    };
+    return {shrink(options_.acceptance_episodes), shrink(options_.report_episodes)};
   }
 
   // Projected stochastic gradient refinement from `rates` (screening mean `value`); returns the
@@ -392,11 +433,16 @@ class RealizedCostSearch {
   std::string refine(Eigen::MatrixXd& rates, double& value) {
     double fraction = 0.25;
     int failures = 0;
-    const double deadline = 0.8 * request_.max_seconds;
-    const long long reserve = 2LL * options_.acceptance_episodes + options_.report_episodes;
+    const auto [acceptance, report] = finalSizes();
+    const long long reserve = 2LL * acceptance + report;
+    // Leave time for the final stages (with a margin of 20%).
+    const double deadline =
+        request_.max_seconds - 1.2 * static_cast<double>(reserve) * episodeSeconds();
+    double last_iteration = 0.0;
     for (int it = 0;; ++it) {
+      const double elapsed = planning::secondsSince(start_);
       if (it >= request_.max_iterations) return "max_iterations";
-      if (planning::secondsSince(start_) > deadline) return "time_limit";
+      if (elapsed + last_iteration > deadline) return "time_limit";
       if (episodes_ + options_.gradient_episodes + 2LL * options_.screening_episodes + reserve >
           options_.max_episodes) {
         return "episode_limit";
@@ -429,8 +475,9 @@ class RealizedCostSearch {
         failures = 0;
       } else {
         fraction /= 16.0;
-        if (++failures >= 3 || fraction < 1e-4) return "stalled";
+        if (++failures >= kMaxFailures || fraction < 1e-4) return "stalled";
       }
+      last_iteration = planning::secondsSince(start_) - elapsed;
       if (request_.progress) {
         const PlanProgress p{iterations_, value, planning::secondsSince(start_)};
         if (!request_.progress(p)) return "stopped";
@@ -444,7 +491,10 @@ class RealizedCostSearch {
   planning::PlanningProblem problem_;
   RealizedCostSampler sampler_;
   planning::Clock::time_point start_;
+  int screening_size_ = 0;       // fixed by the first screen()
   long long episodes_ = 0;
+  long long sampled_ = 0;        // episodes of sample(), and their wall time
+  double sample_seconds_ = 0.0;
   int iterations_ = 0;
   int gradients_ = 0;
 };
@@ -483,8 +533,9 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
 
   // The reference: the best of the surrogate plans (and warm start) on the screening sample.
   Candidate reference{starts.front(), std::numeric_limits<double>::infinity()};
+  const int candidates = static_cast<int>(starts.size()) + 6;
   for (const Eigen::MatrixXd& s : starts) {
-    const double v = meanOf(search.screen(s));
+    const double v = meanOf(search.screen(s, candidates));
     if (v < reference.value) reference = {s, v};
   }
   // The start: the best of the reference and the mixtures of cov with info and with uniform.
@@ -505,12 +556,13 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
 
   // The paired test on fresh episodes: refined minus reference, one-sided at 5%.
   const RealizedCostOptions& o = request.realized;
+  const auto [acceptance, report] = search.finalSizes();
   Eigen::MatrixXd chosen = reference.rates;
   result.status = "kept_start";
   if (best.rates != reference.rates) {
     const std::uint64_t seed = stageSeed(o.seed, kAcceptanceStage);
-    const std::vector<double> a = search.sample(best.rates, seed, o.acceptance_episodes);
-    const std::vector<double> r = search.sample(reference.rates, seed, o.acceptance_episodes);
+    const std::vector<double> a = search.sample(best.rates, seed, acceptance);
+    const std::vector<double> r = search.sample(reference.rates, seed, acceptance);
     std::vector<double> d(a.size());
     for (std::size_t e = 0; e < a.size(); ++e) d[e] = a[e] - r[e];
     const double n = static_cast<double>(d.size());
@@ -523,7 +575,7 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
 
   // The score: yet another fresh sample.
   const std::vector<double> scored =
-      search.sample(chosen, stageSeed(o.seed, kReportStage), o.report_episodes);
+      search.sample(chosen, stageSeed(o.seed, kReportStage), report);
   const double n = static_cast<double>(scored.size());
   result.schedule = RateSchedule(scenario.horizon_s, chosen);
   result.objective = meanOf(scored);

@@ -68,11 +68,11 @@ struct PlanProgress {
 struct RealizedCostOptions {
   std::uint64_t seed = 1;
   int threads = 0;                   // 0 = std::thread::hardware_concurrency()
-  int screening_episodes = 1000;     // the common-random-number sample that compares candidates
+  int screening_episodes = 2000;     // the common-random-number sample that compares candidates
   int gradient_episodes = 64;        // episodes per gradient estimate
   int gradient_sensors = 8;          // sensors sampled per interval and episode (0 = all)
-  int acceptance_episodes = 4000;    // fresh paired test: refined schedule vs its warm start
-  int report_episodes = 4000;        // fresh episodes that score the returned schedule
+  int acceptance_episodes = 10000;   // fresh paired test: refined schedule vs its warm start
+  int report_episodes = 10000;       // fresh episodes that score the returned schedule
   long long max_episodes = 2000000;  // all stages together
 };
 
