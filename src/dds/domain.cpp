@@ -34,13 +34,16 @@ void validateDomainConfig(const DomainConfig& config) {
 
 }  // namespace
 
-DomainConfig DomainConfig::loopback(dds_domainid_t domain_id, std::string partition) {
-  return DomainConfig{domain_id, std::move(partition), loopbackConfigXml()};
+DomainConfig DomainConfig::loopback(dds_domainid_t domain_id, std::string partition,
+                                    DiscoveryRole role) {
+  std::string xml = loopbackConfigXml();
+  if (role == DiscoveryRole::Leaf) xml += "," + leafConfigXml();
+  return DomainConfig{domain_id, std::move(partition), std::move(xml)};
 }
 
-DomainConfig DomainConfig::forRun(std::string_view run_id) {
+DomainConfig DomainConfig::forRun(std::string_view run_id, DiscoveryRole role) {
   validateRunId(run_id, "domain config");
-  return loopback(domainIdForRun(run_id), "sensornet/" + std::string(run_id));
+  return loopback(domainIdForRun(run_id), "sensornet/" + std::string(run_id), role);
 }
 
 void validateRunId(std::string_view run_id, const std::string& source) {
@@ -71,6 +74,13 @@ dds_domainid_t parseDomainId(std::string_view text, const std::string& source) {
                          std::string(text) + "')");
   }
   return static_cast<dds_domainid_t>(value);
+}
+
+const std::string& leafConfigXml() {
+  static const std::string xml =
+      R"(<CycloneDDS><Domain Id="any"><Discovery><ParticipantIndex>none</ParticipantIndex>)"
+      R"(</Discovery></Domain></CycloneDDS>)";
+  return xml;
 }
 
 const std::string& loopbackConfigXml() {

@@ -24,9 +24,9 @@ std::string asCycloneConfig(const std::string& text) {
 
 }  // namespace
 
-dds::DomainConfig RunOptions::domainConfig() const {
+dds::DomainConfig RunOptions::domainConfig(dds::DiscoveryRole role) const {
   dds::validateRunId(run_id, kSource);
-  dds::DomainConfig config = dds::DomainConfig::forRun(run_id);
+  dds::DomainConfig config = dds::DomainConfig::forRun(run_id, role);
   if (domain_id) {
     config.domain_id = dds::parseDomainId(std::to_string(*domain_id), "--domain-id");
   }

@@ -85,7 +85,7 @@ DomainParticipantQos participantQos() {
   qos.transport().use_builtin_transports = false;
   auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
   udp->interfaceWhiteList.push_back("127.0.0.1");
-  udp->maxInitialPeersRange = 121;  // Cyclone's participant indices 0..120 (the loopback config)
+  udp->maxInitialPeersRange = 32;  // the hubs' participant indices 0..31 (the loopback config)
   qos.transport().user_transports.push_back(udp);
   qos.wire_protocol().builtin.initialPeersList.push_back(loopback());
   qos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(loopback());

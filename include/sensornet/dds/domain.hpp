@@ -23,9 +23,19 @@
 
 namespace sensornet::dds {
 
-// With the shipped configuration (MaxAutoParticipantIndex 120) Cyclone's default port mapping
+// With the shipped configuration (MaxAutoParticipantIndex 31) Cyclone's default port mapping
 // 7400 + 250 d + 10 + 2 i stays below 65536 for every domain id d <= 230.
 inline constexpr dds_domainid_t kMaxDomainId = 230;
+
+// How a process takes part in discovery on the shipped loopback configuration, so that its cost
+// grows with the number of processes, not its square (config/cyclonedds-loopback.xml):
+// - Hub: the coordinator, the fusion center, the launcher and the tools. A hub takes a
+//   participant index (one of 0..31, so its ports are known) and probes those ports, so hubs
+//   find each other.
+// - Leaf: a sensor agent. It takes no index (arbitrary ports, nobody can probe it) and probes
+//   the hubs' ports; a hub answers the leaf's announcement directly. Leaves never discover one
+//   another, which they never talk to anyway.
+enum class DiscoveryRole { Hub, Leaf };
 
 struct DomainConfig {
   dds_domainid_t domain_id = 0;
@@ -35,11 +45,13 @@ struct DomainConfig {
   // Given verbatim to dds_create_domain: XML text and/or file URIs, comma-separated.
   std::string cyclone_config;
 
-  // The shipped loopback configuration on `domain_id`, with `partition`.
-  [[nodiscard]] static DomainConfig loopback(dds_domainid_t domain_id, std::string partition);
+  // The shipped loopback configuration on `domain_id`, with `partition`, for `role`.
+  [[nodiscard]] static DomainConfig loopback(dds_domainid_t domain_id, std::string partition,
+                                             DiscoveryRole role = DiscoveryRole::Hub);
   // Loopback, on domainIdForRun(run_id), in partition "sensornet/<run_id>". Throws InputError
   // if run_id is not a run id (see validateRunId).
-  [[nodiscard]] static DomainConfig forRun(std::string_view run_id);
+  [[nodiscard]] static DomainConfig forRun(std::string_view run_id,
+                                           DiscoveryRole role = DiscoveryRole::Hub);
 };
 
 // Throws InputError(source, "run_id", ...) unless run_id is 1 to 64 characters from letters,
@@ -56,6 +68,9 @@ void validateRunId(std::string_view run_id, const std::string& source);
 
 // The text of config/cyclonedds-loopback.xml, compiled into the library.
 [[nodiscard]] const std::string& loopbackConfigXml();
+// What a leaf adds to a configuration (Cyclone reads a comma-separated list of XML fragments,
+// the later ones overriding): participant index none.
+[[nodiscard]] const std::string& leafConfigXml();
 
 class Domain : public Entity {
  public:

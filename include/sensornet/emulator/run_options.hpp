@@ -45,7 +45,10 @@ struct RunOptions {
 
   // Throws InputError for a bad run id or domain id. A cyclone_config that names an existing
   // file path (not a URI, not XML) is turned into a file:// URI.
-  [[nodiscard]] dds::DomainConfig domainConfig() const;
+  // The shipped loopback configuration for `role` (domain.hpp), unless --cyclone-config or
+  // $SENSORNET_CYCLONE_CONFIG names another, which is used as given for every role.
+  [[nodiscard]] dds::DomainConfig domainConfig(
+      dds::DiscoveryRole role = dds::DiscoveryRole::Hub) const;
 };
 
 // Adds --run-id (required unless `run_id_required` is false), --domain-id and --cyclone-config.

@@ -101,8 +101,20 @@ TEST(LoopbackConfig, NamesLoopbackUnicastAndTheRaisedLimits) {
   EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
   EXPECT_NE(xml.find(R"(<Peer Address="127.0.0.1"/>)"), std::string::npos);
   EXPECT_NE(xml.find("<ParticipantIndex>auto</ParticipantIndex>"), std::string::npos);
-  EXPECT_NE(xml.find("<MaxAutoParticipantIndex>120</MaxAutoParticipantIndex>"), std::string::npos);
+  EXPECT_NE(xml.find("<MaxAutoParticipantIndex>31</MaxAutoParticipantIndex>"), std::string::npos);
   EXPECT_NE(xml.find("<LeaseDuration>20 s</LeaseDuration>"), std::string::npos);
+}
+
+TEST(LoopbackConfig, ALeafTakesNoParticipantIndexAndCyclonesAcceptsTheFragment) {
+  const DomainConfig hub = DomainConfig::forRun("leaf-config-test");
+  const DomainConfig leaf = DomainConfig::forRun("leaf-config-test", DiscoveryRole::Leaf);
+  EXPECT_EQ(hub.cyclone_config, loopbackConfigXml());
+  EXPECT_EQ(leaf.cyclone_config, loopbackConfigXml() + "," + leafConfigXml());
+  EXPECT_NE(leafConfigXml().find("<ParticipantIndex>none</ParticipantIndex>"), std::string::npos);
+  EXPECT_EQ(leaf.domain_id, hub.domain_id);
+  EXPECT_EQ(leaf.partition, hub.partition);
+  const Domain domain(leaf);  // Cyclone parses the combined configuration
+  EXPECT_GT(domain.handle(), 0);
 }
 
 TEST(Domain, RefusesADomainIdOutsideThePortMapping) {
