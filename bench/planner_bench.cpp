@@ -8,6 +8,11 @@
 //
 //   planner_bench [--sweep sensors|states|both] [--instances 10] [--mc-runs 200]
 //                 [--method pqn|ipopt] [--tolerance 1e-6] [--substeps 2] [--n N] [--markdown]
+//
+// Scale mode (issue 14, "plan at scale"): time, iterations, status and KKT residual against n
+// and M for the default optimizer and IPOPT in the same run, medians over the instances.
+//   planner_bench --scale [--instances 3] [--max-seconds 60] [--only pqn|ipopt] [--n N] [--m M]
+//                         [--markdown]
 
 #include <algorithm>
 #include <chrono>
@@ -41,13 +46,17 @@ double secondsOf(const std::function<void()>& work) {
 
 struct Options {
   std::string sweep = "both";
-  int instances = 10;
+  int instances = 0;  // 0: 10 for the sweeps, 3 for --scale
   int mc_runs = 200;
   sensornet::PlanMethod method = sensornet::PlanMethod::ProjectedGradient;
   bool markdown = false;
   double tolerance = sensornet::PlanRequest{}.tolerance;
   int substeps = sensornet::PlanRequest{}.substeps;
   int only_n = 0;  // run just this state dimension of the state sweep (0: all)
+  bool scale = false;
+  double max_seconds = 60.0;  // per solve, scale mode
+  std::string only_method;    // scale mode: "pqn" or "ipopt" alone (empty: both)
+  int only_m = 0;             // scale mode: just the rows with this M (0: all)
 };
 
 struct Column {  // one surrogate at one sweep point, over the instances
@@ -158,6 +167,119 @@ void printPoint(const Point& p, bool markdown) {
   std::fflush(stdout);
 }
 
+
+// ---- Scale mode -------------------------------------------------------------------------------
+
+struct ScaleCase {
+  PlanSurrogate surrogate;
+  int n, m;
+};
+
+struct ScaleColumn {  // one method at one case, over the instances
+  std::vector<double> seconds, iterations, evaluations, eval_ms, kkt, objective;
+  int optimal = 0;
+};
+
+ScaleColumn& scaleSolve(ScaleColumn& column, const sensornet::Scenario& scenario,
+                        PlanSurrogate surrogate, sensornet::PlanMethod method,
+                        const Options& options) {
+  sensornet::PlanRequest request;
+  request.surrogate = surrogate;
+  request.method = method;
+  request.max_iterations = 3000;
+  request.max_seconds = options.max_seconds;
+  request.tolerance = options.tolerance;
+  request.substeps = options.substeps;
+  const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
+  // "acceptable" is IPOPT's looser tolerance: counted as converged only when the residual of
+  // the returned schedule meets the tolerance.
+  if ((plan.status == "optimal" || plan.status == "acceptable") &&
+      plan.kkt_residual <= options.tolerance) {
+    ++column.optimal;
+  }
+  column.seconds.push_back(plan.solve_seconds);
+  column.iterations.push_back(plan.iterations);
+  column.evaluations.push_back(plan.evaluations);
+  column.kkt.push_back(plan.kkt_residual);
+  column.objective.push_back(plan.objective / scenario.plant.P0.trace());
+  return column;
+}
+
+void printScaleHeader(bool markdown) {
+  if (markdown) {
+    std::printf(
+        "| form | n | M | method | s | it | evals | eval ms | optimal | kkt (max) | J/trP0 | "
+        "time vs ipopt |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  } else {
+    std::printf("%-4s %3s %5s %-6s | %8s %6s %6s %8s %8s %9s %9s | %8s\n", "form", "n", "M",
+                "method", "s", "it", "evals", "eval ms", "optimal", "kkt max", "J/trP0",
+                "t/ipopt");
+  }
+}
+
+void printScaleRow(const ScaleCase& c, const char* method, const ScaleColumn& col,
+                   double ipopt_seconds, bool markdown) {
+  const double kkt_max = *std::max_element(col.kkt.begin(), col.kkt.end());
+  const double t = median(col.seconds);
+  char ratio[32] = "-";
+  if (ipopt_seconds > 0.0) std::snprintf(ratio, sizeof ratio, "%.2fx", t / ipopt_seconds);
+  const char* form = c.surrogate == PlanSurrogate::Covariance ? "cov" : "info";
+  if (markdown) {
+    std::printf("| %s | %d | %d | %s | %.3f | %.0f | %.0f | %.2f | %d/%zu | %.1e | %.5f | %s |\n",
+                form, c.n, c.m, method, t, median(col.iterations), median(col.evaluations),
+                median(col.eval_ms), col.optimal, col.seconds.size(), kkt_max,
+                median(col.objective), ratio);
+  } else {
+    std::printf("%-4s %3d %5d %-6s | %8.3f %6.0f %6.0f %8.2f %6d/%zu %9.1e %9.5f | %8s\n", form,
+                c.n, c.m, method, t, median(col.iterations), median(col.evaluations),
+                median(col.eval_ms), col.optimal, col.seconds.size(), kkt_max,
+                median(col.objective), ratio);
+  }
+  std::fflush(stdout);
+}
+
+void runScale(const Options& options) {
+  const std::vector<ScaleCase> cases = {
+      {PlanSurrogate::Information, 20, 30},   {PlanSurrogate::Information, 20, 100},
+      {PlanSurrogate::Information, 20, 300},  {PlanSurrogate::Information, 20, 1000},
+      {PlanSurrogate::Information, 50, 1000}, {PlanSurrogate::Covariance, 20, 30},
+      {PlanSurrogate::Covariance, 20, 100}};
+  std::printf("planner_bench --scale: T = 3, N = 30, budget 1'λ <= 5, %d instances per row, "
+              "medians; limit %.0f s and 3000 iterations per solve\n",
+              options.instances, options.max_seconds);
+  printScaleHeader(options.markdown);
+  for (const ScaleCase& c : cases) {
+    if ((options.only_n != 0 && c.n != options.only_n) ||
+        (options.only_m != 0 && c.m != options.only_m)) {
+      continue;
+    }
+    ScaleColumn pqn, ipopt;
+    for (int i = 0; i < options.instances; ++i) {
+      sensornet::RandomPlantSpec spec;
+      spec.state_dim = c.n;
+      spec.sensor_count = c.m;
+      spec.seed = 1000u * static_cast<std::uint64_t>(c.n) + 10u * static_cast<std::uint64_t>(c.m) +
+                  static_cast<std::uint64_t>(i);
+      const sensornet::Scenario scenario = sensornet::generateRandomScenario(spec);
+      const auto form = sensornet::formOf(c.surrogate);
+      const double eval_ms = assemblyMilliseconds(form, scenario,
+                                                  sensornet::uniformSchedule(scenario).rates(),
+                                                  options.substeps);
+      if (options.only_method != "ipopt") {
+        scaleSolve(pqn, scenario, c.surrogate, sensornet::PlanMethod::ProjectedGradient, options)
+            .eval_ms.push_back(eval_ms);
+      }
+      if (options.only_method != "pqn") {
+        scaleSolve(ipopt, scenario, c.surrogate, sensornet::PlanMethod::Ipopt, options)
+            .eval_ms.push_back(eval_ms);
+      }
+    }
+    const double ipopt_seconds = ipopt.seconds.empty() ? 0.0 : median(ipopt.seconds);
+    if (!pqn.seconds.empty()) printScaleRow(c, "pqn", pqn, ipopt_seconds, options.markdown);
+    if (!ipopt.seconds.empty()) printScaleRow(c, "ipopt", ipopt, 0.0, options.markdown);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -188,10 +310,20 @@ int main(int argc, char** argv) {
       options.only_n = std::atoi(value().c_str());
     } else if (arg == "--markdown") {
       options.markdown = true;
+    } else if (arg == "--scale") {
+      options.scale = true;
+    } else if (arg == "--max-seconds") {
+      options.max_seconds = std::atof(value().c_str());
+    } else if (arg == "--m") {
+      options.only_m = std::atoi(value().c_str());
+    } else if (arg == "--only") {
+      options.only_method = value();
     } else {
       std::fprintf(stderr,
                    "usage: planner_bench [--sweep sensors|states|both] [--instances K] "
-                   "[--mc-runs R] [--method pqn|ipopt] [--tolerance T] [--substeps S] [--n N] [--markdown]\n");
+                   "[--mc-runs R] [--method pqn|ipopt] [--tolerance T] [--substeps S] [--n N] [--markdown]\n"
+                   "       planner_bench --scale [--instances K] [--max-seconds S] "
+                   "[--only pqn|ipopt] [--n N] [--m M] [--markdown]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
@@ -199,6 +331,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "planner_bench: --sweep expects sensors, states or both\n");
     return 2;
   }
+  if (options.scale) {
+    if (options.instances == 0) options.instances = 3;
+    if (!(options.max_seconds > 0.0) ||
+        (!options.only_method.empty() && options.only_method != "pqn" &&
+         options.only_method != "ipopt")) {
+      std::fprintf(stderr, "planner_bench: --max-seconds expects S > 0, --only pqn or ipopt\n");
+      return 2;
+    }
+    runScale(options);
+    return 0;
+  }
+  if (options.instances == 0) options.instances = 10;
   std::printf("planner_bench: %d instances per point, Monte Carlo %d episodes, medians\n",
               options.instances, options.mc_runs);
   if (options.sweep != "states") {
