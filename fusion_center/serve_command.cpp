@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <ctime>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -25,6 +26,7 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/covariance_trace.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
@@ -58,6 +60,20 @@ struct ServeOptions {
 // measurement reader to match every live sensor process before it answers for the episode it
 // could not fuse (the coordinator then starts the next one, which must lose nothing).
 constexpr double kResumeMatchWaitS = 5.0;
+
+// The report's covariance_traces: the first few episodes, each curve on this many grid times.
+constexpr std::size_t kTracedEpisodes = 3;
+constexpr int kTracePoints = 200;
+
+// Now, as an ISO 8601 UTC time ("2026-11-30T18:20:00Z"): when the report was written.
+std::string utcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
+}
 
 std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
 
@@ -614,6 +630,7 @@ class FusionCenter {
       }
     }
     checkKeepingUp(number, open, result);
+    traceCovariance(*open.fusion, result);
     report_->addLatencies(result.latencies_s);
     const json entry = emulator::episodeEntry(result);
     if (episode_log_) episode_log_->append(entry);
@@ -626,6 +643,38 @@ class FusionCenter {
         result.episode, result.complete ? "" : " (incomplete)", result.realized_cost,
         result.bracket.info, result.bracket.cov, s.mean, s.episodes_complete);
     publishReport(result, s);
+  }
+
+  // The weighted covariance trace of one of the first kTracedEpisodes episodes, and the surrogate
+  // curves of the version in force at its start (once per version), for the report's page.
+  void traceCovariance(const emulator::EpisodeFusion& fusion, const emulator::EpisodeResult& r) {
+    if (traced_episodes_.size() >= kTracedEpisodes || r.versions.empty()) return;
+    const Scenario& scenario = inputs_.scenario();
+    const emulator::TraceWeight weight = emulator::traceWeight(scenario);
+    const std::uint32_t version = r.versions.front();
+    json curve = emulator::traceJson(
+        emulator::fusedCovarianceTrace(scenario, fusion.measurements(), weight, kTracePoints));
+    curve["episode"] = r.episode;
+    curve["version"] = version;
+    curve["complete"] = r.complete;
+    traced_episodes_.push_back(std::move(curve));
+    if (traced_versions_.count(version) > 0) return;
+    for (const emulator::ScheduleVersion& v : inputs_.book().versions()) {
+      if (v.version != version) continue;
+      const emulator::SurrogateTraces s =
+          emulator::surrogateTraces(scenario, v.schedule, weight, kTracePoints);
+      traced_versions_[version] = {{"version", version},
+                                   {"info", emulator::traceJson(s.info)},
+                                   {"cov", emulator::traceJson(s.cov)}};
+    }
+  }
+
+  [[nodiscard]] json covarianceTraces() const {
+    json surrogates = json::array();
+    for (const auto& [version, curves] : traced_versions_) surrogates.push_back(curves);
+    return {{"weight", emulator::traceWeight(inputs_.scenario()).name},
+            {"episodes", traced_episodes_},
+            {"surrogates", surrogates}};
   }
 
   // Overload: the fusion center drained an episode late (not counting its own stalls), or a
@@ -762,6 +811,19 @@ class FusionCenter {
                                                "): episode " + episodes)));
   }
 
+  // The arrival mode of the run, and what the bracket [info, cov] says under it.
+  static json arrivalsJson(ArrivalMode mode) {
+    const char* note =
+        mode == ArrivalMode::Timetable
+            ? "timetable: every sensor sends at the deterministic instants where its integrated "
+              "rate is k - 1/2, the same in every episode, so the realized cost varies only "
+              "through the network; the bracket [info, cov] bounds the Poisson mean of the same "
+              "schedule (Corollary 1), not the timetable's cost, and meets_bracket only says "
+              "whether the timetable's cost lies in it"
+            : "poisson: the bracket [info, cov] bounds the mean realized cost (Corollary 1)";
+    return {{"mode", std::string(arrivalModeName(mode))}, {"bracket_note", note}};
+  }
+
   void writeReport(const std::string& status) {
     if (!report_) {
       spdlog::error("no scenario ever arrived; no report");
@@ -769,7 +831,10 @@ class FusionCenter {
     }
     const json extra = {{"episodes_planned", episodes_planned_},
                         {"seed", inputs_.run().seed},
-                        {"stalls", stalls_}};
+                        {"stalls", stalls_},
+                        {"written_at", utcNow()},
+                        {"covariance_traces", covarianceTraces()},
+                        {"arrivals", arrivalsJson(inputs_.scenario().arrivals)}};
     const json doc =
         report_->toJson(status, faults_, emulator::scheduleVersionsJson(inputs_.book()), extra);
     if (!options_.report_path.empty()) {
@@ -822,6 +887,8 @@ class FusionCenter {
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
   emulator::RejectionCounts rejected_outside_;  // samples refused before reaching an episode
   json faults_ = json::array();
+  json traced_episodes_ = json::array();      // covariance_traces: the first episodes' curves
+  std::map<std::uint32_t, json> traced_versions_;  // ... and their versions' surrogate curves
   json stalls_ = json::array();  // stalls absorbed (own and the sensors'), for the report
   emulator::StallWatch stall_watch_;
   std::uint32_t episodes_planned_ = 0;

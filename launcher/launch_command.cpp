@@ -19,6 +19,7 @@
 #include "output_file.hpp"
 #include "process_group.hpp"
 #include "progress_watcher.hpp"
+#include "report_command.hpp"
 #include "run_files.hpp"
 #include "run_lock.hpp"
 #include "run_outcome.hpp"
@@ -68,6 +69,7 @@ struct LaunchOptions {
   std::string log_dir;
   double timeout_s = 0.0;  // 0: no limit
   bool json = false;
+  bool no_html = false;  // no report page (report.html) beside the report
   std::string on_sensor_failure = "replan";
   std::string network_aware = "auto";  // auto: when the scenario has a network: section
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
@@ -507,6 +509,11 @@ int runLaunch(LaunchOptions options) {
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
   }
+  if (!options.no_html) {  // a page that cannot be written is a warning, never an exit code
+    if (const auto problem = writePageBeside(plan.report_path)) {
+      std::fprintf(stderr, "sensornet: warning: %s\n", problem->c_str());
+    }
+  }
   if (options.json) {
     printOutcomeJson(outcome, plan.report_path);
   } else {
@@ -611,6 +618,9 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "ms or s). Known:\n" +
                       emulator::requirementsHelp())
       ->check(requirementList());
+  cmd->add_flag("--no-html", options->no_html,
+                "do not write the report page (report.json -> report.html beside it; see "
+                "`sensornet report`)");
   cmd->add_flag("--json", options->json,
                 "print one JSON line at the end: the report's summary with \"run_id\", "
                 "\"status\", \"faults\", \"report\" and \"exit_code\"");

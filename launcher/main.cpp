@@ -3,11 +3,13 @@
 //   sensornet replan [...]            change the schedule of the running emulation
 //   sensornet status [...]            show its sensors and schedule
 //   sensornet watch [...]             follow it live (a terminal view, or lines for a log)
+//   sensornet report REPORT [...]     the page (HTML) and CSV tables of a finished run
 
 #include <vector>
 
 #include "launch_command.hpp"
 #include "replan_command.hpp"
+#include "report_command.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "status_command.hpp"
 #include "watch_command.hpp"
@@ -24,7 +26,8 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     const std::vector<sensornet::Subcommand> subcommands = {
         sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
-        sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app)};
+        sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
+        sensornet::launcher::addReportCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

@@ -185,15 +185,46 @@ RunSummary RunReport::summary() const {
   return s;
 }
 
+json latencyHistogram(const std::vector<double>& latencies_s) {
+  if (latencies_s.empty()) return nullptr;
+  const auto [smallest, largest] = std::minmax_element(latencies_s.begin(), latencies_s.end());
+  const double floor_s = kLatencyHistogramFloorS;
+  const double low = std::floor(std::log10(std::max(*smallest, floor_s)));
+  const double high = std::max(low + 1.0, std::ceil(std::log10(std::max(*largest, floor_s)) +
+                                                    1e-12));
+  const int bins = static_cast<int>(std::lround((high - low) * kLatencyBinsPerDecade));
+  json edges = json::array();
+  for (int i = 0; i <= bins; ++i) {
+    edges.push_back(std::pow(10.0, low + static_cast<double>(i) / kLatencyBinsPerDecade));
+  }
+  std::vector<std::uint64_t> counts(static_cast<std::size_t>(bins), 0);
+  for (const double latency : latencies_s) {
+    const double position =
+        (std::log10(std::max(latency, floor_s)) - low) * kLatencyBinsPerDecade;
+    const auto bin = static_cast<std::size_t>(std::clamp(std::floor(position), 0.0,
+                                                         static_cast<double>(bins - 1)));
+    ++counts[bin];
+  }
+  return {{"edges_s", edges}, {"counts", counts}};
+}
+
 json scheduleVersionsJson(const ScheduleBook& book) {
   json versions = json::array();
   for (const ScheduleVersion& v : book.versions()) {
+    json rates = json::array();
+    for (int k = 0; k < v.schedule.intervals(); ++k) {
+      json row = json::array();
+      for (int j = 0; j < v.schedule.sensorCount(); ++j) row.push_back(v.schedule.rate(k, j));
+      rates.push_back(std::move(row));
+    }
     versions.push_back({{"version", v.version},
                         {"effective_episode", v.effective_episode},
                         {"effective_time_s", v.effective_time_s},
                         {"surrogate", v.surrogate},
                         {"bracket", {{"info", v.bracket.info}, {"cov", v.bracket.cov}}},
-                        {"command_id", v.command_id}});
+                        {"command_id", v.command_id},
+                        {"horizon_s", v.schedule.horizon()},
+                        {"rates", rates}});
   }
   return versions;
 }
@@ -262,7 +293,10 @@ json RunReport::toJson(const std::string& status, const json& faults,
         {"rejected", s.rejectedTotal()},
         {"rejected_by_reason", s.rejected}}},
       {"sensors", per_sensor},
-      {"latency_s", {{"median", s.latency_median_s}, {"p99", s.latency_p99_s}}}};
+      {"latency_s",
+       {{"median", s.latency_median_s},
+        {"p99", s.latency_p99_s},
+        {"histogram", latencyHistogram(latencies_s_)}}}};
   for (const auto& [key, value] : extra.items()) report[key] = value;
   return report;
 }

@@ -191,6 +191,8 @@ class EpisodeFusion {
   void fuseUpTo(double t);
   [[nodiscard]] double fusedTime() const { return filter_.time(); }
   [[nodiscard]] const Eigen::MatrixXd& covariance() const { return filter_.covariance(); }
+  // Every measurement accepted so far, in arrival order.
+  [[nodiscard]] const std::vector<FusedMeasurement>& measurements() const { return all_; }
 
   // Fuses the rest (all of it again, in order, if any measurement was late), propagates to T.
   [[nodiscard]] EpisodeResult finish();

@@ -97,7 +97,18 @@ class RunReport {
   RejectionCounts rejected_outside_;
 };
 
+// The versions of a run as the report lists them: number, effective point, surrogate, bracket,
+// command id, and the schedule itself (horizon_s, rates: N rows of M rates in Hz).
 [[nodiscard]] nlohmann::json scheduleVersionsJson(const ScheduleBook& book);
+
+// The report's latency histogram: log-spaced bins, kLatencyBinsPerDecade a decade, from the
+// decade below the smallest latency to the one above the largest, as
+// {"edges_s": [b_0 .. b_K], "counts": [c_1 .. c_K]}; bin i holds b_i <= latency < b_i+1 (the
+// largest latency in the last bin). Latencies below kLatencyHistogramFloorS (a clock step) count
+// in the first bin. Null when there are none.
+inline constexpr double kLatencyBinsPerDecade = 5.0;
+inline constexpr double kLatencyHistogramFloorS = 1e-7;
+[[nodiscard]] nlohmann::json latencyHistogram(const std::vector<double>& latencies_s);
 
 // One fault of a run, as the report lists it. Optional parts are null when unknown.
 [[nodiscard]] nlohmann::json faultEntry(const std::string& kind, const std::string& process,

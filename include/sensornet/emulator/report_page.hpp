@@ -1,0 +1,51 @@
+#pragma once
+// The report page of a run: one self-contained HTML file made from a run report (run_report.hpp)
+// with inline SVG plots (svg_plot.hpp), no fetched scripts, fonts or styles, readable offline and
+// printable; and the same report as CSV tables for spreadsheets and pandas.
+//
+//   const nlohmann::json report = readReportFile("runs/a/report.json");  // InputError if bad
+//   writeTextFile("runs/a/report.html", reportPage(report, "runs/a/report.json"));
+//   const ReportTables tables = reportTables(report, "runs/a/report.json");
+//   // tables.episodes: "episode,complete,realized_cost,..." one row per episode
+//
+// The plots (each drawn only when the report carries what it needs; a note says what is missing):
+//   1. realized cost per episode, the bracket in force as a band, the running mean of the complete
+//      episodes with its 95% Student-t interval, schedule switches as rules;
+//   2. each schedule version as a sensor x time heat map of its rates, its switch point marked;
+//   3. per sensor: expected, sent, received, lost (and dropped by the emulated network);
+//   4. the publish-to-fusion latency histogram (log-spaced bins) with median and p99;
+//   5. <W, P(t)> of the first episodes beside the two surrogate curves of their schedule;
+//   6. a faults timeline (and table), when there were faults.
+// A small inline script (no network) counts each plot's drawn marks into data-marks and any
+// script error into the body's data-errors: what the browser test reads from the dumped DOM.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace sensornet::emulator {
+
+// Reads a run report: InputError("<path>", ...) when the file cannot be read, is not JSON, or
+// lacks what a report has (run_id, per_episode, sensors, summary).
+[[nodiscard]] nlohmann::json readReportFile(const std::filesystem::path& path);
+
+// Checks the parts of a report the page and the tables read; InputError(source, field, ...).
+void checkReport(const nlohmann::json& report, const std::string& source);
+
+// The HTML page. `source` names the report in errors.
+[[nodiscard]] std::string reportPage(const nlohmann::json& report, const std::string& source);
+
+// The CSV tables (header row, one row per episode / per sensor, plain numbers, empty for none):
+//   episodes.csv: episode, complete (1/0), realized_cost, realtime_cost, bracket_info,
+//     bracket_cov, delivered_bracket_info, delivered_bracket_cov, nees, schedule_version (the
+//     last in force), switch_time_s, and the episode's sums over sensors: sent, received, lost,
+//     dropped_by_network, late, expected; latency_median_s, latency_p99_s.
+//   sensors.csv: sensor_id, sent, received, lost, dropped_by_network, late, expected,
+//     wrong_version (over every episode: the report's `sensors`).
+struct ReportTables {
+  std::string episodes;
+  std::string sensors;
+};
+[[nodiscard]] ReportTables reportTables(const nlohmann::json& report, const std::string& source);
+
+}  // namespace sensornet::emulator

@@ -1,0 +1,89 @@
+#include "report_command.hpp"
+
+#include <exception>
+#include <memory>
+
+#include "output_file.hpp"
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/report_page.hpp"
+
+namespace sensornet::launcher {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReportOptions {
+  std::string report;
+  std::string html;
+  std::string csv_dir;
+};
+
+// Replaces `path` with `text`; an InputError naming the path when it cannot.
+void writeOutput(const fs::path& path, const std::string& text, const std::string& option) {
+  checkOutputFile(path, option);
+  try {
+    replaceFileAtomically(path, text);
+  } catch (const std::exception& e) {
+    throw InputError(option + " " + path.string(), "", "a writable file (" + std::string(e.what()) + ")");
+  }
+}
+
+void writeCsv(const fs::path& dir, const emulator::ReportTables& tables) {
+  if (!fs::is_directory(dir)) {
+    std::error_code error;
+    fs::create_directories(dir, error);
+    if (error) throw InputError("--csv " + dir.string(), "", "a folder that can be created (" + error.message() + ")");
+  }
+  writeOutput(dir / "episodes.csv", tables.episodes, "--csv");
+  writeOutput(dir / "sensors.csv", tables.sensors, "--csv");
+}
+
+int runReport(const ReportOptions& options) {
+  const nlohmann::json report = emulator::readReportFile(options.report);
+  if (options.html.empty() && options.csv_dir.empty()) {
+    throw InputError("sensornet report", "--html / --csv", "at least one output");
+  }
+  if (!options.html.empty()) {
+    writeOutput(options.html, emulator::reportPage(report, options.report), "--html");
+  }
+  if (!options.csv_dir.empty()) writeCsv(options.csv_dir, emulator::reportTables(report, options.report));
+  return kExitOk;
+}
+
+}  // namespace
+
+fs::path pagePathBeside(const fs::path& report_path) {
+  fs::path page = report_path;
+  if (page.extension() == ".json") return page.replace_extension(".html");
+  return page += ".html";
+}
+
+std::optional<std::string> writePageBeside(const fs::path& report_path) {
+  const fs::path page = pagePathBeside(report_path);
+  try {
+    const nlohmann::json report = emulator::readReportFile(report_path);
+    writeOutput(page, emulator::reportPage(report, report_path.string()), "report page");
+    return std::nullopt;
+  } catch (const std::exception& e) {
+    return "no report page " + page.string() + ": " + e.what();
+  }
+}
+
+Subcommand addReportCommand(CLI::App& app) {
+  auto options = std::make_shared<ReportOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "report",
+      "Make the page of a finished run from its report: one self-contained HTML file (inline "
+      "SVG plots: cost per episode against the bracket, schedule heat maps, per-sensor counts, "
+      "latency histogram, covariance traces against the surrogates, faults), readable offline "
+      "and printable; and CSV tables for spreadsheets. `sensornet launch` writes report.html "
+      "beside every report already. Example:\n  sensornet report runs/a/report.json --html "
+      "runs/a/report.html --csv runs/a/tables");
+  cmd->add_option("REPORT", options->report, "the run report (JSON) of a finished run")->required();
+  cmd->add_option("--html", options->html, "write the page here");
+  cmd->add_option("--csv", options->csv_dir,
+                  "write episodes.csv and sensors.csv into this folder (made if missing)");
+  return {cmd, [options] { return runReport(*options); }};
+}
+
+}  // namespace sensornet::launcher

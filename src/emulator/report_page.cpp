@@ -1,0 +1,619 @@
+#include "sensornet/emulator/report_page.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/student_t.hpp"
+#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/io/command_line.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+using nlohmann::json;
+
+const double kNan = std::numeric_limits<double>::quiet_NaN();
+
+// A palette that survives grey-scale printing: its colours differ in lightness, and the lines
+// that share a plot differ in dash pattern too.
+constexpr const char* kInk = "#1b2a49";      // darkest: the main series
+constexpr const char* kMid = "#4a74b4";      // middle
+constexpr const char* kAccent = "#e0891c";   // light-middle orange: what went wrong, p99
+constexpr const char* kPale = "#cfdbee";     // pale: bands, expected
+constexpr const char* kGrey = "#8c8c8c";
+
+double number(const json& j, const char* key) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : kNan;
+}
+
+double number(const json& j) { return j.is_number() ? j.get<double>() : kNan; }
+
+std::vector<double> numbers(const json& values) {
+  std::vector<double> out;
+  if (values.is_array()) {
+    for (const json& v : values) out.push_back(number(v));
+  }
+  return out;
+}
+
+double sumOf(const json& values) {
+  double total = 0.0;
+  for (const double v : numbers(values)) total += std::isfinite(v) ? v : 0.0;
+  return total;
+}
+
+// The finite extremes of some values; nullopt-like (lo > hi) when there are none.
+struct Extent {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    if (!std::isfinite(v)) return;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  void add(const std::vector<double>& vs) {
+    for (const double v : vs) add(v);
+  }
+  [[nodiscard]] bool empty() const { return lo > hi; }
+};
+
+std::string figure(const std::string& id, const std::string& heading, const std::string& svg,
+                   const std::string& caption) {
+  return "<figure id=\"fig-" + id + "\">\n<h2>" + escapeXml(heading) + "</h2>\n" + svg +
+         "<figcaption>" + caption + "</figcaption>\n</figure>\n";
+}
+
+std::string note(const std::string& heading, const std::string& text) {
+  return "<section class=\"note\"><h2>" + escapeXml(heading) + "</h2><p>" + escapeXml(text) +
+         "</p></section>\n";
+}
+
+// ---- 1. cost per episode ----------------------------------------------------------------------
+
+struct RunningMean {
+  std::vector<double> episodes, mean, low, high;
+};
+
+// The running mean of the complete episodes' costs and its 95% Student-t interval (from the
+// second complete episode on), as the report's summary computes it at the end.
+RunningMean runningMean(const json& per_episode) {
+  RunningMean r;
+  double sum = 0.0, squares = 0.0;
+  double k = 0.0;
+  for (const json& e : per_episode) {
+    const double cost = number(e, "realized_cost");
+    if (!e.value("complete", false) || !std::isfinite(cost)) continue;
+    k += 1.0;
+    sum += cost;
+    squares += cost * cost;
+    const double mean = sum / k;
+    r.episodes.push_back(number(e, "episode"));
+    r.mean.push_back(mean);
+    if (k < 2.0) {
+      r.low.push_back(kNan);
+      r.high.push_back(kNan);
+      continue;
+    }
+    const double variance = std::max(0.0, (squares - k * mean * mean) / (k - 1.0));
+    const double half = studentTQuantile(0.975, k - 1.0) * std::sqrt(variance / k);
+    r.low.push_back(std::max(0.0, mean - half));
+    r.high.push_back(mean + half);
+  }
+  return r;
+}
+
+std::string costPlot(const json& report) {
+  const json& per_episode = report.at("per_episode");
+  if (per_episode.empty()) return note("Realized cost per episode", "The run fused no episode.");
+  const RunningMean running = runningMean(per_episode);
+  Extent y;
+  Extent x;
+  for (const json& e : per_episode) {
+    x.add(number(e, "episode"));
+    y.add(number(e, "realized_cost"));
+    if (e.contains("bracket")) {
+      y.add(number(e.at("bracket"), "info"));
+      y.add(number(e.at("bracket"), "cov"));
+    }
+  }
+  y.add(running.low);
+  y.add(running.high);
+  if (y.empty()) return note("Realized cost per episode", "No episode has a finite cost.");
+  const Interval y_range = niceRange({std::min(0.0, y.lo), y.hi}, 5);
+  SvgPlot plot(SvgPlot::Frame{}, Axis{{x.lo - 0.5, x.hi + 0.5}, "episode"},
+               Axis{y_range, "cost J (state units²)"});
+  for (const json& e : per_episode) {
+    const double k = number(e, "episode");
+    if (!e.contains("bracket")) continue;
+    const double info = number(e.at("bracket"), "info");
+    const double cov = number(e.at("bracket"), "cov");
+    plot.rect(k - 0.5, k + 0.5, info, cov, Style::area(kPale),
+              "episode " + formatTick(k) + ": bracket [" + formatTick(info) + ", " +
+                  formatTick(cov) + "]");
+  }
+  Style interval = Style::area(kMid, 0.35);
+  plot.band(running.episodes, running.low, running.high, interval, "95% interval of the mean");
+  plot.polyline(running.episodes, running.mean, Style::line(kInk, 2.0), "running mean");
+  for (const json& v : report.value("schedule_versions", json::array())) {
+    if (number(v, "version") == 0.0 || number(v, "effective_episode") <= x.lo) continue;
+    plot.vline(number(v, "effective_episode") - 0.5, Style::line(kGrey, 1.2, "5 3"),
+               "v" + formatTick(number(v, "version")));
+  }
+  for (const json& e : per_episode) {
+    const bool complete = e.value("complete", false);
+    const double k = number(e, "episode");
+    const double cost = number(e, "realized_cost");
+    plot.circle(k, cost, 3.5,
+                complete ? Style::outlined(kInk, kInk) : Style::outlined("white", kAccent),
+                "episode " + formatTick(k) + ": " + formatTick(cost) +
+                    (complete ? "" : " (incomplete)"));
+  }
+  plot.legend({{"bracket in force", Style::area(kPale)},
+               {"realized cost", Style::outlined(kInk, kInk)},
+               {"incomplete", Style::outlined("white", kAccent)},
+               {"running mean", Style::line(kInk, 2.0)},
+               {"95% interval", interval}});
+  return figure("cost", "Realized cost per episode", plot.svg("plot-cost", "Realized cost per episode"),
+                "Each dot is one episode's realized cost J(P); the shaded box behind it is the "
+                "bracket [J(P<sub>info</sub>), J(P<sub>cov</sub>)] of the schedule in force. The "
+                "line is the running mean over complete episodes with its 95% Student-t interval; "
+                "dashed rules mark the episodes where a new schedule version took effect.");
+}
+
+// ---- 2. schedule heat maps --------------------------------------------------------------------
+
+// Pale (rate 0) to dark (the largest rate of any version): lightness carries the value.
+std::string rampColour(double fraction) {
+  fraction = std::clamp(fraction, 0.0, 1.0);
+  const int from[3] = {0xf4, 0xf6, 0xfa};
+  const int to[3] = {0x0b, 0x1f, 0x44};
+  char text[8];
+  int c[3];
+  for (int i = 0; i < 3; ++i) {
+    c[i] = static_cast<int>(std::lround(from[i] + fraction * (to[i] - from[i])));
+  }
+  std::snprintf(text, sizeof text, "#%02x%02x%02x", c[0], c[1], c[2]);
+  return text;
+}
+
+double largestRate(const json& versions) {
+  double largest = 0.0;
+  for (const json& v : versions) {
+    for (const json& row : v.value("rates", json::array())) {
+      for (const double r : numbers(row)) largest = std::max(largest, std::isfinite(r) ? r : 0.0);
+    }
+  }
+  return largest;
+}
+
+std::string heatMap(const json& v, std::size_t index, double largest) {
+  const json& rates = v.at("rates");
+  const double horizon = number(v, "horizon_s");
+  const auto intervals = static_cast<double>(rates.size());
+  const std::size_t sensors = rates.empty() ? 0 : rates.front().size();
+  SvgPlot::Frame frame;
+  frame.height = frame.top + frame.bottom + std::clamp(16.0 * static_cast<double>(sensors), 64.0, 420.0);
+  Axis y{{-0.5, static_cast<double>(sensors) - 0.5}, "sensor"};
+  const double every = std::max(1.0, std::ceil(static_cast<double>(sensors) / 20.0));
+  for (double j = 0; j < static_cast<double>(sensors); j += every) y.ticks.push_back(j);
+  SvgPlot plot(frame, Axis{{0.0, horizon}, "emulated time t (s)"}, y);
+  const double step = horizon / intervals;
+  for (std::size_t k = 0; k < rates.size(); ++k) {
+    const std::vector<double> row = numbers(rates[k]);
+    for (std::size_t j = 0; j < row.size(); ++j) {
+      const double t0 = step * static_cast<double>(k);
+      const auto s = static_cast<double>(j);
+      plot.rect(t0, t0 + step, s - 0.5, s + 0.5,
+                Style::area(rampColour(largest > 0.0 ? row[j] / largest : 0.0)),
+                "sensor " + std::to_string(j) + ", t in [" + formatTick(t0) + ", " +
+                    formatTick(t0 + step) + ") s: " + formatTick(row[j]) + " Hz");
+    }
+  }
+  const double version = number(v, "version");
+  if (index > 0) {
+    plot.vline(number(v, "effective_time_s"), Style::line(kAccent, 2.0, "6 3"),
+               "switch: episode " + formatTick(number(v, "effective_episode")) + ", t = " +
+                   formatTick(number(v, "effective_time_s")) + " s");
+  }
+  plot.legend({{"0 Hz", Style::outlined(rampColour(0.0), kGrey)},
+               {formatTick(0.5 * largest) + " Hz", Style::area(rampColour(0.5))},
+               {formatTick(largest) + " Hz", Style::area(rampColour(1.0))}});
+  const std::string id = "plot-schedule-" + std::to_string(index);
+  return plot.svg(id, "Schedule version " + formatTick(version)) + "<p class=\"sub\">Version " +
+         formatTick(version) + " (" + escapeXml(v.value("surrogate", std::string("?"))) +
+         "), in force from episode " + formatTick(number(v, "effective_episode")) + " at t = " +
+         formatTick(number(v, "effective_time_s")) + " s; bracket [" +
+         formatTick(number(v.value("bracket", json::object()), "info")) + ", " +
+         formatTick(number(v.value("bracket", json::object()), "cov")) + "].</p>\n";
+}
+
+std::string schedulePlots(const json& report) {
+  const json versions = report.value("schedule_versions", json::array());
+  const std::string heading = "Schedule versions (rates per sensor over time)";
+  std::string maps;
+  const double largest = largestRate(versions);
+  for (std::size_t i = 0; i < versions.size(); ++i) {
+    const json& v = versions[i];
+    if (!v.contains("rates") || !v.at("rates").is_array() || v.at("rates").empty()) continue;
+    maps += heatMap(v, i, largest);
+  }
+  if (maps.empty()) return note(heading, "The report carries no schedule rates.");
+  return figure("schedule", heading, maps,
+                "Each map is one schedule version: rows are sensors, columns the schedule's "
+                "intervals, darker is a higher rate λ<sub>j</sub>(t). The dashed rule marks the "
+                "emulated time at which a later version took effect (in the episode named).");
+}
+
+// ---- 3. per-sensor counts ---------------------------------------------------------------------
+
+std::string sensorPlot(const json& report) {
+  const json& sensors = report.at("sensors");
+  if (sensors.empty()) return note("Measurements per sensor", "The report lists no sensor.");
+  struct Series {
+    const char* key;
+    const char* label;
+    Style style;
+  };
+  std::vector<Series> series = {{"expected", "expected", Style::outlined(kPale, kGrey)},
+                                {"sent", "sent", Style::area(kInk)},
+                                {"received", "received", Style::area(kMid)},
+                                {"lost", "lost", Style::area(kAccent)}};
+  Extent y;
+  bool dropped = false;
+  for (const json& s : sensors) {
+    for (const Series& one : series) y.add(number(s, one.key));
+    dropped = dropped || number(s, "dropped_by_network") > 0.0;
+  }
+  if (dropped) {
+    series.push_back({"dropped_by_network", "dropped by the network", Style::outlined("#ffffff", kInk)});
+    series.back().style.dash = "3 2";
+    for (const json& s : sensors) y.add(number(s, "dropped_by_network"));
+  }
+  const auto count = static_cast<double>(sensors.size());
+  Axis x{{-0.5, count - 0.5}, "sensor"};
+  const double every = std::max(1.0, std::ceil(count / 25.0));
+  for (double j = 0; j < count; j += every) x.ticks.push_back(j);
+  SvgPlot plot(SvgPlot::Frame{}, x, Axis{niceRange({0.0, std::max(1.0, y.hi)}, 5), "measurements"});
+  const double width = 0.84 / static_cast<double>(series.size());
+  std::vector<LegendEntry> legend;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    legend.push_back({series[i].label, series[i].style});
+    for (std::size_t j = 0; j < sensors.size(); ++j) {
+      const double left = static_cast<double>(j) - 0.42 + width * static_cast<double>(i);
+      const double value = number(sensors[j], series[i].key);
+      plot.rect(left, left + width, 0.0, value, series[i].style,
+                "sensor " + std::to_string(j) + ": " + formatTick(value) + " " + series[i].label);
+    }
+  }
+  plot.legend(legend);
+  return figure("sensors", "Measurements per sensor",
+                plot.svg("plot-sensors", "Measurements per sensor"),
+                "Over every episode: expected = ∫λ<sub>j</sub> dt under the versions in force; "
+                "sent = received + lost (+ dropped by the emulated network, when it drops).");
+}
+
+// ---- 4. latency histogram ---------------------------------------------------------------------
+
+std::string formatDuration(double seconds) {
+  if (seconds <= 0.0) return "0";
+  if (seconds >= 1.0) return formatTick(seconds) + " s";
+  if (seconds >= 1e-3) return formatTick(seconds * 1e3) + " ms";
+  if (seconds >= 1e-6) return formatTick(seconds * 1e6) + " µs";
+  return formatTick(seconds * 1e9) + " ns";
+}
+
+std::string latencyPlot(const json& report) {
+  const std::string heading = "Publish-to-fusion latency";
+  const json latency = report.value("latency_s", json::object());
+  const json histogram = latency.value("histogram", json());
+  if (!histogram.is_object()) {
+    return note(heading, "The report carries no latency histogram (median " +
+                             formatDuration(number(latency, "median")) + ", p99 " +
+                             formatDuration(number(latency, "p99")) + ").");
+  }
+  const std::vector<double> edges = numbers(histogram.value("edges_s", json::array()));
+  const std::vector<double> counts = numbers(histogram.value("counts", json::array()));
+  if (edges.size() != counts.size() + 1 || counts.empty() || !(edges.front() > 0.0)) {
+    return note(heading, "The report's latency histogram is malformed.");
+  }
+  Extent y;
+  y.add(counts);
+  Axis x{{edges.front(), edges.back()}, "latency (log scale)", true};
+  x.format = formatDuration;
+  SvgPlot plot(SvgPlot::Frame{}, x, Axis{niceRange({0.0, std::max(1.0, y.hi)}, 5), "measurements"});
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    plot.rect(edges[i], edges[i + 1], 0.0, counts[i], Style::outlined(kMid, "#ffffff"),
+              formatDuration(edges[i]) + " to " + formatDuration(edges[i + 1]) + ": " +
+                  formatTick(counts[i]));
+  }
+  const double median = number(latency, "median");
+  const double p99 = number(latency, "p99");
+  if (median > 0.0) plot.vline(median, Style::line(kInk, 2.0), "median " + formatDuration(median));
+  if (p99 > 0.0) plot.vline(p99, Style::line(kAccent, 2.0, "6 3"), "p99 " + formatDuration(p99));
+  plot.legend({{"measurements per bin", Style::outlined(kMid, "#ffffff")},
+               {"median", Style::line(kInk, 2.0)},
+               {"p99", Style::line(kAccent, 2.0, "6 3")}});
+  return figure("latency", heading, plot.svg("plot-latency", heading),
+                "Wall time from a sensor's publication to the fusion center's receipt, every "
+                "measurement of the run, in log-spaced bins (5 a decade).");
+}
+
+// ---- 5. covariance traces ---------------------------------------------------------------------
+
+std::string tracePlot(const json& report) {
+  const std::string heading = "Weighted covariance over time";
+  const json traces = report.value("covariance_traces", json());
+  if (!traces.is_object() || traces.value("episodes", json::array()).empty()) {
+    return note(heading, "The report carries no covariance traces.");
+  }
+  const std::string weight = traces.value("weight", std::string("W"));
+  Extent x, y;
+  const auto extentOf = [&](const json& curve) {
+    x.add(numbers(curve.value("times_s", json::array())));
+    y.add(numbers(curve.value("values", json::array())));
+  };
+  for (const json& e : traces.at("episodes")) extentOf(e);
+  for (const json& s : traces.value("surrogates", json::array())) {
+    extentOf(s.value("info", json::object()));
+    extentOf(s.value("cov", json::object()));
+  }
+  if (x.empty() || y.empty()) return note(heading, "The covariance traces are empty.");
+  SvgPlot plot(SvgPlot::Frame{}, Axis{{x.lo, x.hi}, "emulated time t (s)"},
+               Axis{niceRange({std::min(0.0, y.lo), y.hi}, 5),
+                    "⟨" + weight + ", P(t)⟩ (state units²)"});
+  std::vector<LegendEntry> legend;
+  const char* shades[] = {kInk, kMid, "#9db3d6"};
+  std::size_t i = 0;
+  for (const json& e : traces.at("episodes")) {
+    const Style style = Style::line(shades[std::min<std::size_t>(i++, 2)], 1.4);
+    const std::string label = "episode " + formatTick(number(e, "episode"));
+    plot.polyline(numbers(e.at("times_s")), numbers(e.at("values")), style, label);
+    legend.push_back({label, style});
+  }
+  for (const json& s : traces.value("surrogates", json::array())) {
+    const std::string v = " (v" + formatTick(number(s, "version")) + ")";
+    const Style info = Style::line(kAccent, 2.0, "8 4");
+    const Style cov = Style::line(kInk, 2.0, "2 3");
+    plot.polyline(numbers(s.at("info").at("times_s")), numbers(s.at("info").at("values")), info,
+                  "information-form surrogate" + v);
+    plot.polyline(numbers(s.at("cov").at("times_s")), numbers(s.at("cov").at("values")), cov,
+                  "covariance-form surrogate" + v);
+    legend.push_back({"info surrogate" + v, info});
+    legend.push_back({"cov surrogate" + v, cov});
+  }
+  plot.legend(legend);
+  return figure("trace", heading, plot.svg("plot-trace", heading),
+                "⟨" + escapeXml(weight) + ", P(t)⟩ of the fusion center's exact filter in the "
+                "first episodes (sampled on 200 times; it drops at each fused measurement), and "
+                "the same of the information-form (eq. 11) and covariance-form (eq. 15) "
+                "surrogates of the schedule in force at their start, from P0.");
+}
+
+// ---- 6. faults --------------------------------------------------------------------------------
+
+std::string faultPlot(const json& report) {
+  const json faults = report.value("faults", json::array());
+  if (!faults.is_array() || faults.empty()) return "";
+  const double episodes = std::max(1.0, number(report, "episodes"));
+  double horizon = 1.0;
+  for (const json& v : report.value("schedule_versions", json::array())) {
+    if (number(v, "horizon_s") > 0.0) horizon = number(v, "horizon_s");
+  }
+  std::map<std::string, double> rows;
+  for (const json& f : faults) rows.emplace(f.value("kind", std::string("?")), 0.0);
+  double row = 0.0;
+  for (auto& [kind, at] : rows) at = row++;
+  SvgPlot::Frame frame;
+  frame.left = 130.0;
+  frame.height = frame.top + frame.bottom + std::max(60.0, 26.0 * row);
+  Axis y{{-0.5, row - 0.5}, "fault"};
+  for (const auto& [kind, at] : rows) y.ticks.push_back(at);
+  y.format = [rows](double v) {
+    for (const auto& [kind, at] : rows) {
+      if (at == v) return kind;
+    }
+    return std::string();
+  };
+  SvgPlot plot(frame, Axis{{-0.5, episodes - 0.5}, "episode (and emulated time within it)"}, y);
+  std::string table = "<table class=\"faults\"><tr><th>kind</th><th>process</th><th>sensor</th>"
+                      "<th>episode</th><th>t (s)</th><th>detail</th></tr>\n";
+  for (const json& f : faults) {
+    const double episode = number(f, "episode");
+    const double t = number(f, "emulated_time_s");
+    const double at = std::isfinite(episode)
+                          ? episode - 0.5 + (std::isfinite(t) ? std::clamp(t / horizon, 0.0, 1.0) : 0.5)
+                          : episodes - 0.5;
+    const std::string kind = f.value("kind", std::string("?"));
+    plot.circle(at, rows[kind], 5.0, Style::outlined(kAccent, kInk),
+                kind + ": " + f.value("detail", std::string()));
+    const auto cell = [](const json& v) {
+      return v.is_null() ? std::string("–") : escapeXml(v.is_string() ? v.get<std::string>() : v.dump());
+    };
+    table += "<tr><td>" + escapeXml(kind) + "</td><td>" + cell(f.value("process", json())) +
+             "</td><td>" + cell(f.value("sensor", json())) + "</td><td>" +
+             cell(f.value("episode", json())) + "</td><td>" +
+             cell(f.value("emulated_time_s", json())) + "</td><td>" +
+             cell(f.value("detail", json())) + "</td></tr>\n";
+  }
+  plot.legend({{"fault (a fault of no episode sits at the run's end)", Style::outlined(kAccent, kInk)}});
+  return figure("faults", "Faults", plot.svg("plot-faults", "Faults") + table + "</table>\n",
+                "Each mark is one entry of the report's faults list, at its episode and, when "
+                "known, its emulated time within the episode.");
+}
+
+// ---- the page ---------------------------------------------------------------------------------
+
+std::string summaryTable(const json& report) {
+  const json s = report.at("summary");
+  const json bracket = s.value("bracket", json::object());
+  const auto row = [](const std::string& name, const std::string& value) {
+    return "<tr><th>" + escapeXml(name) + "</th><td>" + escapeXml(value) + "</td></tr>\n";
+  };
+  const json meets = s.value("meets_bracket", json());
+  std::string t = "<table class=\"summary\">\n";
+  t += row("status", report.value("status", std::string("?")));
+  t += row("episodes (complete)", formatTick(number(s, "episodes")) + " (" +
+                                      formatTick(number(s, "episodes_complete")) + ")");
+  t += row("mean realized cost", formatTick(number(s, "mean")) + ", 95% interval [" +
+                                     formatTick(number(s, "ci95_low")) + ", " +
+                                     formatTick(number(s, "ci95_high")) + "]");
+  t += row("mean bracket", "[" + formatTick(number(bracket, "info")) + ", " +
+                               formatTick(number(bracket, "cov")) + "]");
+  t += row("meets the bracket", meets.is_boolean() ? (meets.get<bool>() ? "yes" : "no")
+                                                   : "undetermined (fewer than 2 complete episodes)");
+  t += row("sent / received / lost", formatTick(number(s, "sent")) + " / " +
+                                         formatTick(number(s, "received")) + " / " +
+                                         formatTick(number(s, "lost")));
+  t += row("faults", std::to_string(report.value("faults", json::array()).size()));
+  return t + "</table>\n";
+}
+
+constexpr const char* kStyle = R"(
+body { font-family: system-ui, "DejaVu Sans", Arial, sans-serif; color: #1a1a1a; margin: 24px auto;
+       max-width: 800px; padding: 0 12px; line-height: 1.4; }
+h1 { font-size: 22px; margin: 0 0 4px; } h2 { font-size: 16px; margin: 24px 0 6px; }
+.meta { color: #444; font-size: 13px; margin-bottom: 12px; }
+table { border-collapse: collapse; font-size: 13px; margin: 8px 0; }
+th, td { text-align: left; padding: 2px 10px 2px 0; vertical-align: top; }
+table.faults td, table.faults th { border-bottom: 1px solid #ddd; }
+figure { margin: 0 0 12px; break-inside: avoid; page-break-inside: avoid; }
+figcaption, .sub, .note p { font-size: 12.5px; color: #333; }
+svg.plot { display: block; max-width: 100%; height: auto; }
+svg.plot text { font-size: 12px; fill: #1a1a1a; }
+svg.plot .tick { font-size: 11px; } svg.plot .rule { font-size: 11px; }
+svg.plot .grid { stroke: #e4e4e4; stroke-width: 1; } svg.plot .frame { fill: none; stroke: #555; }
+@media print { body { margin: 0; max-width: none; } h2 { break-after: avoid; }
+  a { color: inherit; text-decoration: none; } }
+)";
+
+// Counts each plot's drawn marks (non-empty boxes) into data-marks, and errors into the body's
+// data-errors: what the browser test reads. Inline, fetches nothing.
+constexpr const char* kScript = R"(
+(function () {
+  var errors = 0;
+  window.addEventListener('error', function () { errors += 1; document.body.dataset.errors = errors; });
+  document.body.dataset.errors = 0;
+  var plots = document.querySelectorAll('svg.plot');
+  plots.forEach(function (svg) {
+    var drawn = 0;
+    svg.querySelectorAll('g.marks > *').forEach(function (mark) {
+      var box = mark.getBBox();
+      if (box.width > 0 || box.height > 0) drawn += 1;
+    });
+    svg.dataset.marks = drawn;
+  });
+  document.body.dataset.plots = plots.length;
+})();
+)";
+
+std::string formatCsv(double value) { return std::isfinite(value) ? formatNumber(value) : ""; }
+
+}  // namespace
+
+void checkReport(const json& report, const std::string& source) {
+  if (!report.is_object()) throw InputError(source, "", "a JSON object (a run report)");
+  const auto require = [&](const char* key, json::value_t type, const char* what) {
+    const auto it = report.find(key);
+    if (it == report.end() || it->type() != type) throw InputError(source, key, what);
+  };
+  require("run_id", json::value_t::string, "a string (the run id)");
+  require("per_episode", json::value_t::array, "an array of episode entries");
+  require("sensors", json::value_t::array, "an array of per-sensor counts");
+  require("summary", json::value_t::object, "an object (the run's summary)");
+  const json& episodes = report.at("per_episode");
+  for (std::size_t i = 0; i < episodes.size(); ++i) {
+    const json& e = episodes[i];
+    if (!e.is_object() || !e.contains("episode") || !e.at("episode").is_number()) {
+      throw InputError(source, "per_episode[" + std::to_string(i) + "].episode", "a number");
+    }
+  }
+  const json& sensors = report.at("sensors");
+  for (std::size_t j = 0; j < sensors.size(); ++j) {
+    if (!sensors[j].is_object()) {
+      throw InputError(source, "sensors[" + std::to_string(j) + "]", "an object of counts");
+    }
+  }
+}
+
+json readReportFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string(), "", "a readable run report (cannot open it)");
+  const json report = json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (report.is_discarded()) throw InputError(path.string(), "", "JSON (a run report)");
+  checkReport(report, path.string());
+  return report;
+}
+
+std::string reportPage(const json& report, const std::string& source) {
+  checkReport(report, source);
+  const std::string run_id = report.at("run_id").get<std::string>();
+  const json scenario = report.value("scenario", json::object());
+  const std::string digest = scenario.value("digest", std::string());
+  const std::string written = report.value("written_at", std::string("unknown date"));
+  std::string page = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+                     "<title>sensornet run " + escapeXml(run_id) + "</title>\n<style>" + kStyle +
+                     "</style>\n</head>\n<body>\n";
+  page += "<h1>sensornet run " + escapeXml(run_id) + "</h1>\n<div class=\"meta\">scenario " +
+          escapeXml(digest.empty() ? "(digest unknown)" : digest) + " · " +
+          formatTick(number(scenario, "sensors")) + " sensors, " +
+          formatTick(number(scenario, "states")) + " states · written " + escapeXml(written) +
+          "</div>\n";
+  page += summaryTable(report);
+  page += costPlot(report);
+  page += schedulePlots(report);
+  page += sensorPlot(report);
+  page += latencyPlot(report);
+  page += tracePlot(report);
+  page += faultPlot(report);
+  page += std::string("<script>") + kScript + "</script>\n</body>\n</html>\n";
+  return page;
+}
+
+ReportTables reportTables(const json& report, const std::string& source) {
+  checkReport(report, source);
+  ReportTables tables;
+  std::ostringstream e;
+  e << "episode,complete,realized_cost,realtime_cost,bracket_info,bracket_cov,"
+       "delivered_bracket_info,delivered_bracket_cov,nees,schedule_version,switch_time_s,sent,"
+       "received,lost,dropped_by_network,late,expected,latency_median_s,latency_p99_s\n";
+  for (const json& r : report.at("per_episode")) {
+    const json bracket = r.value("bracket", json::object());
+    const json delivered = r.value("delivered_bracket", json::object());
+    const std::vector<double> versions = numbers(r.value("schedule_versions", json::array()));
+    e << formatCsv(number(r, "episode")) << ',' << (r.value("complete", false) ? 1 : 0) << ','
+      << formatCsv(number(r, "realized_cost")) << ',' << formatCsv(number(r, "realtime_cost"))
+      << ',' << formatCsv(number(bracket, "info")) << ',' << formatCsv(number(bracket, "cov"))
+      << ',' << formatCsv(number(delivered, "info")) << ','
+      << formatCsv(number(delivered, "cov")) << ',' << formatCsv(number(r, "nees")) << ','
+      << (versions.empty() ? "" : formatCsv(versions.back())) << ','
+      << formatCsv(number(r, "switch_time_s"));
+    for (const char* key : {"sent", "received", "lost", "dropped_by_network", "late", "expected"}) {
+      e << ',' << formatCsv(sumOf(r.value(key, json::array())));
+    }
+    e << ',' << formatCsv(number(r, "latency_median_s")) << ','
+      << formatCsv(number(r, "latency_p99_s")) << '\n';
+  }
+  tables.episodes = e.str();
+  std::ostringstream s;
+  const char* keys[] = {"sensor_id", "sent", "received", "lost", "dropped_by_network",
+                        "late", "expected", "wrong_version"};
+  for (std::size_t i = 0; i < std::size(keys); ++i) s << (i ? "," : "") << keys[i];
+  s << '\n';
+  for (const json& row : report.at("sensors")) {
+    for (std::size_t i = 0; i < std::size(keys); ++i) {
+      s << (i ? "," : "") << formatCsv(number(row, keys[i]));
+    }
+    s << '\n';
+  }
+  tables.sensors = s.str();
+  return tables;
+}
+
+}  // namespace sensornet::emulator
