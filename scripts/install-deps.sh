@@ -10,6 +10,7 @@ packages=(
   coinor-libipopt-dev
   libgtest-dev libgmock-dev docker-compose
   fastddsgen libfastrtps-dev  # a second DDS vendor: the interoperability test (Fast DDS 2.9)
+  chromium  # headless, for the report page's browser test
 )
 
 missing=()
