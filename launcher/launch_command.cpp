@@ -55,6 +55,11 @@ constexpr std::size_t kLogLinesShown = 15;
 // A coordinator or fusion center killed more often than this in one run is not restarted again.
 constexpr int kMaxRestarts = 3;
 constexpr int kMaxSensorsPerProcess = 1'000'000;
+// --sensors-per-process auto: one sensor per process up to this many sensor processes, else
+// the fewest equal blocks that stay within it. Measured on a 2-core machine (bench/README.md,
+// "Start-up at scale"): 200 one-sensor processes are all ready in under 10 s; beyond that
+// start-up and the idle load of the processes grow with their number, not with the sensors.
+constexpr int kAutoSensorProcesses = 200;
 
 struct LaunchOptions {
   std::string scenario_path;
@@ -62,7 +67,7 @@ struct LaunchOptions {
   double time_scale = 1.0;
   std::string seed = "1";  // checked by seedNumber(); passed on as written
   std::string report_path;
-  int sensors_per_process = 1;
+  std::string sensors_per_process = "auto";  // or a count: see sensorsPerProcess()
   std::string surrogate = "info";
   std::string schedule_path;
   emulator::RunOptions run;
@@ -101,6 +106,22 @@ CLI::Validator requirementList() {
         return {};
       },
       "CRITERIA");
+}
+
+// The sensors of one sensor_agent process: the count given, or for "auto" one each up to
+// kAutoSensorProcesses processes, else ceil(M / kAutoSensorProcesses).
+int sensorsPerProcess(const std::string& given, int sensor_count) {
+  if (given != "auto") return std::stoi(given);  // checked by the option's validator
+  return std::max(1, (sensor_count + kAutoSensorProcesses - 1) / kAutoSensorProcesses);
+}
+
+// --sensors-per-process: "auto" or a whole number in [1, kMaxSensorsPerProcess].
+CLI::Validator sensorsPerProcessValue() {
+  return CLI::Validator(
+      [count = integerRange(1, kMaxSensorsPerProcess)](std::string& input) -> std::string {
+        return input == "auto" ? std::string() : count(input);
+      },
+      "auto|N");
 }
 
 // A run seed as the coordinator takes it: a decimal integer that fits 64 bits unsigned.
@@ -163,7 +184,7 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   plan.children.push_back(childSpec(kFusionCenter,
                                     {programs.fusion_center, "serve", "--report", plan.report_path},
                                     flags, plan.log_dir));
-  const int per_process = options.sensors_per_process;
+  const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
   for (int first = 0; first < sensor_count; first += per_process) {
     const int last = std::min(first + per_process, sensor_count) - 1;
     const std::string block = blockSpec(first, last);
@@ -461,7 +482,7 @@ int runLaunch(LaunchOptions options) {
   const LaunchPlan plan = planLaunch(options, scenario, programs, domain);
   if (!plan.default_report) checkReportPaths(plan);
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
-  ProgressWatcher progress(domain, options.episodes, scenario.horizon_s);
+  ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
 
   std::fprintf(stderr,
@@ -574,8 +595,10 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "where the fusion center writes the final report (JSON): a regular file or a "
                   "new one in an existing writable folder; default <log-dir>/report.json");
   cmd->add_option("--sensors-per-process", options->sensors_per_process,
-                  "sensors hosted by each sensor_agent process")
-      ->check(integerRange(1, kMaxSensorsPerProcess))
+                  "sensors hosted by each sensor_agent process; auto: one each up to " +
+                      std::to_string(kAutoSensorProcesses) +
+                      " processes, else the fewest equal blocks that stay within that many")
+      ->check(sensorsPerProcessValue())
       ->capture_default_str();
   cmd->add_option("--surrogate", options->surrogate,
                   "how the coordinator plans the schedule: uniform, info (eq. 11) or cov (eq. 15)")

@@ -57,7 +57,7 @@ std::string formatProgress(const sensornet_Report& report, int episodes_planned)
 }
 
 ProgressWatcher::ProgressWatcher(const dds::DomainConfig& config, int episodes_planned,
-                                 double horizon_s)
+                                 double horizon_s, int sensor_count)
     : domain_(config),
       participant_(domain_),
       topic_(participant_),
@@ -66,11 +66,14 @@ ProgressWatcher::ProgressWatcher(const dds::DomainConfig& config, int episodes_p
       reader_(participant_, topic_),
       scenario_reader_(participant_, scenario_topic_),
       control_reader_(participant_, control_topic_),
+      status_topic_(participant_),
+      status_reader_(participant_, status_topic_),
       has_data_(reader_),
       has_control_(control_reader_),
       waitset_(participant_),
       episodes_planned_(episodes_planned),
-      horizon_s_(horizon_s) {
+      horizon_s_(horizon_s),
+      sensor_count_(sensor_count) {
   waitset_.attach(has_data_, kReports);
   waitset_.attach(has_control_, kControls);
 }
@@ -85,6 +88,7 @@ bool ProgressWatcher::seesLiveRun(std::chrono::milliseconds wait) const {
 }
 
 void ProgressWatcher::poll(std::chrono::milliseconds wait) {
+  if (!episode_) takeStatuses();
   const dds::WaitResult result = waitset_.wait(wait);
   if (result.timedOut()) return;
   if (result.triggered(kControls)) takeControls();
@@ -97,6 +101,33 @@ void ProgressWatcher::poll(std::chrono::milliseconds wait) {
   }
 }
 
+void ProgressWatcher::takeStatuses() {
+  for (const auto& received : status_reader_.take().samples) {
+    if (received.sample->schedule_version >= 1) ready_.insert(received.sample->sensor_id);
+  }
+  const auto now = std::chrono::steady_clock::now();
+  const bool all = static_cast<int>(ready_.size()) >= sensor_count_;
+  if (ready_.size() == ready_said_ || (!all && now - ready_said_at_ < std::chrono::seconds(1))) {
+    return;
+  }
+  sayReady(ready_.size());
+}
+
+void ProgressWatcher::sayAllReady() {
+  takeStatuses();
+  if (static_cast<int>(ready_said_) < sensor_count_) {
+    sayReady(static_cast<std::size_t>(sensor_count_));
+  }
+}
+
+void ProgressWatcher::sayReady(std::size_t count) {
+  const auto now = std::chrono::steady_clock::now();
+  ready_said_ = count;
+  ready_said_at_ = now;
+  std::fprintf(stderr, "ready %zu/%d sensors (%.1f s)\n", count, sensor_count_,
+               std::chrono::duration<double>(now - created_).count());
+}
+
 void ProgressWatcher::takeControls() {
   const dds::Batch<sensornet_EpisodeControl> batch = control_reader_.take();
   for (const auto& received : batch.samples) {
@@ -104,6 +135,7 @@ void ProgressWatcher::takeControls() {
     if (c.command == sensornet_RUN_SHUTDOWN) {
       shut_down_ = true;
     } else if (c.command == sensornet_EPISODE_START && (!episode_ || c.episode >= *episode_)) {
+      if (!episode_) sayAllReady();  // the coordinator starts only once every sensor is ready
       episode_ = c.episode;
       clock_ = {c.start_wall_time_ns, c.time_scale};
     }

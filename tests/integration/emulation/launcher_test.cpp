@@ -194,7 +194,11 @@ TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
   EXPECT_EQ(line["mean"], report["summary"]["mean"]);
   EXPECT_EQ(line["meets_bracket"], report["summary"]["meets_bracket"]);
 
-  // Progress: one line per episode.
+  // Readiness, then one line per episode.
+  EXPECT_NE(r.err.find("ready " + std::to_string(kDefaultSensors) + "/" +
+                       std::to_string(kDefaultSensors) + " sensors ("),
+            std::string::npos)
+      << r.err;
   for (int episode = 0; episode < 3; ++episode) {
     const std::string progress = "[" + std::to_string(episode + 1) + "/3] episode " +
                                  std::to_string(episode) + ": realized";
