@@ -56,10 +56,10 @@ constexpr std::size_t kLogLinesShown = 15;
 constexpr int kMaxRestarts = 3;
 constexpr int kMaxSensorsPerProcess = 1'000'000;
 // --sensors-per-process auto: one sensor per process up to this many sensor processes, else
-// the fewest equal blocks that stay within it. Measured on a 2-core machine (bench/README.md,
-// "Start-up at scale"): 200 one-sensor processes are all ready in under 10 s; beyond that
-// start-up and the idle load of the processes grow with their number, not with the sensors.
-constexpr int kAutoSensorProcesses = 200;
+// the fewest equal blocks that stay within it. Start-up and the idle load grow with the number
+// of processes, not of sensors; measured on the 2-core machine (bench/README.md, "Start-up at
+// scale"), 60 one-sensor processes are all ready in about 3 s, 100 in about 10 s.
+constexpr int kAutoSensorProcesses = 50;
 
 struct LaunchOptions {
   std::string scenario_path;
