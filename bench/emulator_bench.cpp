@@ -1,7 +1,12 @@
 // The emulator's speed targets (issue 4), each with real processes over Cyclone DDS on
 // loopback, one run id per measurement:
-//   startup     30 sensor processes (one sensor each) started at once: the time until all 30
-//               report READY (scenario and schedule received), median of 3.
+//   startup     (issue 12) sensor processes started at once after the fusion center and the
+//               coordinator: the time until every sensor reports READY (scenario and schedule
+//               received, writers matched), for 30, 100 and 200 one-sensor processes and for
+//               1000 sensors in 50 processes of 20 (--sensors-per-process auto), median of 3
+//               unless told. Beside each, in the same run, as many `ddsperf pub` processes
+//               started the same way (leaves of the loopback configuration) and one
+//               `ddsperf sub` as the hub: the time until the hub has discovered all of them.
 //   latency     publish-to-fusion median at light load (the default scenario at 10x real
 //               time: about 120 measurements/s reach the fusion center), with one process per
 //               sensor and with one process for all 6, against Cyclone's own `ddsperf`
@@ -24,7 +29,7 @@
 //               Beside it, in the same run, ddsperf pub/sub throughput of 64-byte samples
 //               (reliable, keep-all, 2 processes) before and after the sweep.
 //
-//   emulator_bench [startup|latency|throughput|all] [latency rounds = 3]
+//   emulator_bench [startup|latency|throughput|all] [rounds: latency 3, startup 3]
 //   emulator_bench overload [total rates/s, comma-separated = 30000,45000,60000,90000,...]
 
 #include <unistd.h>
@@ -48,6 +53,7 @@
 #include <utility>
 #include <vector>
 
+#include "sensornet/dds/domain.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
@@ -110,10 +116,28 @@ nlohmann::json readReport(const fs::path& path) {
   return nlohmann::json::parse(in);
 }
 
-double startupSeconds(int repeat) {
-  const std::string run = runId("startup", repeat);
+// Sets an environment variable for the processes started while it lives.
+class ScopedEnvironment {
+ public:
+  ScopedEnvironment(const char* name, const std::string& value) : name_(name) {
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnvironment() { ::unsetenv(name_); }
+  ScopedEnvironment(const ScopedEnvironment&) = delete;
+  ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
+
+ private:
+  const char* name_;
+};
+
+// `processes` sensor_agent processes hosting `sensors` sensors in equal blocks, started at once
+// once the fusion center and the coordinator are up: the time until every sensor is READY, or
+// -1 if not within 60 s.
+double startupSeconds(int process_count, int sensors, int repeat) {
+  const std::string run =
+      runId("startup" + std::to_string(process_count) + "x" + std::to_string(sensors), repeat);
   Processes processes(fs::temp_directory_path() / run);
-  const fs::path scenario = writeRandomScenario(processes.dir(), 5, 30, 5.0);
+  const fs::path scenario = writeRandomScenario(processes.dir(), 5, sensors, 5.0);
   sensornet::emulator::RunOptions options;
   options.run_id = run;
   sensornet::dds::Domain domain(options.domainConfig());
@@ -124,29 +148,98 @@ double startupSeconds(int repeat) {
   processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run});
   BackgroundProcess& coordinator = processes.start(
       "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
-                      "--surrogate", "uniform", "--episodes", "1", "--time-scale", "10"});
+                      "--surrogate", "uniform", "--episodes", "1", "--time-scale", "10",
+                      "--ready-timeout", "60"});
   std::this_thread::sleep_for(1500ms);  // scenario and schedule published
+  const int per_process = (sensors + process_count - 1) / process_count;
   const auto start = std::chrono::steady_clock::now();
-  for (int j = 0; j < 30; ++j) {
-    processes.start("sensor-" + std::to_string(j),
-                    {kSensorAgent, "--run-id", run, "--sensors", std::to_string(j)});
+  for (int first = 0; first < sensors; first += per_process) {
+    const int last = std::min(first + per_process, sensors) - 1;
+    const std::string block = std::to_string(first) + "-" + std::to_string(last);
+    processes.start("sensor-" + block, {kSensorAgent, "--run-id", run, "--sensors", block});
   }
   std::set<std::uint32_t> ready;
-  while (ready.size() < 30 && secondsSince(start) < 60.0) {
-    for (auto& s : statuses.take(64).samples) {
-      if (s.sample->state == sensornet_SENSOR_READY ||
-          s.sample->state == sensornet_SENSOR_RUNNING ||
-          s.sample->state == sensornet_SENSOR_EXCLUDED) {
-        ready.insert(s.sample->sensor_id);
-      }
+  const auto wanted = static_cast<std::size_t>(sensors);
+  while (ready.size() < wanted && secondsSince(start) < 60.0) {
+    for (auto& s : statuses.take(1024).samples) {
+      if (s.sample->schedule_version >= 1) ready.insert(s.sample->sensor_id);
     }
-    std::this_thread::sleep_for(2ms);
+    std::this_thread::sleep_for(5ms);
   }
   const double seconds = secondsSince(start);
-  const int code = coordinator.waitForExit(60s).value_or(-1);
-  std::printf("  repeat %d: %zu/30 ready after %.3f s; the run %s\n", repeat, ready.size(),
-              seconds, code == 0 ? "completed" : "FAILED");
-  return ready.size() == 30 ? seconds : -1.0;
+  const int code = coordinator.waitForExit(90s).value_or(-1);
+  std::printf("  %d processes, %d sensors, repeat %d: %zu/%d ready after %.3f s; the run %s\n",
+              process_count, sensors, repeat, ready.size(), sensors, seconds,
+              code == 0 ? "completed" : "FAILED");
+  std::fflush(stdout);
+  return ready.size() == wanted ? seconds : -1.0;
+}
+
+// The same start-up with Cyclone's own ddsperf: one `ddsperf sub` as the hub (the loopback
+// configuration), then `process_count` `ddsperf pub` processes at once as leaves; the time until
+// the hub has discovered all of them (its "participant ...: new" lines), or -1 within 60 s.
+double ddsperfStartupSeconds(int process_count, int repeat) {
+  const std::string run = runId("ddsperf-startup" + std::to_string(process_count), repeat);
+  Processes processes(fs::temp_directory_path() / run);
+  const fs::path hub_config = processes.dir() / "hub.xml";
+  std::ofstream(hub_config) << sensornet::dds::loopbackConfigXml();
+  const std::string hub_uri = "file://" + hub_config.string();
+  const std::string domain = std::to_string(sensornet::dds::domainIdForRun(run));
+  const std::string duration = "75";
+  {
+    const ScopedEnvironment hub("CYCLONEDDS_URI", hub_uri);
+    processes.start("sub", {"/usr/bin/ddsperf", "-i", domain, "-D", duration, "sub"});
+  }
+  std::this_thread::sleep_for(1500ms);
+  const auto start = std::chrono::steady_clock::now();
+  {
+    const ScopedEnvironment leaf("CYCLONEDDS_URI",
+                                 hub_uri + "," + sensornet::dds::leafConfigXml());
+    for (int p = 0; p < process_count; ++p) {
+      processes.start("pub-" + std::to_string(p),
+                      {"/usr/bin/ddsperf", "-i", domain, "-D", duration, "pub", "1Hz"});
+    }
+  }
+  const fs::path sub_log = processes.dir() / "sub.log";
+  long discovered = 0;
+  while (discovered < process_count && secondsSince(start) < 60.0) {
+    std::ifstream in(sub_log);
+    discovered = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line.find(": new") != std::string::npos && line.find("(self)") == std::string::npos) {
+        ++discovered;
+      }
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+  const double seconds = secondsSince(start);
+  std::printf("  ddsperf: %d pub processes, repeat %d: %ld/%d discovered by the sub after %.3f s\n",
+              process_count, repeat, discovered, process_count, seconds);
+  std::fflush(stdout);
+  return discovered >= process_count ? seconds : -1.0;
+}
+
+void startup(int repeats) {
+  struct Case {
+    int processes;
+    int sensors;
+  };
+  const std::vector<Case> cases = {{30, 30}, {100, 100}, {200, 200}, {50, 1000}};
+  std::printf("startup: sensor processes started at once, time until every sensor is READY "
+              "(median of %d; -1 = not within 60 s); beside it ddsperf, as many processes\n",
+              repeats);
+  for (const Case& c : cases) {
+    std::vector<double> ours, theirs;
+    for (int repeat = 0; repeat < repeats; ++repeat) {
+      ours.push_back(startupSeconds(c.processes, c.sensors, repeat));
+      theirs.push_back(ddsperfStartupSeconds(c.processes, repeat));
+    }
+    const double a = median(ours), b = median(theirs);
+    std::printf("startup: %d processes, %d sensors: %.3f s; ddsperf %d processes: %.3f s; "
+                "ratio %.2f (target: all ready in < 10 s)\n",
+                c.processes, c.sensors, a, c.processes, b, b > 0.0 ? a / b : 0.0);
+    std::fflush(stdout);
+  }
 }
 
 // One emulation of the default scenario at 10x: the publish-to-fusion median and p99 (µs), or
@@ -545,10 +638,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (what == "all" || what == "startup") {
-    std::printf("startup: 30 sensor processes\n");
-    std::vector<double> times;
-    for (int repeat = 0; repeat < 3; ++repeat) times.push_back(startupSeconds(repeat));
-    std::printf("startup: median %.3f s (target < 3 s)\n", median(times));
+    startup(what == "startup" && argc > 2 ? std::max(1, std::atoi(argv[2])) : 3);
   }
   if (what == "all" || what == "latency") latency(argc > 2 ? std::max(1, std::atoi(argv[2])) : 3);
   if (what == "all" || what == "throughput") throughput();
