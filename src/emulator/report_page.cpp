@@ -64,6 +64,18 @@ struct Extent {
   [[nodiscard]] bool empty() const { return lo > hi; }
 };
 
+// An axis over episodes first..last (each a unit wide, centred on its number): a tick on every
+// episode up to 20 of them, else 1-2-5 steps (whole numbers then).
+Axis episodeAxis(double first, double last, const std::string& label) {
+  Axis axis({first - 0.5, last + 0.5}, label);
+  if (last - first <= 20.0) {
+    for (double k = first; k <= last; k += 1.0) axis.ticks.push_back(k);
+  } else {
+    axis.ticks = niceTicks({first, last}, 10);
+  }
+  return axis;
+}
+
 std::string figure(const std::string& id, const std::string& heading, const std::string& svg,
                    const std::string& caption) {
   return "<figure id=\"fig-" + id + "\">\n<h2>" + escapeXml(heading) + "</h2>\n" + svg +
@@ -127,7 +139,7 @@ std::string costPlot(const json& report) {
   y.add(running.high);
   if (y.empty()) return note("Realized cost per episode", "No episode has a finite cost.");
   const Interval y_range = niceRange({std::min(0.0, y.lo), y.hi}, 5);
-  SvgPlot plot(SvgPlot::Frame{}, Axis{{x.lo - 0.5, x.hi + 0.5}, "episode"},
+  SvgPlot plot(SvgPlot::Frame{}, episodeAxis(x.lo, x.hi, "episode"),
                Axis{y_range, "cost J (state units²)"});
   for (const json& e : per_episode) {
     const double k = number(e, "episode");
@@ -421,7 +433,7 @@ std::string faultPlot(const json& report) {
     }
     return std::string();
   };
-  SvgPlot plot(frame, Axis{{-0.5, episodes - 0.5}, "episode (and emulated time within it)"}, y);
+  SvgPlot plot(frame, episodeAxis(0.0, episodes - 1.0, "episode (and emulated time within it)"), y);
   std::string table = "<table class=\"faults\"><tr><th>kind</th><th>process</th><th>sensor</th>"
                       "<th>episode</th><th>t (s)</th><th>detail</th></tr>\n";
   for (const json& f : faults) {

@@ -185,6 +185,11 @@ TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
   EXPECT_EQ(report["run_id"], run_id_);
   EXPECT_EQ(report["episodes"], 3);
   EXPECT_EQ(report["status"], "completed");
+  // Its page beside it by default (report.json -> report.html; the browser test is in
+  // report_page_test.cpp).
+  const std::string page = readText(dir_ / "report.html");
+  EXPECT_NE(page.find("<title>sensornet run " + run_id_ + "</title>"), std::string::npos);
+  EXPECT_NE(page.find("id=\"plot-cost\""), std::string::npos);
 
   // One JSON line on stdout: the report's summary plus run id and report path.
   const json line = json::parse(r.out, nullptr, false);
