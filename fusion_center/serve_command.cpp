@@ -645,8 +645,9 @@ class FusionCenter {
     publishReport(result, s);
   }
 
-  // The weighted covariance trace of one of the first kTracedEpisodes episodes, and the surrogate
-  // curves of the version in force at its start (once per version), for the report's page.
+  // The weighted covariance trace of one of the first kTracedEpisodes episodes (its measurements
+  // are gone once it is closed), for the report's page; the surrogate curves of the version in
+  // force at its start are computed when the report is written, not while the run goes on.
   void traceCovariance(const emulator::EpisodeFusion& fusion, const emulator::EpisodeResult& r) {
     if (traced_episodes_.size() >= kTracedEpisodes || r.versions.empty()) return;
     const Scenario& scenario = inputs_.scenario();
@@ -658,21 +659,26 @@ class FusionCenter {
     curve["version"] = version;
     curve["complete"] = r.complete;
     traced_episodes_.push_back(std::move(curve));
-    if (traced_versions_.count(version) > 0) return;
-    for (const emulator::ScheduleVersion& v : inputs_.book().versions()) {
-      if (v.version != version) continue;
-      const emulator::SurrogateTraces s =
-          emulator::surrogateTraces(scenario, v.schedule, weight, kTracePoints);
-      traced_versions_[version] = {{"version", version},
-                                   {"info", emulator::traceJson(s.info)},
-                                   {"cov", emulator::traceJson(s.cov)}};
-    }
+    traced_versions_.insert(version);
   }
 
   [[nodiscard]] json covarianceTraces() const {
+    const Scenario& scenario = inputs_.scenario();
+    const emulator::TraceWeight weight = emulator::traceWeight(scenario);
     json surrogates = json::array();
-    for (const auto& [version, curves] : traced_versions_) surrogates.push_back(curves);
-    return {{"weight", emulator::traceWeight(inputs_.scenario()).name},
+    for (const emulator::ScheduleVersion& v : inputs_.book().versions()) {
+      if (traced_versions_.count(v.version) == 0) continue;
+      try {  // a curve of the page must never cost the report
+        const emulator::SurrogateTraces s =
+            emulator::surrogateTraces(scenario, v.schedule, weight, kTracePoints);
+        surrogates.push_back({{"version", v.version},
+                              {"info", emulator::traceJson(s.info)},
+                              {"cov", emulator::traceJson(s.cov)}});
+      } catch (const std::exception& e) {
+        spdlog::warn("no surrogate curves of version {} for the report: {}", v.version, e.what());
+      }
+    }
+    return {{"weight", weight.name},
             {"episodes", traced_episodes_},
             {"surrogates", surrogates}};
   }
@@ -888,7 +894,7 @@ class FusionCenter {
   emulator::RejectionCounts rejected_outside_;  // samples refused before reaching an episode
   json faults_ = json::array();
   json traced_episodes_ = json::array();      // covariance_traces: the first episodes' curves
-  std::map<std::uint32_t, json> traced_versions_;  // ... and their versions' surrogate curves
+  std::set<std::uint32_t> traced_versions_;   // ... and the versions in force at their start
   json stalls_ = json::array();  // stalls absorbed (own and the sensors'), for the report
   emulator::StallWatch stall_watch_;
   std::uint32_t episodes_planned_ = 0;
