@@ -8,9 +8,11 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
+#include "sensornet/core/arrival_timetable.hpp"
 #include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/poisson_arrivals.hpp"
@@ -58,8 +60,9 @@ void fillStandardNormal(Rng& rng, Eigen::Ref<Eigen::VectorXd> out) {
 
 // What every episode shares, read-only across threads.
 struct EpisodeModel {
-  EpisodeModel(const Scenario& s, const RateSchedule& schedule, bool plant)
+  EpisodeModel(const Scenario& s, const RateSchedule& schedule, bool plant, ArrivalMode mode)
       : scenario(s), sampler(schedule), horizon_s(s.horizon_s), simulate_plant(plant) {
+    if (mode == ArrivalMode::Timetable) timetable = timetableArrivals(schedule);
     const Eigen::Index n = s.plant.A.rows();
     initial_mean = s.plant.m0.size() == 0 ? Eigen::VectorXd::Zero(n) : s.plant.m0;
     terminal_weight = s.cost.WT.size() == 0 ? Eigen::MatrixXd::Identity(n, n) : s.cost.WT;
@@ -74,6 +77,7 @@ struct EpisodeModel {
 
   const Scenario& scenario;
   ArrivalSampler sampler;
+  std::optional<std::vector<Arrival>> timetable;  // the fixed instants, in timetable mode
   double horizon_s;
   bool simulate_plant;
   Eigen::VectorXd initial_mean;
@@ -109,7 +113,11 @@ class EpisodeRunner {
   EpisodeOutcome run(std::uint64_t seed, int episode) {
     Rng arrival_rng = Rng::keyed(seed, kMonteCarloArrivalStream, episode);
     Rng plant_rng = Rng::keyed(seed, kMonteCarloPlantStream, episode);
-    model_.sampler.draw(arrival_rng, 0.0, model_.horizon_s, arrivals_);
+    if (model_.timetable) {
+      arrivals_ = *model_.timetable;  // no allocation once the buffer has grown
+    } else {
+      model_.sampler.draw(arrival_rng, 0.0, model_.horizon_s, arrivals_);
+    }
 
     filter_.reset();
     if (model_.simulate_plant) {
@@ -343,7 +351,7 @@ MonteCarloResult summarize(const std::vector<EpisodeOutcome>& outcomes, bool sim
 MonteCarloResult evaluateSchedule(const Scenario& scenario, const RateSchedule& schedule,
                                   const MonteCarloOptions& options) {
   checkInputs(scenario, schedule, options);
-  const EpisodeModel model(scenario, schedule, options.simulate_plant);
+  const EpisodeModel model(scenario, schedule, options.simulate_plant, options.arrivals);
   const int threads = resolveThreadCount(options.threads, options.runs);
   return summarize(runEpisodes(model, options, threads), options.simulate_plant);
 }

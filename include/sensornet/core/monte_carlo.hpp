@@ -12,6 +12,8 @@
 //   const CostBracket bracket = computeBracket(scenario, schedule);  // surrogate.hpp
 //   // expect bracket.info <= mc.mean (+- mc.ci95) <= bracket.cov
 //
+// With options.arrivals = ArrivalMode::Timetable every episode uses timetableArrivals(schedule).
+//
 // Reproducibility: episode e draws its arrivals only from
 // Rng::keyed(seed, kMonteCarloArrivalStream, e) and its plant and measurement noise only from
 // Rng::keyed(seed, kMonteCarloPlantStream, e), and all reductions run in episode order after the
@@ -21,6 +23,7 @@
 #include <functional>
 #include <vector>
 
+#include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 
@@ -34,6 +37,10 @@ struct MonteCarloOptions {
   std::uint64_t seed = 1;
   int threads = 0;               // 0 = std::thread::hardware_concurrency()
   bool simulate_plant = true;    // also simulate the truth and measurements: squared error, NEES
+  // Poisson arrivals drawn per episode, or the schedule's timetable (arrival_timetable.hpp), the
+  // same in every episode: then J(P) is deterministic (std_dev zero up to rounding) and only
+  // the plant and measurement noise vary.
+  ArrivalMode arrivals = ArrivalMode::Poisson;
   // Optional; called as episodes complete, always from the thread that called evaluateSchedule,
   // last with (runs, runs). An exception it throws stops the workers and propagates.
   std::function<void(int done, int total)> progress;

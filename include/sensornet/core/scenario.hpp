@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/network_spec.hpp"
 
 namespace sensornet {
@@ -47,6 +48,9 @@ struct Scenario {
   ResourceConstraints constraints;
   std::optional<NetworkSpec> network;  // the emulated network, when the scenario has one
   std::vector<CrashFault> faults;      // scripted faults (network.hpp)
+  // How every sensor's instants follow from its rates (the file's `arrivals:`, overridden by
+  // --arrivals): Poisson, or the deterministic timetable of arrival_timetable.hpp.
+  ArrivalMode arrivals = ArrivalMode::Poisson;
 
   [[nodiscard]] int stateDim() const { return static_cast<int>(plant.A.rows()); }
   [[nodiscard]] int sensorCount() const { return static_cast<int>(sensors.size()); }
