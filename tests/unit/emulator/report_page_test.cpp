@@ -9,6 +9,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "emulator_test_support.hpp"
@@ -187,12 +188,15 @@ TEST(ReportPage, HasATitleAndOnePlotPerPartWithMarksAndNoFetchedResource) {
   const std::string page = reportPage(sampleReport(), "r.json");
   EXPECT_NE(page.find("<title>sensornet run run-x</title>"), std::string::npos);
   EXPECT_NE(page.find("scenario digest-1"), std::string::npos);
-  for (const char* id : {"plot-cost", "plot-sensors", "plot-latency", "plot-faults"}) {
-    const std::size_t at = page.find(std::string("id=\"") + id + "\"");
+  const std::vector<std::pair<std::string, std::string>> plots = {
+      {"plot-cost", "<circle"}, {"plot-cost", "<rect"}, {"plot-sensors", "<rect"},
+      {"plot-latency", "<rect"}, {"plot-faults", "<circle"}};
+  for (const auto& [id, mark] : plots) {
+    const std::size_t at = page.find("id=\"" + id + "\"");
     ASSERT_NE(at, std::string::npos) << id;
     const std::size_t marks = page.find("<g class=\"marks\"", at);
     const std::size_t end = page.find("</g>", marks);
-    EXPECT_NE(page.substr(marks, end - marks).find("<rect"), std::string::npos) << id;
+    EXPECT_NE(page.substr(marks, end - marks).find(mark), std::string::npos) << id << " " << mark;
   }
   // No schedule rates nor traces in this report: said, not drawn.
   EXPECT_NE(page.find("carries no schedule rates"), std::string::npos);
