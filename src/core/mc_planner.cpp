@@ -390,7 +390,9 @@ class RealizedCostSearch {
     std::vector<double> costs = sample(rates, seed, pilot);
     const double affordable =
         0.3 * request_.max_seconds / (std::max(1, candidates) * std::max(episodeSeconds(), 1e-9));
-    screening_size_ = std::clamp(static_cast<int>(affordable), pilot, options_.screening_episodes);
+    // Clamped as a double: the affordable count can exceed the range of int.
+    screening_size_ = std::max(
+        pilot, static_cast<int>(std::min(affordable, static_cast<double>(options_.screening_episodes))));
     if (screening_size_ > pilot) {
       episodes_ += screening_size_ - pilot;
       const std::vector<double> rest =
