@@ -27,6 +27,7 @@ using Eigen::MatrixXd;
 constexpr int kMemory = 40;  // L-BFGS pairs
 constexpr double kSufficientDecrease = 1e-4;  // Armijo
 constexpr int kMaxBacktracks = 40;
+constexpr int kMaxShortenings = 6;  // arc steps shortened without evaluation (t >= 1e-6)
 constexpr double kMinScaledStep = 1e-10;
 constexpr double kMaxScaledStep = 1e10;
 constexpr double kMaxActiveWidth = 1e-3;    // ε never exceeds this many rate units
@@ -322,12 +323,22 @@ class ProjectedQuasiNewton {
     return std::nullopt;
   }
 
+  // Along the arc, a long step may bend by projection into a direction that does not descend
+  // (rates clipped at zero, rows clipped at their bound), while a shorter one does: such steps
+  // are shortened tenfold without evaluating the cost (the projection is cheap), and only a
+  // step with negative slope is evaluated.
   std::optional<Iterate> arcSearch(const MatrixXd& direction) {
     double t = 1.0;
-    for (int i = 0; i < kMaxBacktracks; ++i) {
+    int shortenings = 0;
+    for (int i = 0; i < kMaxBacktracks;) {
       const MatrixXd x = problem_.projected(current_.x + t * direction);
       const double slope = problem_.inner(current_.gradient, x - current_.x);
-      if (!(slope < 0.0)) return std::nullopt;
+      if (!(slope < 0.0)) {
+        if (++shortenings > kMaxShortenings) return std::nullopt;
+        t *= 0.1;
+        continue;
+      }
+      ++i;
       Iterate trial = evaluate(x);
       if (trial.cost <= current_.cost + kSufficientDecrease * slope) return trial;
       // slope already carries the step; interpolate as if along a segment of length t.

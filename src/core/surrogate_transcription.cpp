@@ -1,9 +1,12 @@
 #include "sensornet/core/surrogate_transcription.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <system_error>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -65,6 +68,18 @@ WhitenedRows whitenedRows(const Scenario& scenario) {
   return w;
 }
 
+// A piece of [start_time, T] on which the rates are constant.
+struct Segment {
+  double start;
+  double end;
+  int interval;
+};
+
+// TranscriptionOptions::threads = 0: the hardware concurrency, at most 2.
+int automaticThreads() {
+  return static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 2u));
+}
+
 // Per-row values summed into per-sensor values.
 VectorXd sumPerSensor(const WhitenedRows& w, const VectorXd& per_row) {
   VectorXd per_sensor(w.sensorCount());
@@ -87,8 +102,6 @@ class InformationDynamics {
         q_is_identity_(s.plant.Q.isIdentity(0.0)),
         weighted_(!s.cost.W.isZero(0.0)),
         rows_(std::move(rows)),
-        row_rates_(rows_.rows.rows()),
-        scaled_rows_(rows_.rows.rows(), n_),
         U_(n_, n_),
         xa_(n_, n_),
         xq_(n_, n_),
@@ -106,14 +119,27 @@ class InformationDynamics {
     return Y;
   }
 
+  // U = Σ_j λ_j S_j over the sensors with a nonzero rate (at large M most rates of a plan are
+  // zero, and the others cost p_j n² each).
   void useRates(const Eigen::Ref<const VectorXd>& rates) {
+    Index active = 0;
+    for (Index j = 0; j < rows_.sensorCount(); ++j) active += rates(j) != 0.0 ? rows_.rowCount(j) : 0;
+    active_rows_.resize(active, n_);
+    row_rates_.resize(active);
+    Index r = 0;
     for (Index j = 0; j < rows_.sensorCount(); ++j) {
-      row_rates_.segment(rows_.firstRow(j), rows_.rowCount(j)).setConstant(rates(j));
+      if (rates(j) == 0.0) continue;
+      const Index p = rows_.rowCount(j);
+      active_rows_.middleRows(r, p) = rows_.rows.middleRows(rows_.firstRow(j), p);
+      row_rates_.segment(r, p).setConstant(rates(j));
+      r += p;
     }
-    scaled_rows_.noalias() = row_rates_.asDiagonal() * rows_.rows;
-    U_.noalias() = rows_.rows.transpose() * scaled_rows_;
+    scaled_rows_.noalias() = row_rates_.asDiagonal() * active_rows_;
+    U_.noalias() = active_rows_.transpose() * scaled_rows_;
     symmetrize(U_);
   }
+  // The reverse pass needs no rates: (∂f/∂Y)' does not involve U.
+  void useRatesInReverse(const Eigen::Ref<const VectorXd>&) {}
 
   // F = f(Y); running_rate = <W, Y^{-1}>. False when Y is not positive definite and the running
   // cost needs its inverse.
@@ -158,11 +184,46 @@ class InformationDynamics {
 
   void beginInterval() { rate_adjoint_.setZero(); }
 
-  // ∂cost/∂λ_j over the interval: <Σ_stages k̄, S_j> = Σ_rows of j  h̃' (Σ k̄) h̃.
-  [[nodiscard]] VectorXd finishInterval() {
-    scaled_rows_.noalias() = rows_.rows * rate_adjoint_;
-    const VectorXd per_row = (scaled_rows_.array() * rows_.rows.array()).rowwise().sum();
-    return sumPerSensor(rows_, per_row);
+  // Keeps G = Σ_stages k̄ of the interval in `slot`; rateGradients pairs it with every S_j.
+  void finishInterval(std::size_t slot) {
+    if (interval_adjoints_.size() <= slot) interval_adjoints_.resize(slot + 1);
+    interval_adjoints_[slot] = rate_adjoint_;
+  }
+
+  // ∂cost/∂λ_j of every interval: <G_k, S_j> = Σ_rows of j  h̃' G_k h̃, O(Σ_j p_j n²) per
+  // interval. The intervals are independent, so they are split over the threads (`threads`
+  // as TranscriptionOptions::threads); each interval is computed by the same code whichever
+  // thread runs it, so the result does not depend on the thread count.
+  void rateGradients(const std::vector<Segment>& segments, int threads, MatrixXd& gradient) const {
+    const std::size_t count = segments.size();
+    const auto work = [&](std::size_t begin, std::size_t end) {
+      MatrixXd product(rows_.rows.rows(), n_);
+      for (std::size_t slot = begin; slot < end; ++slot) {
+        product.noalias() = rows_.rows * interval_adjoints_[slot];
+        const VectorXd per_row = (product.array() * rows_.rows.array()).rowwise().sum();
+        gradient.row(segments[slot].interval) = sumPerSensor(rows_, per_row).transpose();
+      }
+    };
+    // Chosen automatically, a second thread is used from about a million multiply-adds.
+    const double flops = static_cast<double>(count) * static_cast<double>(rows_.rows.rows()) *
+                         static_cast<double>(n_ * n_);
+    const std::size_t parts = std::min<std::size_t>(
+        count, static_cast<std::size_t>(threads > 0 ? threads : automaticThreads()));
+    if (parts < 2 || (threads == 0 && flops < 1e6)) {
+      work(0, count);
+      return;
+    }
+    std::vector<std::thread> helpers;
+    for (std::size_t part = 1; part < parts; ++part) {
+      const std::size_t begin = part * count / parts, end = (part + 1) * count / parts;
+      try {
+        helpers.emplace_back(work, begin, end);
+      } catch (const std::system_error&) {  // no thread to be had: do that part here
+        work(begin, end);
+      }
+    }
+    work(0, count / parts);
+    for (std::thread& helper : helpers) helper.join();
   }
 
   // <W_T, Y^{-1}> and its gradient -Y^{-1} W_T Y^{-1}; +inf when Y is not positive definite.
@@ -197,9 +258,11 @@ class InformationDynamics {
   bool q_is_identity_;
   bool weighted_;
   WhitenedRows rows_;
-  VectorXd row_rates_;
+  MatrixXd active_rows_;  // rows of the sensors with a nonzero rate in the current interval
+  VectorXd row_rates_;    // their rates, row by row
   MatrixXd scaled_rows_;
   MatrixXd U_, xa_, xq_, inverse_, rate_adjoint_;
+  std::vector<MatrixXd> interval_adjoints_;  // G of every segment, by slot
   Eigen::LLT<MatrixXd> llt_;
 };
 
@@ -328,8 +391,21 @@ class CovarianceDynamics {
     symmetrize(Pbar);
   }
 
+  void useRatesInReverse(const Eigen::Ref<const VectorXd>& rates) { useRates(rates); }
+
   void beginInterval() { rate_adjoint_.setZero(); }
-  [[nodiscard]] VectorXd finishInterval() { return rate_adjoint_; }
+  // The covariance form pairs every stage with g_j(P_stage) as it goes (reverseStage): the
+  // gradient of an interval is complete here, and is kept in `slot`.
+  void finishInterval(std::size_t slot) {
+    if (interval_gradients_.size() <= slot) interval_gradients_.resize(slot + 1);
+    interval_gradients_[slot] = rate_adjoint_;
+  }
+  void rateGradients(const std::vector<Segment>& segments, int /*threads*/,
+                     MatrixXd& gradient) const {
+    for (std::size_t slot = 0; slot < segments.size(); ++slot) {
+      gradient.row(segments[slot].interval) = interval_gradients_[slot].transpose();
+    }
+  }
 
   double terminalCost(const MatrixXd& P, MatrixXd& gradient) {
     gradient = WT_;
@@ -365,13 +441,8 @@ class CovarianceDynamics {
   MatrixXd hp_, weighted_hp_;
   Eigen::ArrayXd innovation_;
   VectorXd rate_adjoint_;
+  std::vector<VectorXd> interval_gradients_;  // by slot
   Eigen::LLT<MatrixXd> llt_;
-};
-
-struct Segment {
-  double start;
-  double end;
-  int interval;
 };
 
 // The pieces of [start_time, T] on which the rates are constant, as in the accurate rollout.
@@ -394,6 +465,10 @@ Eigen::MatrixXd checkedStartCovariance(const Scenario& scenario,
   if (options.substeps < 1) {
     throw InputError(kSource, "substeps", "an integer >= 1, got " +
                                               std::to_string(options.substeps));
+  }
+  if (options.threads < 0) {
+    throw InputError(kSource, "threads", "an integer >= 0, got " +
+                                             std::to_string(options.threads));
   }
   if (!std::isfinite(options.start_time) || options.start_time < 0.0 ||
       options.start_time > scenario.horizon_s) {
@@ -446,6 +521,7 @@ class Shooting {
         intervals_(scenario.intervals),
         sensors_(scenario.sensorCount()),
         substeps_(options.substeps),
+        threads_(options.threads),
         segments_(segmentsFrom(scenario, options.start_time)),
         start_(dynamics_.stateFromCovariance(checkedStartCovariance(scenario, options))),
         stages_(4 * segments_.size() * static_cast<std::size_t>(substeps_),
@@ -497,16 +573,18 @@ class Shooting {
     if (!std::isfinite(result.cost)) return result;
     // xbar_ holds the terminal gradient.
     std::size_t stage = stages_.size();
-    for (auto segment = segments_.rbegin(); segment != segments_.rend(); ++segment) {
-      dynamics_.useRates(rates.row(segment->interval).transpose());
+    for (std::size_t slot = segments_.size(); slot-- > 0;) {
+      const Segment& segment = segments_[slot];
+      dynamics_.useRatesInReverse(rates.row(segment.interval).transpose());
       dynamics_.beginInterval();
-      const double h = (segment->end - segment->start) / substeps_;
+      const double h = (segment.end - segment.start) / substeps_;
       for (int step = 0; step < substeps_; ++step) {
         stage -= 4;
         reverseStep(stage, h);
       }
-      result.gradient.row(segment->interval) = dynamics_.finishInterval().transpose();
+      dynamics_.finishInterval(slot);
     }
+    dynamics_.rateGradients(segments_, threads_, result.gradient);
     return result;
   }
 
@@ -543,6 +621,7 @@ class Shooting {
   int intervals_;
   int sensors_;
   int substeps_;
+  int threads_;
   std::vector<Segment> segments_;
   MatrixXd start_;
   std::vector<MatrixXd> stages_;    // X1..X4 of every step, for the reverse pass

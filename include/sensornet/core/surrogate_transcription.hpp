@@ -37,6 +37,10 @@ struct TranscriptionOptions {
   // rates μ = delivery ⊙ λ (N x M, entries in [0, 1]), so the gradient in λ is
   // delivery ⊙ ∂cost/∂μ (chain rule). Absent: μ = λ.
   std::optional<Eigen::MatrixXd> delivery;
+  // Threads of the information form's gradient products (one n x n adjoint per interval paired
+  // with every S_j); 0 = the hardware concurrency, at most 2, and one thread for small problems
+  // (below about 1e6 multiply-adds per gradient). The result does not depend on it.
+  int threads = 0;
 };
 
 struct CostGradient {
