@@ -186,8 +186,9 @@ Subcommand addReplanCommand(CLI::App& app) {
   CLI::Option_group* change = cmd->add_option_group("change", "what to change (exactly one)");
   change
       ->add_option("--surrogate", options->surrogate,
-                   "re-plan with this surrogate: info (eq. 11) or cov (eq. 15)")
-      ->check(CLI::IsMember({"info", "cov"}));
+                   "re-plan with this surrogate: info (eq. 11), cov (eq. 15) or mc (E[J] "
+                   "itself by Monte Carlo; takes up to the coordinator's plan time limit)")
+      ->check(CLI::IsMember({"info", "cov", "mc"}));
   change->add_option("--exclude", options->exclude, "re-plan with these sensor ids at rate zero")
       ->delimiter(',');
   change

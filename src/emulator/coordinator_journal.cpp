@@ -137,7 +137,8 @@ PlanSurrogate surrogateOf(const Fields& f, const std::string& name, const std::s
   if (name == "info") return PlanSurrogate::Information;
   if (name == "cov") return PlanSurrogate::Covariance;
   if (name == "uniform") return PlanSurrogate::Uniform;
-  f.fail(field, "info, cov or uniform, got '" + name + "'");
+  if (name == "mc") return PlanSurrogate::MonteCarlo;
+  f.fail(field, "info, cov, uniform or mc, got '" + name + "'");
 }
 
 ReplanSettings settingsFrom(const Fields& f, const json& s, const Scenario& scenario) {

@@ -24,6 +24,7 @@ bool stalledAtAStationaryPoint(const PlanResult& plan) {
 void requireOptimal(const PlanResult& plan, const std::string& which, const std::string& surrogate,
                     std::uint64_t command_id) {
   if (plan.status == "optimal" || plan.status == "acceptable" || plan.status == "not_optimized" ||
+      plan.status == "improved" || plan.status == "kept_start" ||  // mc: both are published
       stalledAtAStationaryPoint(plan)) {
     return;
   }
@@ -116,9 +117,11 @@ Replan Replanner::changeSurrogate(std::string_view surrogate, const ScheduleBook
     settings.surrogate = PlanSurrogate::Covariance;
   } else if (surrogate == "uniform") {
     settings.surrogate = PlanSurrogate::Uniform;
+  } else if (surrogate == "mc") {
+    settings.surrogate = PlanSurrogate::MonteCarlo;
   } else {
     throw InputError(sourceOf(command_id), "surrogate",
-                     "info, cov or uniform, got '" + std::string(surrogate) + "'");
+                     "info, cov, uniform or mc, got '" + std::string(surrogate) + "'");
   }
   return plan(std::move(settings), book, now, command_id);
 }

@@ -25,7 +25,7 @@ struct ScheduleVersion {
   std::uint32_t effective_episode = 0;
   double effective_time_s = 0.0;
   RateSchedule schedule;
-  std::string surrogate;    // "uniform", "info", "cov", "file"
+  std::string surrogate;    // "uniform", "info", "cov", "mc", "file"
   CostBracket bracket;      // of the whole schedule over [0, T] from P0
   std::uint64_t command_id = 0;
 };
