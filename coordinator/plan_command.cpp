@@ -27,6 +27,7 @@ struct PlanOptions {
   double tolerance = PlanRequest{}.tolerance;
   int max_iterations = 500;
   double max_seconds = 120.0;
+  bool max_seconds_given = false;  // mc defaults to 55 s instead
   bool network_aware = false;
   bool json = false;
 };
@@ -51,6 +52,9 @@ int runPlan(const PlanOptions& options) {
   request.tolerance = options.tolerance;
   request.max_iterations = options.max_iterations;
   request.max_seconds = options.max_seconds;
+  if (options.surrogate == PlanSurrogate::MonteCarlo && !options.max_seconds_given) {
+    request.max_seconds = 55.0;
+  }
   for (const int sensor : options.excluded) {
     if (sensor < 0 || sensor >= scenario.sensorCount()) {
       throw InputError("command line", "--exclude",
@@ -72,11 +76,14 @@ int runPlan(const PlanOptions& options) {
   }
   // Progress on long solves: one line every 2 s of wall time.
   double next_report = 2.0;
-  request.progress = [&next_report](const PlanProgress& p) {
+  const char* what = options.surrogate == PlanSurrogate::MonteCarlo
+                         ? "Monte Carlo cost (screening sample)"
+                         : "surrogate cost";
+  request.progress = [&next_report, what](const PlanProgress& p) {
     if (p.elapsed_seconds >= next_report) {
       next_report = p.elapsed_seconds + 2.0;
-      spdlog::info("plan: iteration {}, surrogate cost {:.8g}, {:.1f} s", p.iteration,
-                   p.objective, p.elapsed_seconds);
+      spdlog::info("plan: iteration {}, {} {:.8g}, {:.1f} s", p.iteration, what, p.objective,
+                   p.elapsed_seconds);
     }
     return true;
   };
@@ -84,15 +91,21 @@ int runPlan(const PlanOptions& options) {
   const PlanResult plan = planSchedule(scenario, request);
   const CostBracket delivered = deliveredBracket(scenario, plan.schedule, plan.bracket);
   const std::string surrogate{describe(options.surrogate)};
-  writeScheduleFile(options.out_path, plan.schedule,
-                    {{"surrogate", surrogate},
-                     {"objective", plan.objective},
-                     {"bracket", toJson(plan.bracket)},
-                     {"delivered_bracket", toJson(delivered)},
-                     {"network_aware", options.network_aware},
-                     {"status", plan.status}});
+  const bool mc = options.surrogate == PlanSurrogate::MonteCarlo;
+  nlohmann::json record = {{"surrogate", surrogate},
+                           {"objective", plan.objective},
+                           {"bracket", toJson(plan.bracket)},
+                           {"delivered_bracket", toJson(delivered)},
+                           {"network_aware", options.network_aware},
+                           {"status", plan.status}};
+  if (mc) {
+    record["objective_half_width"] = plan.objective_half_width;
+    record["episodes"] = plan.episodes;
+  }
+  writeScheduleFile(options.out_path, plan.schedule, record);
   const bool solved = plan.status == "optimal" || plan.status == "acceptable" ||
-                      plan.status == "not_optimized";
+                      plan.status == "not_optimized" || plan.status == "improved" ||
+                      plan.status == "kept_start";
   if (!solved) spdlog::warn("plan: solver status '{}'; the best schedule found was written", plan.status);
 
   if (options.json) {
@@ -107,15 +120,26 @@ int runPlan(const PlanOptions& options) {
                           {"out", options.out_path}};
     doc["kkt_residual"] = std::isfinite(plan.kkt_residual) ? nlohmann::json(plan.kkt_residual)
                                                             : nlohmann::json(nullptr);
+    if (mc) {
+      doc["objective_half_width"] = plan.objective_half_width;
+      doc["episodes"] = plan.episodes;
+    }
     printJson(doc);
     return kExitOk;
   }
   std::printf("scenario   %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
               options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
               scenario.horizon_s, scenario.intervals);
-  std::printf("surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s\n",
-              surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
-              plan.solve_seconds);
+  if (mc) {
+    std::printf("surrogate  mc: E[J] = %.9g +- %.3g (95%%, fresh episodes), status %s, %d "
+                "iterations, %lld episodes in %.3f s\n",
+                plan.objective, plan.objective_half_width, plan.status.c_str(), plan.iterations,
+                plan.episodes, plan.solve_seconds);
+  } else {
+    std::printf("surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s\n",
+                surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
+                plan.solve_seconds);
+  }
   std::printf("bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n", plan.bracket.info,
               plan.bracket.cov);
   if (scenario.network) {
@@ -143,11 +167,13 @@ Subcommand addPlanCommand(CLI::App& app) {
   const std::map<std::string, PlanSurrogate> surrogates = {
       {"info", PlanSurrogate::Information},
       {"cov", PlanSurrogate::Covariance},
-      {"uniform", PlanSurrogate::Uniform}};
+      {"uniform", PlanSurrogate::Uniform},
+      {"mc", PlanSurrogate::MonteCarlo}};
   cmd->add_option("--surrogate", options->surrogate,
                   "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
                   "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
-                  "no optimization")
+                  "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
+                  "(objective = mean +- 95% half-width on fresh episodes; 55 s by default)")
       ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
       ->capture_default_str();
   cmd->add_option("--out", options->out_path, "schedule file to write (JSON, written atomically)")
@@ -170,9 +196,11 @@ Subcommand addPlanCommand(CLI::App& app) {
   cmd->add_option("--max-iterations", options->max_iterations, "iteration limit")
       ->capture_default_str()
       ->check(integerRange(0, std::numeric_limits<int>::max()));
-  cmd->add_option("--max-seconds", options->max_seconds, "wall-time limit of the solve")
-      ->capture_default_str()
-      ->check(positiveNumber());
+  CLI::Option* max_seconds =
+      cmd->add_option("--max-seconds", options->max_seconds,
+                      "wall-time limit of the solve (mc: of the whole plan, default 55)")
+          ->capture_default_str()
+          ->check(positiveNumber());
   cmd->add_flag("--network-aware", options->network_aware,
                 "plan for the rates the scenario's network: section delivers (loss thins them, "
                 "outages of every episode zero them) while C λ <= b binds the planned rates; "
@@ -181,7 +209,10 @@ Subcommand addPlanCommand(CLI::App& app) {
                 "print {\"surrogate\", \"objective\", \"bracket\", \"delivered_bracket\" "
                 "(of what the network delivers in episode 0), \"network_aware\", \"iterations\", "
                 "\"solve_seconds\", \"status\"} as one JSON line");
-  return {cmd, [options] { return runPlan(*options); }};
+  return {cmd, [options, max_seconds] {
+            options->max_seconds_given = max_seconds->count() > 0;
+            return runPlan(*options);
+          }};
 }
 
 }  // namespace sensornet::coordinator
