@@ -689,9 +689,11 @@ Subcommand addServeCommand(CLI::App& app) {
   const std::map<std::string, PlanSurrogate> surrogates = {
       {"info", PlanSurrogate::Information},
       {"cov", PlanSurrogate::Covariance},
-      {"uniform", PlanSurrogate::Uniform}};
+      {"uniform", PlanSurrogate::Uniform},
+      {"mc", PlanSurrogate::MonteCarlo}};
   cmd->add_option("--surrogate", options->surrogate,
-                  "how to plan the initial schedule: info, cov or uniform")
+                  "how to plan the initial schedule: info, cov, uniform or mc (the expected "
+                  "realized cost by Monte Carlo; up to a minute)")
       ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
       ->capture_default_str();
   cmd->add_option("--schedule", options->schedule_path,

@@ -601,8 +601,9 @@ Subcommand addLaunchCommand(CLI::App& app) {
       ->check(sensorsPerProcessValue())
       ->capture_default_str();
   cmd->add_option("--surrogate", options->surrogate,
-                  "how the coordinator plans the schedule: uniform, info (eq. 11) or cov (eq. 15)")
-      ->check(CLI::IsMember({"uniform", "info", "cov"}))
+                  "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
+                  "or mc (E[J] itself by Monte Carlo, up to a minute)")
+      ->check(CLI::IsMember({"uniform", "info", "cov", "mc"}))
       ->capture_default_str();
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");
