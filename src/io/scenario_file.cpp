@@ -136,6 +136,17 @@ YAML::Node locate(const YAML::Node& root, const std::string& field) {
   return node;
 }
 
+// `arrivals: poisson|timetable` (optional, Poisson when absent).
+void readArrivalMode(const YamlReader& in, const YAML::Node& node, Scenario& s) {
+  if (!node) return;
+  if (!node.IsScalar()) in.fail(node, "arrivals", "poisson or timetable");
+  try {
+    s.arrivals = parseArrivalMode(node.Scalar(), "", "arrivals");
+  } catch (const InputError& e) {
+    in.fail(node, "arrivals", e.expected());
+  }
+}
+
 }  // namespace
 
 Scenario parseScenarioYaml(const std::string& text, const std::string& source) {
@@ -150,7 +161,7 @@ Scenario parseScenarioYaml(const std::string& text, const std::string& source) {
   if (!root.IsMap()) in.fail(root, "(top level)", "a mapping with horizon, intervals, ...");
   in.rejectUnknownKeys(root, "", {"horizon", "intervals", "plant", "sensors", "cost",
                                   "constraints", "random", "name", "description", "network",
-                                  "faults"});
+                                  "faults", "arrivals"});
   Scenario s;
   s.horizon_s = in.number(in.required(root, "horizon", "horizon"), "horizon");
   if (s.horizon_s <= 0.0) in.fail(root["horizon"], "horizon", "a number > 0");
@@ -172,6 +183,7 @@ Scenario parseScenarioYaml(const std::string& text, const std::string& source) {
   }
   readNetworkSection(in, root["network"], s);
   readFaults(in, root["faults"], s);
+  readArrivalMode(in, root["arrivals"], s);
   try {
     validateScenario(s, source);
   } catch (const InputError& e) {

@@ -475,3 +475,30 @@ TEST(ScheduleFile, RoundTripsAndRejectsMalformedSchedules) {
 
 }  // namespace
 }  // namespace sensornet
+
+namespace sensornet {
+namespace {
+
+TEST(ScenarioFileArrivals, PoissonByDefaultAndTimetableWhenAsked) {
+  EXPECT_EQ(parseScenarioYaml(kValid, "ok.yaml").arrivals, ArrivalMode::Poisson);
+  EXPECT_EQ(parseScenarioYaml(std::string(kValid) + "arrivals: poisson\n", "ok.yaml").arrivals,
+            ArrivalMode::Poisson);
+  EXPECT_EQ(parseScenarioYaml(std::string(kValid) + "arrivals: timetable\n", "ok.yaml").arrivals,
+            ArrivalMode::Timetable);
+}
+
+TEST(ScenarioFileArrivals, ABadModeNamesFileLineFieldAndTheChoices) {
+  const std::string text = std::string(kValid) + "arrivals: periodic\n";
+  const int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  const std::string message = errorOf(text);
+  EXPECT_NE(message.find("bad.yaml:" + std::to_string(line) + ": arrivals"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("poisson or timetable, got 'periodic'"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  const std::string listed = errorOf(std::string(kValid) + "arrivals: [timetable]\n");
+  EXPECT_NE(listed.find("arrivals"), std::string::npos) << listed;
+  EXPECT_NE(listed.find("poisson or timetable"), std::string::npos) << listed;
+}
+
+}  // namespace
+}  // namespace sensornet
