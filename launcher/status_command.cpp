@@ -13,6 +13,7 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
+#include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 
 namespace sensornet::launcher {
@@ -63,28 +64,10 @@ struct RunStatus {
   }
 };
 
-std::string stateName(sensornet_SensorState state) {
-  switch (state) {
-    case sensornet_SENSOR_STARTING:
-      return "starting";
-    case sensornet_SENSOR_READY:
-      return "ready";
-    case sensornet_SENSOR_RUNNING:
-      return "running";
-    case sensornet_SENSOR_EXCLUDED:
-      return "excluded";
-    case sensornet_SENSOR_STOPPED:
-      return "stopped";
-    case sensornet_SENSOR_FAILED:
-      return "failed";
-  }
-  return "unknown";
-}
-
 SensorRow toRow(const sensornet_SensorStatus& s) {
   SensorRow row;
   row.sensor_id = s.sensor_id;
-  row.state = stateName(s.state);
+  row.state = emulator::sensorStateName(s.state);
   row.episode = s.episode;
   row.schedule_version = s.schedule_version;
   row.rate_hz = s.current_rate_hz;

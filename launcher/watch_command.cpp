@@ -22,6 +22,7 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
+#include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 
 namespace sensornet::launcher {
@@ -43,24 +44,6 @@ std::string format(const char* pattern, auto... values) {
   char text[512];
   std::snprintf(text, sizeof text, pattern, values...);
   return text;
-}
-
-std::string stateName(sensornet_SensorState state) {
-  switch (state) {
-    case sensornet_SENSOR_STARTING:
-      return "starting";
-    case sensornet_SENSOR_READY:
-      return "ready";
-    case sensornet_SENSOR_RUNNING:
-      return "running";
-    case sensornet_SENSOR_EXCLUDED:
-      return "excluded";
-    case sensornet_SENSOR_STOPPED:
-      return "stopped";
-    case sensornet_SENSOR_FAILED:
-      return "failed";
-  }
-  return "unknown";
 }
 
 std::string listed(const std::vector<std::uint32_t>& ids) {
@@ -163,7 +146,7 @@ class RunView {
     if (dds::viewString(s.run_id) != run_id_) return;
     SensorView& view = sensors_[s.sensor_id];
     if (s.wall_time_ns < view.status_wall_ns) return;  // an older sample of another writer
-    const std::string state = stateName(s.state);
+    const std::string state = emulator::sensorStateName(s.state);
     const bool changed = state != view.state || s.schedule_version != view.version;
     view.state = state;
     view.version = s.schedule_version;

@@ -146,4 +146,22 @@ ScheduleVersion scheduleFromWire(const sensornet_Schedule& sample, const Scenari
   return version;
 }
 
+std::string sensorStateName(sensornet_SensorState state) {
+  switch (state) {
+    case sensornet_SENSOR_STARTING:
+      return "starting";
+    case sensornet_SENSOR_READY:
+      return "ready";
+    case sensornet_SENSOR_RUNNING:
+      return "running";
+    case sensornet_SENSOR_EXCLUDED:
+      return "excluded";
+    case sensornet_SENSOR_STOPPED:
+      return "stopped";
+    case sensornet_SENSOR_FAILED:
+      return "failed";
+  }
+  return "unknown";
+}
+
 }  // namespace sensornet::emulator

@@ -24,6 +24,9 @@ namespace sensornet::emulator {
 // A 16-hex-digit digest of a text (FNV-1a 64), to check that processes agree on the scenario.
 [[nodiscard]] std::string digestOf(std::string_view text);
 
+// "starting", "ready", "running", "excluded", "stopped", "failed" (what status and watch show).
+[[nodiscard]] std::string sensorStateName(sensornet_SensorState state);
+
 // What a process learns from the Scenario topic.
 struct RunScenario {
   Scenario scenario;
