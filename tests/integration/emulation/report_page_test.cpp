@@ -108,7 +108,7 @@ TEST_F(ReportPage, CsvTablesHoldTheReportsCountsAndThePageOpensInChromiumWithEve
   const std::string chromium = findChromium();
   if (chromium.empty()) GTEST_SKIP() << "no chromium on PATH (scripts/install-deps.sh installs it)";
   const ProcessResult browser =
-      runProcess({"env", "HOME=" + dir_.string(), chromium, "--headless", "--disable-gpu",
+      runProcess({"/usr/bin/env", "HOME=" + dir_.string(), chromium, "--headless", "--disable-gpu",
                   "--no-sandbox", "--enable-logging=stderr", "--v=0",
                   "--user-data-dir=" + (dir_ / "chromium").string(), "--dump-dom",
                   "file://" + page.string()},

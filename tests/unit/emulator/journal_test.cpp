@@ -150,7 +150,7 @@ TEST_F(JournalFile, RefusesMalformedJournalsNamingTheField) {
   };
   EXPECT_EQ(refusal("\"seed\"", "\"sead\""), "state.json: seed: expected present");
   EXPECT_EQ(refusal("\"surrogate\": \"cov\"", "\"surrogate\": \"newton\""),
-            "state.json: settings.surrogate: expected info, cov or uniform, got 'newton'");
+            "state.json: settings.surrogate: expected info, cov, uniform or mc, got 'newton'");
   EXPECT_EQ(refusal("\"excluded\": [\n   3", "\"excluded\": [\n   4"),
             "state.json: settings.excluded[0]: expected a sensor id below M = 4");
   EXPECT_EQ(refusal("\"time_scale\": 2.5", "\"time_scale\": -1"),
