@@ -88,7 +88,6 @@ class RunView {
   void apply(const sensornet_Scenario& s) {
     if (dds::viewString(s.run_id) != run_id_ || scenario_seen_) return;
     scenario_seen_ = true;
-    sensor_count_ = s.sensor_count;
     horizon_s_ = s.horizon_s;
     const std::string digest(dds::viewString(s.digest));
     say(format("run %s: scenario %s, %u sensors, %u states, T = %g s, seed %llu",
@@ -290,7 +289,6 @@ class RunView {
 
   std::string run_id_;
   bool scenario_seen_ = false;
-  std::uint32_t sensor_count_ = 0;
   double horizon_s_ = 0.0;
   std::set<std::uint32_t> versions_;
   std::optional<ScheduleView> newest_;

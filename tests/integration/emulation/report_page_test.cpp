@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "launch_fixture.hpp"
+#include "support/csv_rows.hpp"
 
 namespace {
 
@@ -43,19 +44,7 @@ std::string findChromium() {
   return {};
 }
 
-std::vector<std::vector<std::string>> csvRows(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::istringstream fields(line);
-    std::string cell;
-    while (std::getline(fields, cell, ',')) cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return rows;
-}
+using sensornet::testing::csvRows;
 
 class ReportPage : public sensornet::testing::LaunchTest {
  protected:

@@ -19,6 +19,7 @@
 #include "sensornet/emulator/covariance_trace.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "support/csv_rows.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -140,20 +141,7 @@ json sampleReport() {
   return report.toJson("degraded", faults, json::array());
 }
 
-std::vector<std::vector<std::string>> csvRows(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::istringstream fields(line);
-    std::string cell;
-    while (std::getline(fields, cell, ',')) cells.push_back(cell);
-    if (!line.empty() && line.back() == ',') cells.emplace_back();
-    rows.push_back(cells);
-  }
-  return rows;
-}
+using sensornet::testing::csvRows;
 
 TEST(ReportTables, HaveOneRowPerEpisodeAndPerSensorWithTheReportsCounts) {
   const json report = sampleReport();
