@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -48,7 +49,8 @@ struct ServeOptions {
   double time_scale = 1.0;
   std::uint64_t seed = 1;
   double ready_timeout_s = 30.0;
-  double start_lead_s = 0.2;     // wall seconds between announcing an episode and its start
+  double start_lead_s = 0.2;     // wall seconds between announcing the first episode and its start
+  double episode_gap_s = 0.002;  // wall seconds between one episode's end and the next's start
   double switch_margin_s = 0.3;  // wall seconds between a re-plan and its effective time
   double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
   FailurePolicy on_sensor_failure = FailurePolicy::Replan;
@@ -83,6 +85,12 @@ emulator::CoordinatorJournal journalHeader(const ServeOptions& options,
 struct Answer {
   std::optional<emulator::Replan> replan;
   std::string reason;
+};
+
+// An episode announced and not reported yet.
+struct Outstanding {
+  std::uint32_t episode = 0;
+  emulator::EpisodeClock clock;
 };
 
 class Coordinator {
@@ -129,8 +137,9 @@ class Coordinator {
     if (announced_) {  // resumed: the episode announced last runs on without us
       current_episode_ = announced_->episode;
       next_episode_ = current_episode_ + 1;
-      clock_ = {announced_->start_wall_ns, options_.time_scale};
-      running_ = !reported_.count(current_episode_);
+      const emulator::EpisodeClock clock{announced_->start_wall_ns, options_.time_scale};
+      if (!reported_.count(current_episode_)) outstanding_.push_back({current_episode_, clock});
+      last_end_ns_ = clock.wallAt(run_.scenario.horizon_s);
     }
   }
 
@@ -143,10 +152,15 @@ class Coordinator {
                  options_.run.run_id, run_.digest, book_.latest().version, sensorsInService());
     if (!abort_detail_.empty()) return abort();
     if (!waitUntilReady()) return abort_detail_.empty() ? kExitFailure : abort();
-    if (running_ && !resumeAnnouncedEpisode()) return fail();
-    for (std::uint32_t e = next_episode_;
-         e < static_cast<std::uint32_t>(options_.episodes) && !stopping_; ++e) {
-      if (!runEpisode(e)) return fail();
+    if (!outstanding_.empty()) {
+      spdlog::info("resuming: episode {} was announced before the restart; waiting for its report",
+                   current_episode_);
+    }
+    for (;;) {
+      announceAhead();
+      if (outstanding_.empty()) break;
+      if (!awaitReport(outstanding_.front())) return fail();
+      outstanding_.pop_front();
     }
     shutDown("");
     if (emulator::stopRequested()) return kExitFailure;
@@ -221,35 +235,49 @@ class Coordinator {
     }
   }
 
-  bool runEpisode(std::uint32_t episode) {
-    current_episode_ = episode;
-    clock_ = {wallNowNs() + toNs(options_.start_lead_s), options_.time_scale};
-    announced_ = emulator::AnnouncedEpisode{episode, clock_.start_wall_ns};
+  // Episodes run back to back: while one runs, the next is announced (its start is the end of
+  // this one plus --episode-gap), so the sensors hold it and begin on time. At most two episodes
+  // are outstanding (announced, not reported): the next but one is announced only once the
+  // report of the oldest is in, so a stalled fusion center holds the run back by one episode.
+  void announceAhead() {
+    while (outstanding_.size() < 2 && !stopping_ &&
+           next_episode_ < static_cast<std::uint32_t>(options_.episodes)) {
+      announceEpisode(next_episode_);
+    }
+  }
+
+  // The first episode of a run starts start_lead_s from now (every process is ready but has not
+  // seen a start yet); a later one episode_gap_s after the previous one's end, or from now if
+  // that has passed (a report came late).
+  [[nodiscard]] std::int64_t nextStartNs() const {
+    const std::int64_t now = wallNowNs();
+    if (!announced_) return now + toNs(options_.start_lead_s);
+    return std::max(last_end_ns_, now) + toNs(options_.episode_gap_s);
+  }
+
+  void announceEpisode(std::uint32_t episode) {
+    const emulator::EpisodeClock clock{nextStartNs(), options_.time_scale};
+    announced_ = emulator::AnnouncedEpisode{episode, clock.start_wall_ns};
+    outstanding_.push_back({episode, clock});
+    last_end_ns_ = clock.wallAt(run_.scenario.horizon_s);
+    next_episode_ = episode + 1;
     saveState();
     const std::vector<std::uint32_t> failed = failedIds();
     sensornet_EpisodeControl c = control(sensornet_EPISODE_START, episode);
-    c.start_wall_time_ns = clock_.start_wall_ns;
+    c.start_wall_time_ns = clock.start_wall_ns;
     c.schedule_version = book_.inForce(episode, 0.0)->version;
     dds::borrowSequence(c.failed_sensors, failed);
     mustWrite(control_writer_.write(c), "episode control");
-    return awaitReport(episode);
   }
 
-  // After a restart: the episode announced last runs without us (the sensors run it to its
-  // end, the fusion center closes it); wait for its report.
-  bool resumeAnnouncedEpisode() {
-    spdlog::info("resuming: episode {} was announced before the restart; waiting for its report",
-                 current_episode_);
-    return awaitReport(current_episode_);
-  }
-
-  bool awaitReport(std::uint32_t episode) {
-    running_ = true;
+  bool awaitReport(const Outstanding& awaited) {
+    const std::uint32_t episode = awaited.episode;
+    current_episode_ = episode;
     // The fusion center closes the episode once every sensor's count is in, which after a
     // stall can take a while; it publishes its state meanwhile. Give up only when it has shown
     // no sign of life for report_timeout_s after the episode's end, not counting the time this
     // process was stalled itself.
-    const std::int64_t end_ns = clock_.wallAt(run_.scenario.horizon_s);
+    const std::int64_t end_ns = awaited.clock.wallAt(run_.scenario.horizon_s);
     fusion_heard_ns_ = end_ns;
     while (!reported_.count(episode)) {
       pump(10ms);
@@ -264,8 +292,6 @@ class Coordinator {
         return false;
       }
     }
-    running_ = false;
-    next_episode_ = episode + 1;
     return true;
   }
 
@@ -435,7 +461,7 @@ class Coordinator {
         return onSensorsFailed(c);
       case sensornet_COMMAND_SHUTDOWN:
         stopping_ = true;
-        return {std::nullopt, "the run ends after the current episode"};
+        return {std::nullopt, "the run ends after the episodes already announced"};
       case sensornet_COMMAND_REPLAN:
         return replanned(replanner_.changeSurrogate(dds::viewString(c.surrogate), book, now,
                                                     c.command_id));
@@ -507,25 +533,62 @@ class Coordinator {
   }
 
   // EPISODE_SENSORS_FAILED: every failed sensor, from now in the running episode (from the
-  // start of the next one between episodes).
+  // start of the next one between episodes; episodes announced after it count them dead from
+  // their start).
   void announceFailure(const std::string& detail) {
     const std::vector<std::uint32_t> failed = failedIds();
-    sensornet_EpisodeControl c =
-        control(sensornet_EPISODE_SENSORS_FAILED, running_ ? current_episode_ : next_episode_);
+    const Outstanding* running = runningEpisode(wallNowNs());
+    sensornet_EpisodeControl c = control(sensornet_EPISODE_SENSORS_FAILED,
+                                         running ? running->episode : firstNotStarted());
     c.failed_at_s =
-        running_ ? std::clamp(clock_.emulatedNow(), 0.0, run_.scenario.horizon_s) : 0.0;
+        running ? std::clamp(running->clock.emulatedNow(), 0.0, run_.scenario.horizon_s) : 0.0;
     c.detail = dds::borrowString(detail);
     dds::borrowSequence(c.failed_sensors, failed);
     mustWrite(control_writer_.write(c), "failure notice");
   }
 
+  // The outstanding episode whose clock has started by `now_ns` (the latest such), if any.
+  [[nodiscard]] const Outstanding* runningEpisode(std::int64_t now_ns) const {
+    const Outstanding* running = nullptr;
+    for (const Outstanding& o : outstanding_) {
+      if (o.clock.start_wall_ns <= now_ns) running = &o;
+    }
+    return running;
+  }
+  // The announced episode not started yet, if any (the last outstanding one).
+  [[nodiscard]] const Outstanding* pendingEpisode(std::int64_t now_ns) const {
+    if (outstanding_.empty() || outstanding_.back().clock.start_wall_ns <= now_ns) return nullptr;
+    return &outstanding_.back();
+  }
+  [[nodiscard]] std::uint32_t firstNotStarted() const {
+    const Outstanding* pending = pendingEpisode(wallNowNs());
+    return pending ? pending->episode : next_episode_;
+  }
+
+  // Where a re-plan can take effect. An announced episode that starts within the switch margin
+  // keeps the version it was announced with (the sensors may begin it before a new version
+  // reaches them): the new one takes effect from the episode after it, which is not announced
+  // yet; no episode runs long enough then for a mid-episode switch. Otherwise as before: a
+  // switch in the running episode and a version from the next one (announced or not, it starts
+  // at least a margin from now).
   [[nodiscard]] emulator::RunMoment moment() const {
+    const std::int64_t now_ns = wallNowNs();
     emulator::RunMoment now;
-    now.running = running_;
-    now.episode = running_ ? current_episode_ : next_episode_;
     now.fused = fused_;
-    const emulator::EpisodeClock clock = clock_;
-    now.emulated_now = [clock] { return clock.emulatedNow(); };
+    const Outstanding* pending = pendingEpisode(now_ns);
+    const Outstanding* running = runningEpisode(now_ns);
+    if (pending && pending->clock.start_wall_ns < now_ns + toNs(options_.switch_margin_s)) {
+      now.running = false;
+      now.episode = pending->episode + 1;
+    } else if (running) {
+      now.running = true;
+      now.episode = running->episode;
+      const emulator::EpisodeClock clock = running->clock;
+      now.emulated_now = [clock] { return clock.emulatedNow(); };
+    } else {
+      now.running = false;
+      now.episode = pending ? pending->episode : next_episode_;
+    }
     return now;
   }
 
@@ -586,10 +649,10 @@ class Coordinator {
   std::int64_t fusion_heard_ns_ = 0;  // the fusion center's latest state or report
   emulator::StallWatch stall_watch_;
   std::optional<emulator::FusedCovariance> fused_;
-  std::uint32_t current_episode_ = 0;  // announced last
+  std::uint32_t current_episode_ = 0;  // whose report is awaited
   std::uint32_t next_episode_ = 0;     // to announce next
-  emulator::EpisodeClock clock_;       // of the current episode
-  bool running_ = false;
+  std::deque<Outstanding> outstanding_;  // announced, not reported, in order (at most two)
+  std::int64_t last_end_ns_ = 0;         // wall time of the end of the episode announced last
   bool stopping_ = false;
   std::string abort_detail_;  // the run ends as failed (--on-sensor-failure stop)
 };
@@ -714,6 +777,11 @@ Subcommand addServeCommand(CLI::App& app) {
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--switch-margin", options->switch_margin_s,
                   "wall seconds between a live re-plan and the time it takes effect")
+      ->capture_default_str()
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  cmd->add_option("--episode-gap", options->episode_gap_s,
+                  "wall seconds between one episode's end and the next one's start (the next "
+                  "episode is announced while the current one runs)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   const std::map<std::string, FailurePolicy> policies = {{"replan", FailurePolicy::Replan},

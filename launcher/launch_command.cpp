@@ -9,12 +9,15 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "failure_notices.hpp"
+#include "host_placement.hpp"
 #include "interrupts.hpp"
 #include "output_file.hpp"
 #include "process_group.hpp"
@@ -25,6 +28,7 @@
 #include "run_outcome.hpp"
 #include "run_supervisor.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/hosts_file.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
@@ -78,6 +82,7 @@ struct LaunchOptions {
   std::string on_sensor_failure = "replan";
   std::string network_aware = "auto";  // auto: when the scenario has a network: section
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
+  std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
 // What one launch starts, decided before anything starts.
@@ -157,11 +162,6 @@ std::vector<std::string> runFlags(const LaunchOptions& options, const dds::Domai
   return flags;
 }
 
-// "3" for a block of one sensor, "3-5" for sensors 3, 4 and 5.
-std::string blockSpec(int first, int last) {
-  return first == last ? std::to_string(first) : std::to_string(first) + "-" + std::to_string(last);
-}
-
 ChildSpec childSpec(const std::string& name, std::vector<std::string> argv,
                     const std::vector<std::string>& run_flags, const fs::path& log_dir) {
   argv.insert(argv.end(), run_flags.begin(), run_flags.end());
@@ -169,7 +169,8 @@ ChildSpec childSpec(const std::string& name, std::vector<std::string> argv,
 }
 
 LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
-                      const EmulatorPrograms& programs, const dds::DomainConfig& domain) {
+                      const EmulatorPrograms& programs, const dds::DomainConfig& domain,
+                      const emulator::HostsFile* hosts) {
   const int sensor_count = scenario.sensorCount();
   LaunchPlan plan;
   plan.run_id = options.run.run_id;
@@ -185,14 +186,13 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
                                     {programs.fusion_center, "serve", "--report", plan.report_path},
                                     flags, plan.log_dir));
   const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
-  for (int first = 0; first < sensor_count; first += per_process) {
-    const int last = std::min(first + per_process, sensor_count) - 1;
-    const std::string block = blockSpec(first, last);
+  for (const std::vector<int>& sensors : sensorBlocks(hosts, sensor_count, per_process)) {
+    const std::string block = sensorListSpec(sensors);
     const std::string name = "sensor_agent-" + block;
     plan.children.push_back(
         childSpec(name, {programs.sensor_agent, "--sensors", block}, flags, plan.log_dir));
     plan.sensor_agents.push_back(name);
-    for (int j = first; j <= last; ++j) plan.sensors_of[name].push_back(j);
+    plan.sensors_of[name] = sensors;
   }
   std::vector<std::string> coordinator = {programs.coordinator,
                                           "serve",
@@ -218,6 +218,30 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   }
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator), flags, plan.log_dir));
   return plan;
+}
+
+// --hosts: every child runs through its host's prefix with its host's Cyclone configuration.
+void placeOnHosts(LaunchPlan& plan, const emulator::HostsFile& hosts,
+                  const HostPlacement& placement) {
+  for (ChildSpec& child : plan.children) {
+    if (child.name == kCoordinator) {
+      placement.place(child, hosts.coordinatorHost(), dds::DiscoveryRole::Hub);
+    } else if (child.name == kFusionCenter) {
+      placement.place(child, hosts.fusionCenterHost(), dds::DiscoveryRole::Hub);
+    } else {
+      const emulator::Host& host = hosts.hostOfSensor(plan.sensors_of.at(child.name).front());
+      placement.place(child, host, dds::DiscoveryRole::Leaf);
+    }
+  }
+}
+
+// --hosts: the launcher's Cyclone configuration in the log folder, for the tools that join the
+// run from this machine (sensornet status --cyclone-config <log dir>/cyclone-launcher.xml).
+void writeLauncherConfig(const LaunchPlan& plan, const dds::DomainConfig& domain) {
+  const fs::path path = plan.log_dir / "cyclone-launcher.xml";
+  std::ofstream out(path, std::ios::trunc);
+  out << domain.cyclone_config << "\n";
+  if (!out) spdlog::warn("cannot write {}", path.string());
 }
 
 // The report and the episode log beside it must be able to take the run's results.
@@ -473,17 +497,26 @@ int runLaunch(LaunchOptions options) {
   const Scenario scenario = loadScenarioFile(options.scenario_path);
   if (!options.schedule_path.empty()) (void)loadScheduleFile(options.schedule_path, scenario);
   if (options.run.run_id.empty()) options.run.run_id = generateRunId();
-  const dds::DomainConfig domain = options.run.domainConfig();
+  dds::DomainConfig domain = options.run.domainConfig();
+  std::optional<emulator::HostsFile> hosts;
+  std::optional<HostPlacement> placement;
+  if (!options.hosts_path.empty()) {
+    hosts = emulator::loadHostsFile(options.hosts_path, scenario.sensorCount());
+    placement.emplace(*hosts);
+    domain.cyclone_config = placement->launcherConfigXml();
+  }
   const EmulatorPrograms programs = findEmulatorPrograms();
   if (options.network_aware == "yes" && !scenario.network) {
     throw InputError(options.scenario_path, "network",
                      "a network: section for --network-aware yes (the scenario has none)");
   }
-  const LaunchPlan plan = planLaunch(options, scenario, programs, domain);
+  LaunchPlan plan = planLaunch(options, scenario, programs, domain, hosts ? &*hosts : nullptr);
+  if (placement) placeOnHosts(plan, *hosts, *placement);
   if (!plan.default_report) checkReportPaths(plan);
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
+  if (placement) writeLauncherConfig(plan, domain);
 
   std::fprintf(stderr,
                "run id: %s; change it live with: sensornet replan --run-id %s --surrogate cov "
@@ -608,6 +641,13 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  cmd->add_option("--hosts", options->hosts_path,
+                  "run across several hosts: a YAML file naming each host's address, the "
+                  "command prefix that runs a program there (ip netns exec NS, ssh -tt "
+                  "user@host) and what it runs (coordinator, fusion_center, sensors); the "
+                  "launcher stays here and generates every process's Cyclone configuration "
+                  "(README, \"Many hosts\")")
+      ->excludes("--cyclone-config");
   cmd->get_option("--run-id")
       ->description(
           "the run's id (default: run-<pid>-<4 random hex digits>); its DDS partition is "

@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <chrono>
+#include <deque>
 #include <map>
 #include <optional>
 #include <set>
@@ -92,6 +93,7 @@ class Agent {
         return kExitOk;
       }
       if (episode_) publishDue();
+      if (!episode_ && !pending_.empty()) startNextEpisode();
       const sensornet_SensorState state = currentState();
       if (wallNowNs() >= next_status_ns_ || state != last_state_) publishStatus(state, "");
     }
@@ -106,14 +108,16 @@ class Agent {
     }
   }
 
-  // Until the next arrival, held-back measurement or scripted crash falls due (at most the idle
-  // wait).
+  // Until the next arrival, held-back measurement, scripted crash or the episode's end falls due
+  // (at most the idle wait): the tally goes out as soon as the episode ends.
   std::chrono::nanoseconds untilNextEvent() const {
     if (!episode_) return kIdleWait;
     const Episode& e = *episode_;
     std::int64_t due_ns = wallNowNs() + std::chrono::nanoseconds(kIdleWait).count();
     if (e.next < e.timeline.size()) {
       due_ns = std::min(due_ns, e.clock.wallAt(e.timeline[e.next].time_s));
+    } else {
+      due_ns = std::min(due_ns, e.clock.wallAt(inputs_.scenario().horizon_s));
     }
     if (const auto held = e.held.nextDueWallNs()) due_ns = std::min(due_ns, *held);
     if (e.crash) due_ns = std::min(due_ns, e.clock.wallAt(e.crash->at_s));
@@ -144,8 +148,10 @@ class Agent {
     if (update.new_versions > 0) publishStatus(currentState(), "");
     for (const std::uint32_t episode : update.stops) {
       if (episode_ && episode_->number == episode) finishEpisode("stopped");
+      std::erase_if(pending_, [&](const emulator::EpisodeStart& s) { return s.episode == episode; });
     }
-    for (const emulator::EpisodeStart& start : update.starts) startEpisode(start);
+    // The next episode is announced while this one runs: it starts once this one is finished.
+    for (const emulator::EpisodeStart& start : update.starts) pending_.push_back(start);
     return update.shutdown;
   }
 
@@ -194,9 +200,15 @@ class Agent {
     return first;
   }
 
-  void startEpisode(const emulator::EpisodeStart& start) {
-    if (episode_) finishEpisode("overtaken by the next episode");
-    noteFailedSensors(start.failed_sensors);
+  // The episode announced next: its timeline is drawn now (its clock may not have started yet;
+  // nothing is published before its arrivals fall due). A version that arrives before its
+  // start and takes effect in it redraws the timeline (onNewVersion).
+  void startNextEpisode() {
+    const emulator::EpisodeStart start = pending_.front();
+    pending_.pop_front();
+    std::set<int> failed = start.failed_sensors;  // and those a notice named since
+    failed.insert(inputs_.failedSensors().begin(), inputs_.failedSensors().end());
+    noteFailedSensors(failed);
     Episode e;
     e.number = start.episode;
     e.clock = start.clock;
@@ -315,7 +327,7 @@ class Agent {
     if (*why != '\0') spdlog::info("episode {} ended early: {}", e.number, why);
     stall_watch_.forgetBefore(e.clock.start_wall_ns);
     episode_.reset();
-    publishStatus(sensornet_SENSOR_READY, "");
+    if (pending_.empty()) publishStatus(sensornet_SENSOR_READY, "");  // else running on
   }
 
   // A reliable write that timed out is retried: a measurement is never dropped (by DDS).
@@ -414,6 +426,7 @@ class Agent {
   emulator::StallWatch stall_watch_;
 
   std::optional<Episode> episode_;
+  std::deque<emulator::EpisodeStart> pending_;  // announced, to run after the current one
   std::vector<int> live_sensors_ = options_.sensors;
   const NetworkSpec* network_ = nullptr;  // the scenario's, when it impairs anything
   std::uint64_t sent_total_ = 0;

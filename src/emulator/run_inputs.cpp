@@ -93,7 +93,8 @@ void RunInputs::readControls(Update& update) {
         }
         held_starts_.push_back(
             {{c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned, failed},
-             c.seed});
+             c.seed,
+             c.schedule_version});
         break;
       }
       case sensornet_EPISODE_SENSORS_FAILED: {
@@ -107,10 +108,14 @@ void RunInputs::readControls(Update& update) {
       }
     }
   }
-  // A start waits for the scenario and the schedule in force at the episode's start.
+  // A start waits for the scenario, the schedule in force at the episode's start and the version
+  // it names (versions arrive in order, so every earlier one is in the book too).
   std::erase_if(held_starts_, [&](const HeldStart& held) {
     const EpisodeStart& s = held.start;
-    if (!run_ || book_.inForce(s.episode, 0.0) == nullptr) return false;
+    if (!run_ || book_.inForce(s.episode, 0.0) == nullptr ||
+        book_.latest().version < held.schedule_version) {
+      return false;
+    }
     if (!(s.clock.time_scale > 0.0) || held.seed != run_->seed) {
       reject("malformed_episode_control");
       spdlog::warn("rejected episode control {}: bad time scale or seed", s.episode);

@@ -1,9 +1,11 @@
 #pragma once
 // What the sensor agents and the fusion center follow of a run: the scenario (once), the
 // schedule versions (stale and malformed ones refused, counted and logged) and the episode
-// controls. An episode start that overtook the scenario or its schedule (they travel on other
-// topics) is held back until both are there; a repeated start (durability replays the last
-// ones to a late joiner) is dropped.
+// controls. An episode start that overtook the scenario or its schedule versions (they travel on
+// other topics) is held back until the scenario and the version the start names (the one in
+// force at the episode's start, and so every version before it) are there; a repeated start
+// (durability replays the last ones to a late joiner) is dropped. A start may come well before
+// its start time (the coordinator announces the next episode while the current one runs).
 //
 //   RunInputs inputs(participant);
 //   inputs.attachTo(waitset);                    // wakes the wait on any of the three topics
@@ -121,7 +123,8 @@ class RunInputs {
   ScheduleBook book_;
   struct HeldStart {
     EpisodeStart start;
-    std::uint64_t seed = 0;  // must be the run's
+    std::uint64_t seed = 0;               // must be the run's
+    std::uint32_t schedule_version = 0;   // the book must hold it before the start goes out
   };
   void reject(const char* reason) { ++rejected_[reason]; }
   std::vector<HeldStart> held_starts_;
