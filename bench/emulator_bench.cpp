@@ -31,6 +31,11 @@
 //
 //   emulator_bench [startup|latency|throughput|all] [rounds: latency 3, startup 3]
 //   emulator_bench overload [total rates/s, comma-separated = 30000,45000,60000,90000,...]
+//   emulator_bench memory [episodes = 5000] [checkpoint = 1000]
+//               (issue 15) `sensornet launch` of the default scenario at --time-scale 1000:
+//               VmRSS of the launcher and of each process it started after `checkpoint`
+//               episodes (the episode log's line count), every `checkpoint` after, and when the
+//               last is logged: both, their ratio and the growth in bytes per episode.
 
 #include <unistd.h>
 
@@ -313,6 +318,161 @@ void latency(int rounds) {
               median(per_sensor), median(per_sensor_p99), median(per_sensor_ratio));
   std::printf("  one process for all 6 (~120/s):      median %.1f us, p99 %.1f us, %.2fx\n",
               median(one_agent), median(one_agent_p99), median(one_agent_ratio));
+}
+
+// ---- memory: the resident memory of every process of a long run (issue 15)
+
+// VmRSS of a process in bytes (from /proc/PID/status), or 0 when it is gone.
+std::uint64_t residentBytes(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) return 1024ULL * std::strtoull(line.c_str() + 6, nullptr, 10);
+  }
+  return 0;
+}
+
+// The processes whose parent is `parent`, by pid, with their names (/proc/PID/comm).
+std::map<pid_t, std::string> childrenOf(pid_t parent) {
+  std::map<pid_t, std::string> children;
+  std::error_code error;
+  for (fs::directory_iterator entry("/proc", error); !error && entry != fs::directory_iterator();
+       entry.increment(error)) {
+    const std::string name = entry->path().filename();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry->path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const auto close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(line.substr(close + 2));
+    std::string state;
+    long ppid = 0;
+    fields >> state >> ppid;
+    if (ppid != parent) continue;
+    std::ifstream comm(entry->path() / "comm");
+    std::string command;
+    std::getline(comm, command);
+    children[static_cast<pid_t>(std::atol(name.c_str()))] = command;
+  }
+  return children;
+}
+
+// Lines appended to a growing file, counted as they come (the episode log: one per episode).
+class LineCounter {
+ public:
+  explicit LineCounter(fs::path path) : path_(std::move(path)) {}
+  std::uint64_t count() {
+    std::ifstream in(path_, std::ios::binary);
+    if (!in) return lines_;
+    in.seekg(static_cast<std::streamoff>(offset_));
+    char buffer[65536];
+    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+      const auto got = static_cast<std::size_t>(in.gcount());
+      lines_ += static_cast<std::uint64_t>(std::count(buffer, buffer + got, '\n'));
+      offset_ += got;
+    }
+    return lines_;
+  }
+
+ private:
+  fs::path path_;
+  std::uint64_t offset_ = 0;
+  std::uint64_t lines_ = 0;
+};
+
+// One sample of every process of the run: name (pid) -> VmRSS bytes.
+using MemorySample = std::map<std::string, std::uint64_t>;
+
+MemorySample sampleMemory(pid_t launcher) {
+  MemorySample sample;
+  sample["sensornet (launcher)"] = residentBytes(launcher);
+  for (const auto& [pid, name] : childrenOf(launcher)) {
+    sample[name + " (" + std::to_string(pid) + ")"] = residentBytes(pid);
+  }
+  return sample;
+}
+
+// The least-squares slope of RSS against episodes over the samples from the checkpoint on.
+double slopeBytesPerEpisode(const std::vector<std::pair<std::uint64_t, MemorySample>>& samples,
+                            const std::string& process) {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const auto& [episodes, sample] : samples) {
+    const auto it = sample.find(process);
+    if (it == sample.end() || it->second == 0) continue;
+    const double x = static_cast<double>(episodes), y = static_cast<double>(it->second);
+    n += 1;
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  const double d = n * sxx - sx * sx;
+  return n >= 2 && d > 0 ? (n * sxy - sx * sy) / d : 0.0;
+}
+
+// `sensornet launch` of the default scenario at --time-scale 1000 for `episodes` episodes:
+// VmRSS of the launcher and each of its children after `checkpoint` episodes (the episode log's
+// line count), every `checkpoint` episodes after it, and when the last episode is logged.
+int memory(std::uint64_t episodes, std::uint64_t checkpoint) {
+#ifndef SENSORNET_LAUNCHER
+  std::fprintf(stderr, "emulator_bench memory: built without the launcher\n");
+  return 2;
+#else
+  const std::string run = runId("memory", 0);
+  Processes processes(fs::temp_directory_path() / run);
+  const fs::path report = processes.dir() / "report.json";
+  const auto start = std::chrono::steady_clock::now();
+  BackgroundProcess& launcher = processes.start(
+      "launcher",
+      {SENSORNET_LAUNCHER, "launch", kSourceDir + "/scenarios/default.yaml", "--episodes",
+       std::to_string(episodes), "--time-scale", "1000", "--surrogate", "uniform", "--run-id", run,
+       "--log-dir", processes.dir().string(), "--report", report.string(), "--no-html"});
+  std::printf("memory: %llu episodes of the default scenario at --time-scale 1000 (%s); VmRSS "
+              "of every process after %llu episodes, every %llu after, and at the last\n",
+              static_cast<unsigned long long>(episodes), processes.dir().c_str(),
+              static_cast<unsigned long long>(checkpoint),
+              static_cast<unsigned long long>(checkpoint));
+  std::fflush(stdout);
+  LineCounter logged(sensornet::emulator::episodeLogPath(report));
+  std::vector<std::pair<std::uint64_t, MemorySample>> samples;
+  std::uint64_t next = checkpoint;
+  std::optional<int> code;
+  while (!(code = launcher.waitForExit(50ms))) {
+    const std::uint64_t done = logged.count();
+    if (done < next && done < episodes) continue;
+    samples.emplace_back(done, sampleMemory(launcher.pid()));
+    std::printf("  %llu episodes after %.0f s\n", static_cast<unsigned long long>(done),
+                secondsSince(start));
+    std::fflush(stdout);
+    if (done >= episodes) break;
+    next = (done / checkpoint + 1) * checkpoint;
+  }
+  if (!code) code = launcher.waitForExit(120s);
+  const double wall = secondsSince(start);
+  if (samples.size() < 2) {
+    std::printf("memory: the run ended after %llu episodes, exit %d (see %s)\n",
+                static_cast<unsigned long long>(logged.count()), code.value_or(-1),
+                processes.dir().c_str());
+    return 1;
+  }
+  const auto& [first_episodes, first] = samples.front();
+  const auto& [last_episodes, last] = samples.back();
+  std::printf("memory: launcher exit %d after %.0f s; VmRSS after %llu and %llu episodes:\n",
+              code.value_or(-1), wall, static_cast<unsigned long long>(first_episodes),
+              static_cast<unsigned long long>(last_episodes));
+  for (const auto& [process, bytes] : first) {
+    const auto it = last.find(process);
+    const std::uint64_t end = it != last.end() ? it->second : 0;
+    std::printf("  %-28s %8.2f MB -> %8.2f MB  ratio %.3f  slope %+7.1f bytes/episode (least "
+                "squares over %zu samples)\n",
+                process.c_str(), 1e-6 * static_cast<double>(bytes),
+                1e-6 * static_cast<double>(end),
+                bytes > 0 ? static_cast<double>(end) / static_cast<double>(bytes) : 0.0,
+                slopeBytesPerEpisode(samples, process), samples.size());
+  }
+  std::fflush(stdout);
+  return code == 0 ? 0 : 1;
+#endif
 }
 
 void throughput() {
@@ -620,6 +780,10 @@ void overload(const std::vector<double>& rates) {
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
+  if (what == "memory") {  // emulator_bench memory [episodes = 5000] [checkpoint = 1000]
+    return memory(argc > 2 ? std::max(2ULL, std::strtoull(argv[2], nullptr, 10)) : 5000,
+                  argc > 3 ? std::max(1ULL, std::strtoull(argv[3], nullptr, 10)) : 1000);
+  }
   if (what != "all" && what != "startup" && what != "latency" && what != "throughput" &&
       what != "overload") {
     std::fprintf(stderr,

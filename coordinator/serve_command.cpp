@@ -363,7 +363,7 @@ class Coordinator {
       const sensornet_Report& r = *received.sample;
       fusion_heard_ns_ = std::max(fusion_heard_ns_, wallNowNs());
       if (r.episode >= static_cast<std::uint32_t>(options_.episodes)) continue;
-      if (!reported_.insert(r.episode).second) continue;
+      if (!reported_.insert(r.episode)) continue;
       saveState();
       spdlog::info("[{}/{}] episode {}: realized {:.6g}, bracket [{:.6g}, {:.6g}]; mean {:.6g} "
                    "in [{:.6g}, {:.6g}] (95%)",
@@ -643,7 +643,7 @@ class Coordinator {
   dds::ReadCondition report_ready_;
 
   std::set<int> ready_sensors_;
-  std::set<std::uint32_t> reported_;
+  emulator::EpisodeSet reported_;  // as ranges: small over millions of episodes
   std::optional<emulator::AnnouncedEpisode> announced_;
   std::map<std::uint64_t, emulator::AnsweredCommand> answered_;
   std::int64_t fusion_heard_ns_ = 0;  // the fusion center's latest state or report

@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <ctime>
+#include <deque>
+#include <iostream>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -63,6 +65,8 @@ constexpr double kResumeMatchWaitS = 5.0;
 
 // The report's covariance_traces: the first few episodes, each curve on this many grid times.
 constexpr std::size_t kTracedEpisodes = 3;
+// The Report instances (one per episode) kept registered for late joiners: the latest ones.
+constexpr std::size_t kReportsKept = 64;
 constexpr int kTracePoints = 200;
 
 // Now, as an ISO 8601 UTC time ("2026-11-30T18:20:00Z"): when the report was written.
@@ -196,7 +200,12 @@ class FusionCenter {
     const emulator::RunInputs::Update update = inputs_.poll();
     if (update.scenario_arrived) {
       const Scenario& s = inputs_.scenario();
-      report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim());
+      if (episode_log_) {  // the entries are read back from the log for the report
+        report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim(),
+                        emulator::episodeLogPath(options_.report_path));
+      } else {
+        report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim());
+      }
       if (resumed_) {
         for (const json& entry : resumed_->entries()) report_->add(entry);
       }
@@ -759,6 +768,21 @@ class FusionCenter {
     if (report_writer_.write(r) == dds::WriteResult::TimedOut) {
       spdlog::warn("the report of episode {} timed out on the wire (kept in the file)", e.episode);
     }
+    forgetOldReports(e.episode);
+  }
+
+  // The Report topic keeps the last report of each episode for late joiners: an instance per
+  // episode, held by this writer and by every reader until it is unregistered. Only the latest
+  // kReportsKept stay registered (a restarted coordinator needs the last one), so that memory
+  // does not grow with the number of episodes.
+  void forgetOldReports(std::uint32_t episode) {
+    reports_registered_.push_back(episode);
+    if (reports_registered_.size() <= kReportsKept) return;
+    sensornet_Report key{};
+    key.run_id = dds::borrowString(options_.run.run_id);
+    key.episode = reports_registered_.front();
+    reports_registered_.pop_front();
+    (void)report_writer_.unregisterInstance(key);  // a timeout only keeps the old report longer
   }
 
   // DESIGN.md's run outcome, as far as the fusion center saw it (the launcher adds what it saw
@@ -841,13 +865,20 @@ class FusionCenter {
                         {"written_at", utcNow()},
                         {"covariance_traces", covarianceTraces()},
                         {"arrivals", arrivalsJson(inputs_.scenario().arrivals)}};
-    const json doc =
-        report_->toJson(status, faults_, emulator::scheduleVersionsJson(inputs_.book()), extra);
+    // per_episode is streamed in from the episode log, never held whole.
+    const json doc = report_->toJsonWithoutEpisodes(
+        status, faults_, emulator::scheduleVersionsJson(inputs_.book()), extra);
     if (!options_.report_path.empty()) {
-      writeJsonFile(options_.report_path, doc, "run report");
+      writeJsonFile(options_.report_path, "run report", [&](std::ostream& out) {
+        report_->write(out, doc, 2);
+        out << '\n';
+      });
       spdlog::info("report written to {}", options_.report_path);
     }
-    if (options_.json) printJson(doc);
+    if (options_.json) {
+      report_->write(std::cout, doc, -1);
+      std::cout << std::endl;
+    }
   }
 
   ServeOptions options_;
@@ -898,6 +929,7 @@ class FusionCenter {
   json stalls_ = json::array();  // stalls absorbed (own and the sensors'), for the report
   emulator::StallWatch stall_watch_;
   std::uint32_t episodes_planned_ = 0;
+  std::deque<std::uint32_t> reports_registered_;  // episodes whose Report instance is registered
   std::uint64_t waiting_ = 0;  // measurements taken off the inbox in this loop turn
   std::int64_t next_state_ns_ = 0;
 };

@@ -6,8 +6,12 @@
 
 #include <cerrno>
 #include <cstring>
+#include <functional>
+#include <ostream>
+#include <streambuf>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "sensornet/core/input_error.hpp"
 
@@ -72,6 +76,32 @@ bool writeAll(int fd, const std::string& text) {
   return true;
 }
 
+// An output stream buffer over a file descriptor: what is written goes to the file in 64 KiB
+// writes; failed() says whether any write failed.
+class DescriptorBuffer : public std::streambuf {
+ public:
+  explicit DescriptorBuffer(int fd) : fd_(fd), buffer_(1 << 16) {
+    setp(buffer_.data(), buffer_.data() + buffer_.size());
+  }
+  [[nodiscard]] bool failed() const { return failed_; }
+  int sync() override {
+    const auto size = static_cast<std::size_t>(pptr() - pbase());
+    if (size > 0 && !writeAll(fd_, std::string(pbase(), size))) failed_ = true;
+    setp(buffer_.data(), buffer_.data() + buffer_.size());
+    return failed_ ? -1 : 0;
+  }
+  int_type overflow(int_type c) override {
+    if (sync() != 0) return traits_type::eof();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) sputc(traits_type::to_char_type(c));
+    return traits_type::not_eof(c);
+  }
+
+ private:
+  int fd_;
+  std::vector<char> buffer_;
+  bool failed_ = false;
+};
+
 }  // namespace
 
 std::optional<std::string> outputFileProblem(const fs::path& path) {
@@ -108,6 +138,10 @@ void checkOutputFile(const fs::path& path, const std::string& option) {
 }
 
 void replaceFileAtomically(const fs::path& path, const std::string& text) {
+  replaceFileAtomically(path, [&text](std::ostream& out) { out << text; });
+}
+
+void replaceFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
   const std::optional<mode_t> existing = typeAt(path);
   if (existing && !S_ISREG(*existing)) {
     throw std::runtime_error("will not replace " + path.string() + ": it is " + kindOf(*existing) +
@@ -120,8 +154,15 @@ void replaceFileAtomically(const fs::path& path, const std::string& text) {
   }
   Descriptor file(fd);
   const mode_t mode = existing ? (*existing & 07777) : 0644;
-  const bool written = ::fchmod(file.get(), mode) == 0 && writeAll(file.get(), text) &&
-                       ::fsync(file.get()) == 0 && file.close() == 0;
+  bool streamed = ::fchmod(file.get(), mode) == 0;
+  if (streamed) {
+    DescriptorBuffer buffer(file.get());
+    std::ostream out(&buffer);
+    write(out);
+    out.flush();
+    streamed = !buffer.failed() && static_cast<bool>(out);
+  }
+  const bool written = streamed && ::fsync(file.get()) == 0 && file.close() == 0;
   if (!written || ::rename(name.c_str(), path.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     ::unlink(name.c_str());

@@ -10,6 +10,8 @@
 //   replaceFileAtomically("/tmp/r/report.json", doc.dump(2) + "\n");
 
 #include <filesystem>
+#include <functional>
+#include <ostream>
 #include <optional>
 #include <string>
 
@@ -26,6 +28,9 @@ void checkOutputFile(const std::filesystem::path& path, const std::string& optio
 // `path`. Throws std::runtime_error (naming the path) when `path` exists and is not a regular
 // file, or when writing fails; the old file is then left as it was.
 void replaceFileAtomically(const std::filesystem::path& path, const std::string& text);
+// The same with the text written by `write` (a report too large to hold: streamed).
+void replaceFileAtomically(const std::filesystem::path& path,
+                           const std::function<void(std::ostream&)>& write);
 
 // Removes `path` if it is a regular file (a stale result); leaves anything else alone.
 void removeRegularFile(const std::filesystem::path& path);

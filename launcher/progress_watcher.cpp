@@ -96,7 +96,7 @@ void ProgressWatcher::poll(std::chrono::milliseconds wait) {
   const dds::Batch<sensornet_Report> batch = reader_.take();
   for (const auto& received : batch.samples) {
     const sensornet_Report& report = *received.sample;
-    if (!printed_.insert(report.episode).second) continue;
+    if (!printed_.insert(report.episode)) continue;
     std::fprintf(stderr, "%s\n", formatProgress(report, episodes_planned_).c_str());
   }
 }

@@ -26,6 +26,7 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
+#include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 
 namespace sensornet::launcher {
@@ -85,8 +86,8 @@ class ProgressWatcher {
   std::size_t ready_said_ = 0;     // the count last printed
   std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point ready_said_at_{};
-  std::set<std::uint32_t> printed_;
   std::optional<std::uint32_t> episode_;  // the latest episode started
+  emulator::EpisodeSet printed_;  // as ranges: small over millions of episodes
   emulator::EpisodeClock clock_;          // its clock
   bool shut_down_ = false;
 };

@@ -22,15 +22,17 @@ bool isKnownStatus(const std::string& status) {
 }
 
 // The fusion center's report of this run, or nullopt with what is wrong ("wrote no report at
-// ...", completing "fusion_center ...").
-std::optional<json> readReport(const fs::path& path, const std::string& run_id,
+// ...", completing "fusion_center ..."). With an episode log (`logged`) the report is read
+// without its per_episode entries, which a rewrite streams back in from the log: a report of
+// millions of episodes is never held.
+std::optional<json> readReport(const fs::path& path, const std::string& run_id, bool logged,
                                std::string& problem) {
   std::ifstream in(path);
   if (!in) {
     problem = "wrote no report at " + path.string();
     return std::nullopt;
   }
-  json report = json::parse(in, nullptr, false);
+  json report = logged ? emulator::parseReportWithoutEpisodes(in) : json::parse(in, nullptr, false);
   if (!report.is_object() || !report.contains("summary") || !report["summary"].is_object()) {
     problem = "wrote " + path.string() + ", which is not a sensornet report";
     return std::nullopt;
@@ -42,14 +44,19 @@ std::optional<json> readReport(const fs::path& path, const std::string& run_id,
   return report;
 }
 
-// The report rebuilt from the episode log beside `report_path` (no log: no episode).
-json rebuildReport(const RunEnd& end) {
+// The report rebuilt from the episode log beside `report_path` (no log: no episode); with a log,
+// without per_episode (a rewrite streams it in from the log).
+json rebuildReport(const RunEnd& end, bool logged) {
   const fs::path log = emulator::episodeLogPath(end.report_path);
-  std::vector<json> entries;
-  std::error_code error;
-  if (fs::exists(log, error)) entries = emulator::readEpisodeLog(log);
-  json report =
-      emulator::reportFromEpisodes(end.run_id, end.sensor_count, entries, "failed", json::array());
+  json report;
+  if (logged) {
+    emulator::RunReport rebuilt(end.run_id, "", end.sensor_count, 0, log);
+    emulator::forEachReportedEpisode(log, [&rebuilt](const json& entry) { rebuilt.add(entry); });
+    report = rebuilt.toJsonWithoutEpisodes("failed", json::array(), json::array());
+  } else {
+    report = emulator::reportFromEpisodes(end.run_id, end.sensor_count, {}, "failed",
+                                          json::array());
+  }
   report["rebuilt_from"] = log.string();
   if (!report.contains("episodes_planned")) report["episodes_planned"] = end.episodes_planned;
   return report;
@@ -166,14 +173,17 @@ RunOutcome settleRun(const RunEnd& end) {
   RunOutcome outcome;
   std::vector<Fault> faults = end.faults;
   std::string problem;
-  std::optional<json> report = readReport(end.report_path, end.run_id, problem);
+  const fs::path log = emulator::episodeLogPath(end.report_path);
+  std::error_code missing;
+  const bool logged = fs::is_regular_file(log, missing);
+  std::optional<json> report = readReport(end.report_path, end.run_id, logged, problem);
   if (!report) {
     const bool fusion_center_named = std::any_of(
         faults.begin(), faults.end(), [](const Fault& f) { return f.process == kFusionCenter; });
     if (!fusion_center_named) {
       faults.push_back({"report_missing", kFusionCenter, {}, {}, problem});
     }
-    report = rebuildReport(end);
+    report = rebuildReport(end, logged);
     outcome.rebuilt = true;
   }
   const std::string reported = report->value("status", std::string());
@@ -222,7 +232,14 @@ RunOutcome settleRun(const RunEnd& end) {
   }
   if (outcome.amended) {
     try {
-      replaceFileAtomically(end.report_path, report->dump(2) + "\n");
+      if (logged) {
+        replaceFileAtomically(end.report_path, [&](std::ostream& out) {
+          emulator::writeReportWithLog(out, *report, log, 2);
+          out << '\n';
+        });
+      } else {
+        replaceFileAtomically(end.report_path, report->dump(2) + "\n");
+      }
     } catch (const std::exception& e) {
       outcome.write_problem = e.what();
     }

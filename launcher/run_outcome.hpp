@@ -71,7 +71,8 @@ struct RunEnd {
 };
 
 struct RunOutcome {
-  nlohmann::json report;  // as written (or as it should have been, see write_problem)
+  nlohmann::json report;  // as written (or should have been, see write_problem); without
+                          // per_episode when the episode log beside it holds the entries
   std::string status;     // completed, degraded, failed, interrupted
   int exit_code = 1;
   bool amended = false;  // the launcher rewrote the report

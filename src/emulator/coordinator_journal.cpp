@@ -51,14 +51,9 @@ json settingsJson(const ReplanSettings& s) {
 }
 
 // Consecutive episodes as [first, last] ranges.
-json episodeRanges(const std::set<std::uint32_t>& episodes) {
+json episodeRanges(const EpisodeSet& episodes) {
   json ranges = json::array();
-  for (auto it = episodes.begin(); it != episodes.end();) {
-    const std::uint32_t first = *it;
-    std::uint32_t last = first;
-    while (++it != episodes.end() && *it == last + 1) last = *it;
-    ranges.push_back({first, last});
-  }
+  for (const auto& [first, last] : episodes.ranges()) ranges.push_back({first, last});
   return ranges;
 }
 
@@ -220,9 +215,8 @@ std::vector<ScheduleVersion> versionsFrom(const Fields& f, const json& root,
   return versions;
 }
 
-std::set<std::uint32_t> episodesFrom(const Fields& f, const json& root,
-                                     std::uint32_t episodes_planned) {
-  std::set<std::uint32_t> episodes;
+EpisodeSet episodesFrom(const Fields& f, const json& root, std::uint32_t episodes_planned) {
+  EpisodeSet episodes;
   const json& ranges = f.array(root, "", "episodes_reported");
   for (std::size_t i = 0; i < ranges.size(); ++i) {
     const std::string field = "episodes_reported[" + std::to_string(i) + "]";
@@ -232,10 +226,7 @@ std::set<std::uint32_t> episodesFrom(const Fields& f, const json& root,
     if (last < first || last >= episodes_planned) {
       f.fail(field, "first <= last < episodes_planned = " + std::to_string(episodes_planned));
     }
-    for (std::uint32_t e = first;; ++e) {
-      episodes.insert(e);
-      if (e == last) break;
-    }
+    episodes.insertRange(first, last);
   }
   return episodes;
 }

@@ -36,6 +36,8 @@ json optionalJson(const std::optional<bool>& value) {
 }
 
 // A number, or null when it is not finite (an episode that could not be fused).
+constexpr const char* kPerEpisode = "per_episode";
+
 json numberOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 json bracketJson(const CostBracket& b) {
@@ -114,89 +116,199 @@ RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor
     : run_id_(std::move(run_id)),
       digest_(std::move(scenario_digest)),
       sensor_count_(sensor_count),
-      state_dim_(state_dim) {}
+      state_dim_(state_dim),
+      sensor_totals_(static_cast<std::size_t>(std::max(sensor_count, 0))) {}
 
-void RunReport::add(json entry) { episodes_.push_back(std::move(entry)); }
-
-void RunReport::addLatencies(const std::vector<double>& latencies_s) {
-  latencies_s_.insert(latencies_s_.end(), latencies_s.begin(), latencies_s.end());
+RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor_count,
+                     int state_dim, std::filesystem::path episode_log)
+    : RunReport(std::move(run_id), std::move(scenario_digest), sensor_count, state_dim) {
+  episode_log_ = std::move(episode_log);
 }
+
+void RunReport::add(const json& e) {
+  if (!episode_log_) episodes_.push_back(e);
+  ++episode_count_;
+  const json none = json::array();
+  // An entry's per-sensor values onto the totals (an entry may list fewer or more sensors).
+  const auto addPerSensor = [](std::vector<SensorTotals>& totals, const json& values,
+                               auto member) {
+    if (!values.is_array()) return;
+    for (std::size_t j = 0; j < values.size() && j < totals.size(); ++j) {
+      auto& total = totals[j].*member;
+      total += values[j].get<std::remove_reference_t<decltype(total)>>();
+    }
+  };
+  addPerSensor(sensor_totals_, e.at("sent"), &SensorTotals::sent);
+  addPerSensor(sensor_totals_, e.at("received"), &SensorTotals::received);
+  addPerSensor(sensor_totals_, e.at("lost"), &SensorTotals::lost);
+  addPerSensor(sensor_totals_, e.value("dropped_by_network", none),
+               &SensorTotals::dropped_by_network);
+  addPerSensor(sensor_totals_, e.value("late", none), &SensorTotals::late);
+  addPerSensor(sensor_totals_, e.value("wrong_version", none), &SensorTotals::wrong_version);
+  addPerSensor(sensor_totals_, e.value("expected", none), &SensorTotals::expected);
+  summed_.sent += sumOf(e.at("sent"));
+  summed_.received += sumOf(e.at("received"));
+  summed_.lost += sumOf(e.at("lost"));
+  summed_.dropped_by_network += sumOf(e.value("dropped_by_network", none));
+  summed_.late += sumOf(e.value("late", none));
+  for (const json& x : e.value("expected", none)) summed_.expected += x.get<double>();
+  if (const auto rejected = e.find("rejected"); rejected != e.end() && rejected->is_object()) {
+    for (const auto& [reason, count] : rejected->items()) {
+      rejected_in_episodes_[reason] += count.get<std::uint64_t>();
+    }
+  }
+  episode_medians_.add(e.value("latency_median_s", 0.0));
+  if (!e.at("complete").get<bool>()) return;
+  const double cost = e.at("realized_cost").get<double>();
+  ++complete_count_;
+  const double delta = cost - cost_mean_;  // Welford's update
+  cost_mean_ += delta / static_cast<double>(complete_count_);
+  cost_squares_ += delta * (cost - cost_mean_);
+  realtime_sum_ += e.value("realtime_cost", cost);
+  addBracket(bracket_sum_, e.at("bracket"));
+  addBracket(delivered_bracket_sum_, e.value("delivered_bracket", e.at("bracket")));
+  nees_sum_ += e.value("nees", 0.0);
+}
+
+void RunReport::addLatencies(const std::vector<double>& latencies_s) { latencies_.add(latencies_s); }
 
 void RunReport::countRejected(const std::string& reason, std::uint64_t count) {
   if (count > 0) rejected_outside_[reason] += count;
 }
 
 RunSummary RunReport::summary() const {
-  RunSummary s;
-  s.episodes = static_cast<std::uint32_t>(episodes_.size());
+  RunSummary s = summed_;
+  s.episodes = episode_count_;
+  s.episodes_complete = complete_count_;
   s.rejected = rejected_outside_;
-  std::vector<double> costs;
-  std::vector<double> episode_medians;
-  for (const json& e : episodes_) {
-    s.sent += sumOf(e.at("sent"));
-    s.received += sumOf(e.at("received"));
-    s.lost += sumOf(e.at("lost"));
-    s.dropped_by_network += sumOf(e.value("dropped_by_network", json::array()));
-    s.late += sumOf(e.value("late", json::array()));
-    for (const json& x : e.value("expected", json::array())) s.expected += x.get<double>();
-    if (const auto rejected = e.find("rejected"); rejected != e.end() && rejected->is_object()) {
-      for (const auto& [reason, count] : rejected->items()) {
-        s.rejected[reason] += count.get<std::uint64_t>();
-      }
-    }
-    episode_medians.push_back(e.value("latency_median_s", 0.0));
-    if (!e.at("complete").get<bool>()) continue;
-    costs.push_back(e.at("realized_cost").get<double>());
-    s.realtime_mean += e.value("realtime_cost", costs.back());
-    addBracket(s.bracket_mean, e.at("bracket"));
-    addBracket(s.delivered_bracket_mean, e.value("delivered_bracket", e.at("bracket")));
-    s.nees_mean += e.value("nees", 0.0);
-  }
-  s.episodes_complete = static_cast<std::uint32_t>(costs.size());
-  if (!costs.empty()) {
-    const double k = static_cast<double>(costs.size());
-    for (const double c : costs) s.mean += c / k;
-    s.realtime_mean /= k;
-    s.bracket_mean.info /= k;
-    s.bracket_mean.cov /= k;
-    s.delivered_bracket_mean.info /= k;
-    s.delivered_bracket_mean.cov /= k;
-    s.nees_mean /= k;
+  for (const auto& [reason, count] : rejected_in_episodes_) s.rejected[reason] += count;
+  if (complete_count_ > 0) {
+    const double k = static_cast<double>(complete_count_);
+    s.mean = cost_mean_;
+    s.realtime_mean = realtime_sum_ / k;
+    s.bracket_mean = {bracket_sum_.info / k, bracket_sum_.cov / k};
+    s.delivered_bracket_mean = {delivered_bracket_sum_.info / k, delivered_bracket_sum_.cov / k};
+    s.nees_mean = nees_sum_ / k;
     s.ci95_low = s.ci95_high = s.mean;
   }
-  if (costs.size() >= 2) {
-    const double k = static_cast<double>(costs.size());
-    double squares = 0.0;
-    for (const double c : costs) squares += (c - s.mean) * (c - s.mean);
-    s.std_dev = std::sqrt(squares / (k - 1.0));
+  if (complete_count_ >= 2) {
+    const double k = static_cast<double>(complete_count_);
+    s.std_dev = std::sqrt(cost_squares_ / (k - 1.0));
     s.ci95 = studentTQuantile(0.975, k - 1.0) * s.std_dev / std::sqrt(k);
     s.ci95_low = std::max(0.0, s.mean - *s.ci95);
     s.ci95_high = s.mean + *s.ci95;
     s.meets_bracket = meets(s, s.bracket_mean);
     s.meets_delivered_bracket = meets(s, s.delivered_bracket_mean);
   }
-  if (!latencies_s_.empty()) {
-    s.latency_median_s = quantile(latencies_s_, 0.5);
-    s.latency_p99_s = quantile(latencies_s_, 0.99);
-  } else {
-    s.latency_median_s = quantile(episode_medians, 0.5);
-    s.latency_p99_s = quantile(episode_medians, 0.99);
-  }
+  const LatencyHistogram& latencies = latencies_.count() > 0 ? latencies_ : episode_medians_;
+  s.latency_median_s = latencies.quantile(0.5);
+  s.latency_p99_s = latencies.quantile(0.99);
   return s;
+}
+
+namespace {
+
+// The decades of the report's coarse histogram: from the one below the smallest latency to the
+// one above the largest.
+std::pair<double, double> histogramDecades(double smallest, double largest) {
+  const double floor_s = kLatencyHistogramFloorS;
+  const double low = std::floor(std::log10(std::max(smallest, floor_s)));
+  const double high =
+      std::max(low + 1.0, std::ceil(std::log10(std::max(largest, floor_s)) + 1e-12));
+  return {low, high};
+}
+
+json histogramEdges(double low, int bins) {
+  json edges = json::array();
+  for (int i = 0; i <= bins; ++i) {
+    edges.push_back(std::pow(10.0, low + static_cast<double>(i) / kLatencyBinsPerDecade));
+  }
+  return edges;
+}
+
+constexpr double kFineBinsPerDecade = LatencyHistogram::kFineBinsPerDecade;
+const double kFloorDecade = std::log10(kLatencyHistogramFloorS);
+const auto kFineBins = static_cast<std::size_t>(
+    std::lround((std::log10(kLatencyHistogramCeilingS) - kFloorDecade) * kFineBinsPerDecade));
+
+}  // namespace
+
+std::size_t LatencyHistogram::binOf(double latency_s) {
+  const double position =
+      (std::log10(std::max(latency_s, kLatencyHistogramFloorS)) - kFloorDecade) *
+      kFineBinsPerDecade;
+  return static_cast<std::size_t>(
+      std::clamp(std::floor(position), 0.0, static_cast<double>(kFineBins - 1)));
+}
+
+void LatencyHistogram::add(double latency_s) {
+  if (counts_.empty()) {
+    counts_.assign(kFineBins, 0);
+    smallest_ = largest_ = latency_s;
+    lowest_bin_ = highest_bin_ = binOf(latency_s);
+  }
+  const std::size_t bin = binOf(latency_s);
+  ++counts_[bin];
+  ++count_;
+  smallest_ = std::min(smallest_, latency_s);
+  largest_ = std::max(largest_, latency_s);
+  lowest_bin_ = std::min(lowest_bin_, bin);
+  highest_bin_ = std::max(highest_bin_, bin);
+}
+
+void LatencyHistogram::add(const std::vector<double>& latencies_s) {
+  for (const double latency : latencies_s) add(latency);
+}
+
+double LatencyHistogram::orderStatistic(std::uint64_t index) const {
+  if (index == 0) return smallest_;
+  if (index + 1 >= count_) return largest_;
+  std::uint64_t below = 0;
+  std::size_t bin = lowest_bin_;
+  for (; bin < highest_bin_; ++bin) {
+    below += counts_[bin];
+    if (below > index) break;
+  }
+  const double middle =
+      std::pow(10.0, kFloorDecade + (static_cast<double>(bin) + 0.5) / kFineBinsPerDecade);
+  return std::clamp(middle, smallest_, largest_);
+}
+
+double LatencyHistogram::quantile(double q) const {
+  if (count_ == 0) return 0.0;
+  const double position = q * static_cast<double>(count_ - 1);
+  const auto below = static_cast<std::uint64_t>(std::floor(position));
+  const std::uint64_t above = std::min(below + 1, count_ - 1);
+  const double fraction = position - static_cast<double>(below);
+  const double low = orderStatistic(below);
+  return fraction == 0.0 ? low : low + fraction * (orderStatistic(above) - low);
+}
+
+json LatencyHistogram::toJson() const {
+  if (count_ == 0) return nullptr;
+  const auto [low, high] = histogramDecades(smallest_, largest_);
+  const int bins = static_cast<int>(std::lround((high - low) * kLatencyBinsPerDecade));
+  std::vector<std::uint64_t> counts(static_cast<std::size_t>(bins), 0);
+  // Fine bins nest in coarse ones: kFineBinsPerDecade / kLatencyBinsPerDecade fine a coarse.
+  const auto per_coarse = static_cast<std::size_t>(kFineBinsPerDecade / kLatencyBinsPerDecade);
+  const auto offset = static_cast<std::ptrdiff_t>(
+      std::lround((kFloorDecade - low) * kLatencyBinsPerDecade));
+  for (std::size_t bin = lowest_bin_; bin <= highest_bin_; ++bin) {
+    if (counts_[bin] == 0) continue;
+    const std::ptrdiff_t coarse = static_cast<std::ptrdiff_t>(bin / per_coarse) + offset;
+    counts[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(coarse, 0, bins - 1))] +=
+        counts_[bin];
+  }
+  return {{"edges_s", histogramEdges(low, bins)}, {"counts", counts}};
 }
 
 json latencyHistogram(const std::vector<double>& latencies_s) {
   if (latencies_s.empty()) return nullptr;
   const auto [smallest, largest] = std::minmax_element(latencies_s.begin(), latencies_s.end());
   const double floor_s = kLatencyHistogramFloorS;
-  const double low = std::floor(std::log10(std::max(*smallest, floor_s)));
-  const double high = std::max(low + 1.0, std::ceil(std::log10(std::max(*largest, floor_s)) +
-                                                    1e-12));
+  const auto [low, high] = histogramDecades(*smallest, *largest);
   const int bins = static_cast<int>(std::lround((high - low) * kLatencyBinsPerDecade));
-  json edges = json::array();
-  for (int i = 0; i <= bins; ++i) {
-    edges.push_back(std::pow(10.0, low + static_cast<double>(i) / kLatencyBinsPerDecade));
-  }
+  const json edges = histogramEdges(low, bins);
   std::vector<std::uint64_t> counts(static_cast<std::size_t>(bins), 0);
   for (const double latency : latencies_s) {
     const double position =
@@ -229,37 +341,20 @@ json scheduleVersionsJson(const ScheduleBook& book) {
   return versions;
 }
 
-json RunReport::toJson(const std::string& status, const json& faults,
-                       const json& schedule_versions, const json& extra) const {
+json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& faults,
+                                      const json& schedule_versions, const json& extra) const {
   const RunSummary s = summary();
-  const auto sensors = static_cast<std::size_t>(sensor_count_);
-  std::vector<std::uint64_t> sent(sensors), received(sensors), lost(sensors), dropped(sensors),
-      late(sensors), wrong(sensors);
-  std::vector<double> expected(sensors);
-  const auto add = [](auto& totals, const json& values) {
-    for (std::size_t j = 0; j < values.size() && j < totals.size(); ++j) {
-      totals[j] += values[j].get<typename std::decay_t<decltype(totals)>::value_type>();
-    }
-  };
-  for (const json& e : episodes_) {
-    add(sent, e.at("sent"));
-    add(received, e.at("received"));
-    add(lost, e.at("lost"));
-    add(dropped, e.value("dropped_by_network", json::array()));
-    add(late, e.value("late", json::array()));
-    add(wrong, e.value("wrong_version", json::array()));
-    add(expected, e.value("expected", json::array()));
-  }
   json per_sensor = json::array();
-  for (std::size_t j = 0; j < sensors; ++j) {
+  for (std::size_t j = 0; j < sensor_totals_.size(); ++j) {
+    const SensorTotals& t = sensor_totals_[j];
     per_sensor.push_back({{"sensor_id", j},
-                          {"sent", sent[j]},
-                          {"received", received[j]},
-                          {"lost", lost[j]},
-                          {"dropped_by_network", dropped[j]},
-                          {"late", late[j]},
-                          {"expected", expected[j]},
-                          {"wrong_version", wrong[j]}});
+                          {"sent", t.sent},
+                          {"received", t.received},
+                          {"lost", t.lost},
+                          {"dropped_by_network", t.dropped_by_network},
+                          {"late", t.late},
+                          {"expected", t.expected},
+                          {"wrong_version", t.wrong_version}});
   }
   json report = {
       {"run_id", run_id_},
@@ -268,7 +363,6 @@ json RunReport::toJson(const std::string& status, const json& faults,
       {"scenario", {{"digest", digest_}, {"sensors", sensor_count_}, {"states", state_dim_}}},
       {"episodes", s.episodes},
       {"schedule_versions", schedule_versions},
-      {"per_episode", episodes_},
       {"summary",
        {{"episodes", s.episodes},
         {"episodes_complete", s.episodes_complete},
@@ -296,8 +390,134 @@ json RunReport::toJson(const std::string& status, const json& faults,
       {"latency_s",
        {{"median", s.latency_median_s},
         {"p99", s.latency_p99_s},
-        {"histogram", latencyHistogram(latencies_s_)}}}};
+        {"quantile_relative_error", kLatencyQuantileRelativeError},
+        {"histogram", latencies_.toJson()}}}};
   for (const auto& [key, value] : extra.items()) report[key] = value;
+  report.erase(kPerEpisode);
+  return report;
+}
+
+json RunReport::toJson(const std::string& status, const json& faults,
+                       const json& schedule_versions, const json& extra) const {
+  json report = toJsonWithoutEpisodes(status, faults, schedule_versions, extra);
+  json& per_episode = report[kPerEpisode] = json::array();
+  forEachEpisode([&per_episode](const json& entry) { per_episode.push_back(entry); });
+  return report;
+}
+
+void forEachReportedEpisode(const std::filesystem::path& episode_log,
+                            const std::function<void(const json&)>& each) {
+  std::vector<bool> seen;  // by episode number: the first of repeated entries counts
+  (void)forEachLoggedEpisode(episode_log, [&](json entry) {
+    const json& number = entry.at("episode");
+    if (!number.is_number_unsigned()) return;
+    const auto episode = number.get<std::size_t>();
+    if (episode >= seen.size()) seen.resize(std::max(episode + 1, 2 * seen.size()), false);
+    if (seen[episode]) return;
+    seen[episode] = true;
+    each(entry);
+  });
+}
+
+void RunReport::forEachEpisode(const std::function<void(const json&)>& each) const {
+  if (!episode_log_) {
+    for (const json& entry : episodes_) each(entry);
+    return;
+  }
+  forEachReportedEpisode(*episode_log_, each);
+}
+
+namespace {
+
+// `doc` with per_episode (the entries `for_each` hands out) in its place, as doc.dump(indent).
+void writeWithEpisodes(
+    std::ostream& out, const json& doc,
+    const std::function<void(const std::function<void(const json&)>&)>& for_each, int indent) {
+  const bool pretty = indent >= 0;
+  const std::string pad = pretty ? std::string(static_cast<std::size_t>(indent), ' ') : "";
+  const char* separator = pretty ? ",\n" : ",";
+  // A member's value as doc.dump(indent) prints it `depth` levels down.
+  const auto nested = [&](const json& value, int depth) {
+    std::string text = value.dump(indent);
+    if (!pretty) return text;
+    const std::string shift(static_cast<std::size_t>(depth * indent), ' ');
+    for (std::size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at + 1)) {
+      text.insert(at + 1, shift);
+    }
+    return text;
+  };
+  const auto member = [&](const std::string& key) {
+    out << pad << json(key).dump() << (pretty ? ": " : ":");
+  };
+  const auto perEpisode = [&] {
+    member(kPerEpisode);
+    out << '[';
+    bool first = true;
+    for_each([&](const json& entry) {
+      out << (first ? (pretty ? "\n" : "") : separator) << pad << pad << nested(entry, 2);
+      first = false;
+    });
+    if (!first && pretty) out << '\n' << pad;
+    out << ']';
+  };
+  out << '{' << (pretty ? "\n" : "");
+  bool episodes_written = false;
+  bool first = true;
+  for (const auto& [key, value] : doc.items()) {
+    if (key == kPerEpisode) continue;
+    if (!first) out << separator;
+    first = false;
+    if (!episodes_written && key > kPerEpisode) {  // the members are in key order
+      perEpisode();
+      out << separator;
+      episodes_written = true;
+    }
+    member(key);
+    out << nested(value, 1);
+  }
+  if (!episodes_written) {
+    if (!first) out << separator;
+    perEpisode();
+  }
+  out << (pretty ? "\n" : "") << '}';
+}
+
+}  // namespace
+
+void RunReport::write(std::ostream& out, const json& doc, int indent) const {
+  writeWithEpisodes(
+      out, doc, [this](const std::function<void(const json&)>& each) { forEachEpisode(each); },
+      indent);
+}
+
+void writeReportWithLog(std::ostream& out, const json& doc,
+                        const std::filesystem::path& episode_log, int indent) {
+  writeWithEpisodes(
+      out, doc,
+      [&episode_log](const std::function<void(const json&)>& each) {
+        forEachReportedEpisode(episode_log, each);
+      },
+      indent);
+}
+
+json parseReportWithoutEpisodes(std::istream& in, std::size_t* listed) {
+  std::size_t count = 0;
+  bool in_episodes = false;
+  const json::parser_callback_t skip = [&](int depth, json::parse_event_t event, json& parsed) {
+    if (depth == 1 && event == json::parse_event_t::key) {
+      in_episodes = parsed == kPerEpisode;
+    } else if (in_episodes && depth == 2 &&
+               (event == json::parse_event_t::object_end ||
+                event == json::parse_event_t::array_end ||
+                event == json::parse_event_t::value)) {
+      ++count;  // an entry of per_episode, dropped once parsed
+      return false;
+    }
+    return true;
+  };
+  json report = json::parse(in, skip, false);
+  if (report.is_object()) report.erase(kPerEpisode);
+  if (listed != nullptr) *listed = count;
   return report;
 }
 
@@ -348,14 +568,24 @@ void EpisodeLog::append(const json& entry) {
   if (!out_) throw std::runtime_error("cannot append to the episode log " + path_.string());
 }
 
-std::vector<json> readEpisodeLog(const std::filesystem::path& path) {
-  std::vector<json> entries;
+std::size_t forEachLoggedEpisode(const std::filesystem::path& path,
+                                 const std::function<void(json)>& each) {
+  std::size_t count = 0;
   std::ifstream in(path);
   std::string line;
   while (std::getline(in, line)) {
     json entry = json::parse(line, nullptr, false);
-    if (entry.is_object() && entry.contains("episode")) entries.push_back(std::move(entry));
+    if (entry.is_object() && entry.contains("episode")) {
+      each(std::move(entry));
+      ++count;
+    }
   }
+  return count;
+}
+
+std::vector<json> readEpisodeLog(const std::filesystem::path& path) {
+  std::vector<json> entries;
+  (void)forEachLoggedEpisode(path, [&entries](json entry) { entries.push_back(std::move(entry)); });
   return entries;
 }
 

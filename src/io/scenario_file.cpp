@@ -359,6 +359,11 @@ nlohmann::json scheduleToJson(const RateSchedule& schedule) {
 }
 
 void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what) {
+  writeJsonFile(path, what, [&doc](std::ostream& out) { out << doc.dump(2) << '\n'; });
+}
+
+void writeJsonFile(const std::string& path, const std::string& what,
+                   const std::function<void(std::ostream&)>& write) {
   // Only a regular file is ever replaced: renaming over a device, a FIFO or a directory would
   // turn it into a JSON file (or fail after all the work is done).
   struct stat existing {};
@@ -371,7 +376,7 @@ void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std
   const std::string temporary = path + ".tmp" + std::to_string(::getpid());
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << doc.dump(2) << '\n';
+    write(out);
     if (!out) throw InputError(path, "", "a writable path for the " + what);
   }
   if (std::rename(temporary.c_str(), path.c_str()) != 0) {

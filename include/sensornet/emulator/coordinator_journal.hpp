@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "sensornet/core/scenario.hpp"
+#include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/replanner.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
@@ -53,7 +54,7 @@ struct CoordinatorJournal {
   double time_scale = 1.0;
   ReplanSettings settings;                // surrogate, excluded, failed, budget
   std::vector<ScheduleVersion> versions;  // increasing numbers, from version 1
-  std::set<std::uint32_t> episodes_reported;
+  EpisodeSet episodes_reported;           // as ranges, like the file
   std::optional<AnnouncedEpisode> announced;
   std::map<std::uint64_t, AnsweredCommand> answered;  // by command id
   bool shutdown_requested = false;  // COMMAND_SHUTDOWN: the run ends after the episode

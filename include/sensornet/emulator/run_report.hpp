@@ -5,11 +5,20 @@
 // episode log at once; the launcher rebuilds the same report from that log when the fusion
 // center could not write its own (it died), so no finished episode is ever lost.
 //
-//   RunReport report(run_id, digest, sensor_count, state_dim);
+//   RunReport report(run_id, digest, sensor_count, state_dim, episodeLogPath(path));
 //   const nlohmann::json entry = episodeEntry(fusion.finish());
 //   log.append(entry);                     // EpisodeLog: one line per episode, flushed
-//   report.add(entry);
-//   writeJsonFile(path, report.toJson(...));
+//   report.add(entry);                     // folded into the summary, not kept
+//   const nlohmann::json head = report.toJsonWithoutEpisodes(...);
+//   writeJsonFile(path, "run report", [&](std::ostream& out) { report.write(out, head, 2); });
+//
+// Memory stays flat however many episodes a run has: the summary is kept as running sums
+// (means, Welford's sum of squares for the interval, per-sensor totals) and the latencies as a
+// fixed histogram of fine log-spaced bins (LatencyHistogram: median and p99 within a stated
+// relative error); with an episode log the entries are not held but read back from it when the
+// report is written (`per_episode` in log order, each episode once: the first of repeated ones,
+// a torn line skipped). Without a log (tests, a fusion center without --report) the entries
+// are held.
 //
 // Statistics (DESIGN.md): the mean realized cost, its 95% interval and whether it meets the
 // mean bracket are over complete episodes only. The interval is Student's t with K - 1 degrees
@@ -20,17 +29,55 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <istream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <ostream>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
+#include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
 namespace sensornet::emulator {
+
+// Many latencies in fixed memory: counts in fine log-spaced bins (kFineBinsPerDecade a decade
+// from kLatencyHistogramFloorS up to kLatencyHistogramCeilingS; the floor bin takes anything
+// below, the top bin anything above), with the exact count, smallest and largest.
+//
+//   LatencyHistogram h;
+//   h.add(latencies_s);
+//   const double median = h.quantile(0.5);   // within kLatencyQuantileRelativeError
+//
+// quantile(q) is quantile() of the samples (linear interpolation between order statistics) with
+// each order statistic replaced by the geometric middle of its bin, clamped to [smallest,
+// largest] (the extreme ones are exact): within a factor 10^(1 / (2 kFineBinsPerDecade)) of the
+// exact value, i.e. a relative error of at most kLatencyQuantileRelativeError (5.8e-4), for
+// latencies between the floor and the ceiling; below the floor the error is at most the floor.
+class LatencyHistogram {
+ public:
+  static constexpr int kFineBinsPerDecade = 2000;  // a multiple of kLatencyBinsPerDecade
+  void add(double latency_s);
+  void add(const std::vector<double>& latencies_s);
+  [[nodiscard]] std::uint64_t count() const noexcept { return count_; }
+  [[nodiscard]] double quantile(double q) const;
+  // The report's coarse histogram, exactly as latencyHistogram() of the same samples.
+  [[nodiscard]] nlohmann::json toJson() const;
+
+ private:
+  [[nodiscard]] static std::size_t binOf(double latency_s);
+  [[nodiscard]] double orderStatistic(std::uint64_t index) const;
+  std::vector<std::uint64_t> counts_;  // fine bins, allocated on the first sample
+  std::uint64_t count_ = 0;
+  std::size_t lowest_bin_ = 0;
+  std::size_t highest_bin_ = 0;
+  double smallest_ = 0.0;
+  double largest_ = 0.0;
+};
 
 struct RunSummary {
   std::uint32_t episodes = 0;             // finished, complete or not
@@ -53,7 +100,7 @@ struct RunSummary {
   std::uint64_t dropped_by_network = 0;   // by the emulated network: neither received nor lost
   std::uint64_t late = 0;
   RejectionCounts rejected;               // by reason, over episodes and the run's wire
-  double latency_median_s = 0.0;
+  double latency_median_s = 0.0;          // within kLatencyQuantileRelativeError (LatencyHistogram)
   double latency_p99_s = 0.0;
   [[nodiscard]] std::uint64_t rejectedTotal() const;
 };
@@ -70,30 +117,64 @@ inline constexpr const char* kRestartedReason = "fusion_center_restarted";
 
 class RunReport {
  public:
+  // Holds every entry (for small reports and tests).
   RunReport(std::string run_id, std::string scenario_digest, int sensor_count, int state_dim);
+  // Holds none: `per_episode` is read back from `episode_log` (where every added entry was
+  // appended) when the report is written.
+  RunReport(std::string run_id, std::string scenario_digest, int sensor_count, int state_dim,
+            std::filesystem::path episode_log);
 
   // An episode entry (episodeEntry, or a line read back from the log).
-  void add(nlohmann::json entry);
+  void add(const nlohmann::json& entry);
   // Publish-to-fusion latencies, for the run's median and p99 (without them, the summary uses
   // the median of the episodes' medians).
   void addLatencies(const std::vector<double>& latencies_s);
   // Samples refused outside any episode (other runs, malformed schedules, ...), by reason.
   void countRejected(const std::string& reason, std::uint64_t count = 1);
-  [[nodiscard]] const std::vector<nlohmann::json>& episodes() const { return episodes_; }
   [[nodiscard]] RunSummary summary() const;
   // The whole report. `schedule_versions`: the versions of the run (scheduleVersionsJson);
   // `faults`: a list of {kind, process, sensor, episode, emulated_time_s, detail}.
   [[nodiscard]] nlohmann::json toJson(const std::string& status, const nlohmann::json& faults,
                                       const nlohmann::json& schedule_versions,
                                       const nlohmann::json& extra = nlohmann::json::object()) const;
+  // The same without `per_episode`, which write() streams in.
+  [[nodiscard]] nlohmann::json toJsonWithoutEpisodes(
+      const std::string& status, const nlohmann::json& faults,
+      const nlohmann::json& schedule_versions,
+      const nlohmann::json& extra = nlohmann::json::object()) const;
+  // Writes `doc` (toJsonWithoutEpisodes) with `per_episode` added, entry by entry, as
+  // doc.dump(indent) of the whole report would (indent < 0: one line), without holding it.
+  void write(std::ostream& out, const nlohmann::json& doc, int indent) const;
 
  private:
+  // Calls `each` with every entry of the report, in order.
+  void forEachEpisode(const std::function<void(const nlohmann::json&)>& each) const;
+
   std::string run_id_;
   std::string digest_;
   int sensor_count_;
   int state_dim_;
-  std::vector<nlohmann::json> episodes_;
-  std::vector<double> latencies_s_;
+  std::optional<std::filesystem::path> episode_log_;
+  std::vector<nlohmann::json> episodes_;  // without an episode log only
+  // Running sums over every episode (counts) and over complete ones (statistics).
+  std::uint32_t episode_count_ = 0;
+  std::uint32_t complete_count_ = 0;
+  double cost_mean_ = 0.0;     // Welford: the running mean of the realized cost
+  double cost_squares_ = 0.0;  // ... and the sum of squared deviations from it
+  double realtime_sum_ = 0.0;
+  CostBracket bracket_sum_;
+  CostBracket delivered_bracket_sum_;
+  double nees_sum_ = 0.0;
+  RunSummary summed_;  // its counts (sent, received, lost, ...) over every episode
+  RejectionCounts rejected_in_episodes_;
+  struct SensorTotals {
+    std::uint64_t sent = 0, received = 0, lost = 0, dropped_by_network = 0, late = 0,
+                  wrong_version = 0;
+    double expected = 0.0;
+  };
+  std::vector<SensorTotals> sensor_totals_;
+  LatencyHistogram latencies_;
+  LatencyHistogram episode_medians_;  // the fallback without latencies
   RejectionCounts rejected_outside_;
 };
 
@@ -108,6 +189,8 @@ class RunReport {
 // in the first bin. Null when there are none.
 inline constexpr double kLatencyBinsPerDecade = 5.0;
 inline constexpr double kLatencyHistogramFloorS = 1e-7;
+inline constexpr double kLatencyHistogramCeilingS = 1e4;
+inline constexpr double kLatencyQuantileRelativeError = 5.76e-4;  // 10^(1/4000) - 1, rounded up
 [[nodiscard]] nlohmann::json latencyHistogram(const std::vector<double>& latencies_s);
 
 // One fault of a run, as the report lists it. Optional parts are null when unknown.
@@ -138,6 +221,22 @@ class EpisodeLog {
 
 // The entries of an episode log, in order; a torn last line (a crash mid-write) is skipped.
 [[nodiscard]] std::vector<nlohmann::json> readEpisodeLog(const std::filesystem::path& path);
+// The same, one at a time, without holding them; returns how many there were.
+std::size_t forEachLoggedEpisode(const std::filesystem::path& path,
+                                 const std::function<void(nlohmann::json)>& each);
+// The entries of a report's per_episode from its episode log: each episode once (the first of
+// repeated lines), in log order.
+void forEachReportedEpisode(const std::filesystem::path& episode_log,
+                            const std::function<void(const nlohmann::json&)>& each);
+// Writes `doc` (a report without per_episode) with per_episode streamed in from `episode_log`,
+// as RunReport::write does.
+void writeReportWithLog(std::ostream& out, const nlohmann::json& doc,
+                        const std::filesystem::path& episode_log, int indent);
+// A report file parsed without its per_episode entries (each dropped once parsed, so a report of
+// millions of episodes is never held); `listed`, if given, receives how many there were. A
+// discarded (not a JSON document) value when the text is not JSON.
+[[nodiscard]] nlohmann::json parseReportWithoutEpisodes(std::istream& in,
+                                                        std::size_t* listed = nullptr);
 
 // What a restarted fusion center (`serve --resume`) makes of the episodes it hears of. Those in
 // its episode log are done: their entries start the report, and their late measurements and
@@ -175,7 +274,7 @@ class ResumedRun {
  private:
   std::vector<std::uint32_t> restartBefore(std::uint32_t episode);
   std::vector<nlohmann::json> entries_;
-  std::set<std::uint32_t> logged_;
+  EpisodeSet logged_;
   std::set<std::uint32_t> restarted_;
   std::int64_t joined_wall_ns_;
   bool heard_any_ = false;

@@ -8,6 +8,8 @@
 //   writeScheduleFile("plan.json", r, {{"surrogate", "info"}});
 
 #include <nlohmann/json.hpp>
+#include <functional>
+#include <ostream>
 #include <string>
 
 #include "sensornet/core/rate_schedule.hpp"
@@ -31,6 +33,9 @@ namespace sensornet {
 // Writes `doc` (indented) to path atomically: a temporary file beside it, then a rename.
 // Throws InputError naming the path when it cannot be written. `what` names the file's role.
 void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what);
+// The same, with the text written by `write` (a document too large to hold: streamed).
+void writeJsonFile(const std::string& path, const std::string& what,
+                   const std::function<void(std::ostream&)>& write);
 // Writes scheduleToJson(schedule) merged with `extra` keys.
 void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
                        const nlohmann::json& extra = nlohmann::json::object());
