@@ -36,6 +36,7 @@
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
+#include "sensornet/emulator/writer_claims.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet::fusion_center {
@@ -165,7 +166,8 @@ class FusionCenter {
     while (!end && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
       noteOwnStall();
-      for (Arrival& arrival : inbox_.drain()) accept(std::move(arrival));
+      inbox_.drainInto(drained_);
+      for (Arrival& arrival : drained_) accept(std::move(arrival));
       end = follow();
       readTallies();
       readStatuses();
@@ -261,7 +263,7 @@ class FusionCenter {
     for (const emulator::SensorFailure& failure : failures_) applyFailure(start.episode, slot, failure);
     // Measurements and tallies that came before the episode's control sample.
     if (auto early = early_.find(start.episode); early != early_.end()) {
-      for (auto& m : early->second) route(slot, std::move(m));
+      for (auto& a : early->second) route(slot, std::move(a.measurement), a.writer);
       early_.erase(early);
     }
     if (auto early = early_tallies_.find(start.episode); early != early_tallies_.end()) {
@@ -314,14 +316,16 @@ class FusionCenter {
   // In Cyclone's receive thread, as measurements are delivered: takes them, stamps their arrival
   // there (one thread hop after the wire, as in ddsperf) and hands them to the main loop.
   void onMeasurements() {
-    constexpr std::size_t kBatch = 64;
-    std::vector<Arrival> arrivals;
+    // Usually one sample a call: a small batch keeps the loan and its info array small.
+    constexpr std::size_t kBatch = 16;
+    std::vector<Arrival>& arrivals = taken_;  // Cyclone runs one call of a listener at a time
     for (;;) {
       const std::int64_t received_ns = wallNowNs();
       const std::size_t count = measurement_reader_.takeEach(
           kBatch,
-          [&](const sensornet_Measurement& m, const dds::SampleInfo&) {
+          [&](const sensornet_Measurement& m, const dds::SampleInfo& info) {
             arrivals.push_back(arrivalOf(m, received_ns));
+            arrivals.back().writer = info.publication;
           },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
             if (info.instance_state == dds::InstanceState::NoWriters) {
@@ -330,7 +334,7 @@ class FusionCenter {
           });
       if (count < kBatch) break;
     }
-    if (!arrivals.empty() && inbox_.push(std::move(arrivals))) waitset_.wake();
+    if (!arrivals.empty() && inbox_.push(arrivals)) waitset_.wake();
   }
 
   // Reads only what never changes after construction (the run id): safe in the receive thread.
@@ -392,15 +396,60 @@ class FusionCenter {
                                               " (sensor " +
                                               std::to_string(arrival.measurement.sensor) + ")");
       } else {
-        early_[episode].push_back(std::move(arrival.measurement));
+        early_[episode].push_back(std::move(arrival));
       }
       return;
     }
-    route(open->second, std::move(arrival.measurement));
+    route(open->second, std::move(arrival.measurement), arrival.writer);
   }
 
-  void route(OpenEpisode& open, emulator::FusedMeasurement m) {
+  // Without DDS Security anyone on the host can write into the run's partition: a sample of a
+  // second writer claiming a sensor whose first writer lives is kept out (writer_claims.hpp),
+  // counted as rejected (foreign_writer) and named once per writer in the faults.
+  bool refuseForeign(emulator::WriterClaims& claims, const dds::detail::ReaderCore& reader,
+                     const char* topic, std::uint32_t sensor, emulator::WriterId writer,
+                     std::uint32_t episode) {
+    const int j = static_cast<int>(sensor);
+    const auto live = [&reader](emulator::WriterId w) { return reader.matchesWriter(w); };
+    if (!claims.isForeign(j, writer, live)) return false;
+    ++rejected_outside_[emulator::kForeignWriter];
+    if (claims.firstRefusalOf(writer)) {
+      const std::string detail =
+          "a second " + std::string(topic) + " writer (publication " + std::to_string(writer) +
+          ") claims sensor " + std::to_string(sensor) + " while its first writer (publication " +
+          std::to_string(claims.ownerOf(j)) + ") lives; its samples are kept out";
+      spdlog::warn("{}", detail);
+      faults_.push_back(emulator::faultEntry(emulator::kForeignWriter, kProcess, j, episode,
+                                             std::nullopt, detail));
+    }
+    return true;
+  }
+
+  // The sensors' processes were declared failed: whoever takes their place writes anew.
+  void releaseClaims(const std::set<int>& sensors) {
+    for (const int j : sensors) {
+      measurement_claims_.release(j);
+      tally_claims_.release(j);
+      status_claims_.release(j);
+    }
+  }
+
+  // A measurement the fusion would take if its writer spoke for the sensor (a foreign writer's
+  // sample that is malformed anyway is counted under the more telling reason by the fusion).
+  [[nodiscard]] bool wellFormed(const emulator::FusedMeasurement& m) const {
+    const Scenario& s = inputs_.scenario();
+    return m.sensor >= 0 && m.sensor < s.sensorCount() &&
+           m.z.size() == s.sensors[static_cast<std::size_t>(m.sensor)].H.rows() &&
+           m.z.allFinite() && m.time_s >= 0.0 && m.time_s <= s.horizon_s;
+  }
+
+  void route(OpenEpisode& open, emulator::FusedMeasurement m, emulator::WriterId writer) {
     const int sensor = m.sensor;
+    if (wellFormed(m) && refuseForeign(measurement_claims_, measurement_reader_, "Measurement",
+                                       static_cast<std::uint32_t>(sensor), writer,
+                                       open.fusion->episode())) {
+      return;
+    }
     if (auto rejection = open.fusion->add(std::move(m))) {
       // The emulated network's copies are expected; finish() tells them from other duplicates.
       const auto level = rejection->reason == "duplicate" && duplicatesLink(sensor)
@@ -410,6 +459,7 @@ class FusionCenter {
                   rejection->detail);
       return;
     }
+    measurement_claims_.claim(sensor, writer);  // accepted: well-formed, of this run
     open.last_heard_ns[static_cast<std::size_t>(sensor)] = wallNowNs();
   }
 
@@ -425,6 +475,11 @@ class FusionCenter {
         ++rejected_outside_["malformed_tally"];
         continue;
       }
+      if (refuseForeign(tally_claims_, tally_reader_, "EpisodeTally", t.sensor_id,
+                        received.info.publication, t.episode)) {
+        continue;
+      }
+      tally_claims_.claim(static_cast<int>(t.sensor_id), received.info.publication);
       if (resumed_ && resumed_->ignores(t.episode)) continue;  // no late tally for those
       if (auto open = open_.find(t.episode); open != open_.end()) {
         applyTally(open->second, t);
@@ -463,6 +518,11 @@ class FusionCenter {
     for (auto& received : status_reader_.take(64).samples) {
       const sensornet_SensorStatus& s = *received.sample;
       if (dds::viewString(s.run_id) != options_.run.run_id) continue;
+      if (refuseForeign(status_claims_, status_reader_, "SensorStatus", s.sensor_id,
+                        received.info.publication, s.episode)) {
+        continue;
+      }
+      status_claims_.claim(static_cast<int>(s.sensor_id), received.info.publication);
       sensor_processes_[s.sensor_id] = {s.process_id, s.state};
       auto open = open_.find(s.episode);
       if (open == open_.end() || !inputs_.hasScenario() ||
@@ -923,6 +983,8 @@ class FusionCenter {
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
   emulator::RejectionCounts rejected_outside_;  // samples refused before reaching an episode
+  // Which writer speaks for each sensor, per topic (first live writer wins).
+  emulator::WriterClaims measurement_claims_, tally_claims_, status_claims_;
   json faults_ = json::array();
   json traced_episodes_ = json::array();      // covariance_traces: the first episodes' curves
   std::set<std::uint32_t> traced_versions_;   // ... and the versions in force at their start
@@ -949,6 +1011,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "(report.jsonl beside report.json). Example:\n  fusion_center serve --run-id demo "
       "--report report.json");
   emulator::addRunOptions(*cmd, options->run);
+  options->run.security_role = dds::SecurityRole::FusionCenter;
   cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down; the episode log goes "
                   "beside it");

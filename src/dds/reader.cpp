@@ -53,6 +53,13 @@ std::uint32_t ReaderCore::matchedWriters() const {
   return status.current_count;
 }
 
+bool ReaderCore::matchesWriter(dds_instance_handle_t publication) const {
+  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(handle(), publication);
+  if (endpoint == nullptr) return false;
+  dds_builtintopic_free_endpoint(endpoint);
+  return true;
+}
+
 bool ReaderCore::waitForWriters(std::uint32_t count, std::chrono::nanoseconds timeout) const {
   return waitForStatus(
       *this, participant_, DDS_SUBSCRIPTION_MATCHED_STATUS,

@@ -129,6 +129,9 @@ class ReaderCore : public Entity {
   [[nodiscard]] std::uint32_t matchedWriters() const;
   // Waits until at least `count` writers are matched; false on timeout.
   [[nodiscard]] bool waitForWriters(std::uint32_t count, std::chrono::nanoseconds timeout) const;
+  // True while the writer `publication` (SampleInfo::publication) is matched: false once it was
+  // deleted or its participant's lease expired.
+  [[nodiscard]] bool matchesWriter(dds_instance_handle_t publication) const;
 
  protected:
   enum class Access { Take, Read };
