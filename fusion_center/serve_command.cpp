@@ -87,6 +87,7 @@ struct Arrival {
   emulator::FusedMeasurement measurement;
   std::uint32_t episode = 0;
   std::optional<std::string> other_run;  // the run id it carries, if not this run's
+  emulator::WriterId writer = 0;         // the DDS writer that sent it (publication handle)
 };
 
 // Arrivals handed from Cyclone's receive thread (the listener) to the main loop.
@@ -166,8 +167,7 @@ class FusionCenter {
     while (!end && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
       noteOwnStall();
-      inbox_.drainInto(drained_);
-      for (Arrival& arrival : drained_) accept(std::move(arrival));
+      for (Arrival& arrival : inbox_.drain()) accept(std::move(arrival));
       end = follow();
       readTallies();
       readStatuses();
@@ -228,6 +228,7 @@ class FusionCenter {
         }
       }
       failures_.push_back(failure);
+      releaseClaims(failure.sensors);
       for (auto& [number, open] : open_) applyFailure(number, open, failure);
     }
     if (update.shutdown) return update.end;
@@ -316,9 +317,8 @@ class FusionCenter {
   // In Cyclone's receive thread, as measurements are delivered: takes them, stamps their arrival
   // there (one thread hop after the wire, as in ddsperf) and hands them to the main loop.
   void onMeasurements() {
-    // Usually one sample a call: a small batch keeps the loan and its info array small.
-    constexpr std::size_t kBatch = 16;
-    std::vector<Arrival>& arrivals = taken_;  // Cyclone runs one call of a listener at a time
+    constexpr std::size_t kBatch = 64;
+    std::vector<Arrival> arrivals;
     for (;;) {
       const std::int64_t received_ns = wallNowNs();
       const std::size_t count = measurement_reader_.takeEach(
@@ -334,7 +334,7 @@ class FusionCenter {
           });
       if (count < kBatch) break;
     }
-    if (!arrivals.empty() && inbox_.push(arrivals)) waitset_.wake();
+    if (!arrivals.empty() && inbox_.push(std::move(arrivals))) waitset_.wake();
   }
 
   // Reads only what never changes after construction (the run id): safe in the receive thread.
@@ -969,7 +969,7 @@ class FusionCenter {
   // (version, the outages of an episode) -> the bracket of what the network delivers
   std::map<std::pair<std::uint32_t, std::vector<std::size_t>>, CostBracket> delivered_brackets_;
   std::map<std::uint32_t, OpenEpisode> open_;
-  std::map<std::uint32_t, std::vector<emulator::FusedMeasurement>> early_;
+  std::map<std::uint32_t, std::vector<Arrival>> early_;
   std::map<std::uint32_t, std::vector<sensornet_EpisodeTally>> early_tallies_;
   std::vector<emulator::SensorFailure> failures_;  // the coordinator's notices, in order
   std::optional<emulator::ResumedRun> resumed_;    // with --resume
@@ -1011,7 +1011,6 @@ Subcommand addServeCommand(CLI::App& app) {
       "(report.jsonl beside report.json). Example:\n  fusion_center serve --run-id demo "
       "--report report.json");
   emulator::addRunOptions(*cmd, options->run);
-  options->run.security_role = dds::SecurityRole::FusionCenter;
   cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down; the episode log goes "
                   "beside it");
