@@ -748,6 +748,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "  coordinator serve --scenario scenarios/default.yaml --run-id demo --episodes 20\n"
       "After a crash, the same command with --state FILE --resume carries the run on.");
   emulator::addRunOptions(*cmd, options->run);
+  options->run.security_role = dds::SecurityRole::Coordinator;
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
   const std::map<std::string, PlanSurrogate> surrogates = {
       {"info", PlanSurrogate::Information},

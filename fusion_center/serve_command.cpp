@@ -1011,6 +1011,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "(report.jsonl beside report.json). Example:\n  fusion_center serve --run-id demo "
       "--report report.json");
   emulator::addRunOptions(*cmd, options->run);
+  options->run.security_role = dds::SecurityRole::FusionCenter;
   cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down; the episode log goes "
                   "beside it");

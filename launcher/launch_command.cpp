@@ -159,6 +159,10 @@ std::vector<std::string> runFlags(const LaunchOptions& options, const dds::Domai
   if (!options.run.cyclone_config.empty()) {
     flags.insert(flags.end(), {"--cyclone-config", domain.cyclone_config});
   }
+  if (!options.run.security_dir.empty()) {  // each child presents its own role's files
+    flags.insert(flags.end(),
+                 {"--security", fs::absolute(options.run.security_dir).lexically_normal().string()});
+  }
   return flags;
 }
 
@@ -498,6 +502,8 @@ int runLaunch(LaunchOptions options) {
   if (!options.schedule_path.empty()) (void)loadScheduleFile(options.schedule_path, scenario);
   if (options.run.run_id.empty()) options.run.run_id = generateRunId();
   dds::DomainConfig domain = options.run.domainConfig();
+  // Every role's files, so that a bad one is refused here, not when its process starts.
+  if (!options.run.security_dir.empty()) dds::checkSecurityFolder(options.run.security_dir);
   std::optional<emulator::HostsFile> hosts;
   std::optional<HostPlacement> placement;
   if (!options.hosts_path.empty()) {
@@ -641,6 +647,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  options->run.security_role = dds::SecurityRole::Launcher;
   cmd->add_option("--hosts", options->hosts_path,
                   "run across several hosts: a YAML file naming each host's address, the "
                   "command prefix that runs a program there (ip netns exec NS, ssh -tt "

@@ -4,10 +4,12 @@
 //   sensornet status [...]            show its sensors and schedule
 //   sensornet watch [...]             follow it live (a terminal view, or lines for a log)
 //   sensornet report REPORT [...]     the page (HTML) and CSV tables of a finished run
+//   sensornet pki init DIR            the files of a secured run (--security DIR)
 
 #include <vector>
 
 #include "launch_command.hpp"
+#include "pki_command.hpp"
 #include "replan_command.hpp"
 #include "report_command.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -27,7 +29,7 @@ int main(int argc, char** argv) {
     const std::vector<sensornet::Subcommand> subcommands = {
         sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
         sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
-        sensornet::launcher::addReportCommand(app)};
+        sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

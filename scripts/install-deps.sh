@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev docker-compose
   fastddsgen libfastrtps-dev  # a second DDS vendor: the interoperability test (Fast DDS 2.9)
   chromium  # headless, for the report page's browser test
+  openssl libssl-dev  # secured runs: `sensornet pki init` runs openssl; certificates checked with libcrypto
 )
 
 missing=()

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     app.name("sensor_agent");
     sensornet::sensor_agent::AgentOptions options;
     sensornet::emulator::addRunOptions(app, options.run);
+    options.run.security_role = sensornet::dds::SecurityRole::Sensor;
     std::string sensors;
     app.add_option("--sensors", sensors,
                    "the sensor ids (0-based) this process emulates: 3, 0-9 or 0,2,5-7")

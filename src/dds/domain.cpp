@@ -38,7 +38,7 @@ DomainConfig DomainConfig::loopback(dds_domainid_t domain_id, std::string partit
                                     DiscoveryRole role) {
   std::string xml = loopbackConfigXml();
   if (role == DiscoveryRole::Leaf) xml += "," + leafConfigXml();
-  return DomainConfig{domain_id, std::move(partition), std::move(xml)};
+  return DomainConfig{domain_id, std::move(partition), std::move(xml), {}, {}};
 }
 
 DomainConfig DomainConfig::forRun(std::string_view run_id, DiscoveryRole role) {
@@ -92,7 +92,11 @@ Domain::Domain(DomainConfig config, const CApi& api)
     : Entity(api,
              [&] {
                validateDomainConfig(config);
-               return check(api.create_domain(config.domain_id, config.cyclone_config.c_str()),
+               const std::string xml =
+                   config.security_xml.empty()
+                       ? config.cyclone_config
+                       : config.cyclone_config + "," + config.security_xml;
+               return check(api.create_domain(config.domain_id, xml.c_str()),
                             "dds_create_domain");
              }()),
       config_(std::move(config)) {}

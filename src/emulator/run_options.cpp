@@ -22,6 +22,18 @@ std::string asCycloneConfig(const std::string& text) {
   return "file://" + path.string();
 }
 
+// Turns on DDS Security with the role's files in `dir`, checked first.
+void addSecurity(dds::DomainConfig& config, const std::string& dir, dds::SecurityRole role) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(dir, error)) {
+    throw InputError("--security " + dir, "", "a folder made by `sensornet pki init`");
+  }
+  const dds::SecurityFiles files = dds::securityFilesOf(dir, role);
+  dds::checkSecurityFiles(files);
+  config.security_xml = dds::securityConfigXml(files);
+  config.security_hint = dds::securityFailureHint(files);
+}
+
 }  // namespace
 
 dds::DomainConfig RunOptions::domainConfig(dds::DiscoveryRole role) const {
@@ -37,6 +49,7 @@ dds::DomainConfig RunOptions::domainConfig(dds::DiscoveryRole role) const {
     }
   }
   if (!chosen.empty()) config.cyclone_config = asCycloneConfig(chosen);
+  if (!security_dir.empty()) addSecurity(config, security_dir, security_role);
   return config;
 }
 
@@ -50,6 +63,9 @@ void addRunOptions(CLI::App& app, RunOptions& options, bool run_id_required) {
   app.add_option("--cyclone-config", options.cyclone_config,
                  "Cyclone DDS configuration (XML text, file:// URI or file path) instead of the "
                  "shipped loopback-only one; default: $SENSORNET_CYCLONE_CONFIG if set");
+  app.add_option("--security", options.security_dir,
+                 "DDS Security with the files `sensornet pki init DIR` made (this program's "
+                 "role's identity and permissions): authenticated, access-controlled, encrypted");
 }
 
 }  // namespace sensornet::emulator

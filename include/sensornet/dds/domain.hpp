@@ -44,6 +44,12 @@ struct DomainConfig {
   std::string partition;
   // Given verbatim to dds_create_domain: XML text and/or file URIs, comma-separated.
   std::string cyclone_config;
+  // DDS Security (security.hpp): a <Security> fragment appended to cyclone_config when the
+  // domain is created (kept apart so that cyclone_config can be handed to another process that
+  // presents its own files), and why Cyclone most likely refused a participant, so that the
+  // refusal is one line naming the files, not a bare return code.
+  std::string security_xml;
+  std::string security_hint;
 
   // The shipped loopback configuration on `domain_id`, with `partition`, for `role`.
   [[nodiscard]] static DomainConfig loopback(dds_domainid_t domain_id, std::string partition,

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "sensornet/dds/domain.hpp"
+#include "sensornet/dds/security.hpp"
 
 namespace sensornet::emulator {
 
@@ -42,6 +43,10 @@ struct RunOptions {
   std::string run_id;
   std::optional<int> domain_id;
   std::string cyclone_config;  // empty: SENSORNET_CYCLONE_CONFIG, else the loopback config
+  // --security DIR (`sensornet pki init`): DDS Security with this process's role's files, which
+  // are checked (InputError naming a missing, expired or foreign file) by domainConfig().
+  std::string security_dir;
+  dds::SecurityRole security_role = dds::SecurityRole::Operator;  // set by each program
 
   // Throws InputError for a bad run id or domain id. A cyclone_config that names an existing
   // file path (not a URI, not XML) is turned into a file:// URI.
@@ -51,7 +56,8 @@ struct RunOptions {
       dds::DiscoveryRole role = dds::DiscoveryRole::Hub) const;
 };
 
-// Adds --run-id (required unless `run_id_required` is false), --domain-id and --cyclone-config.
+// Adds --run-id (required unless `run_id_required` is false), --domain-id, --cyclone-config and
+// --security.
 void addRunOptions(CLI::App& app, RunOptions& options, bool run_id_required = true);
 
 }  // namespace sensornet::emulator
