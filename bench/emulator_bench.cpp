@@ -29,8 +29,15 @@
 //               Beside it, in the same run, ddsperf pub/sub throughput of 64-byte samples
 //               (reliable, keep-all, 2 processes) before and after the sweep.
 //
+//   security    (issue 12) the cost of DDS Security: per round, unsecured then secured (every
+//               process with --security DIR from one `sensornet pki init`), the latency run
+//               above (6 one-sensor processes) and one overload episode at 10,000 and 40,000
+//               measurements/s: latency median and p99, secured/unsecured ratio per round, and
+//               the fusion center's CPU time per measurement and whether it keeps up.
+//
 //   emulator_bench [startup|latency|throughput|all] [rounds: latency 3, startup 3]
 //   emulator_bench overload [total rates/s, comma-separated = 30000,45000,60000,90000,...]
+//   emulator_bench security [rounds = 3] [total rates/s = 10000,40000]
 //   emulator_bench memory [episodes = 5000] [checkpoint = 1000]
 //               (issue 15) `sensornet launch` of the default scenario at --time-scale 1000:
 //               VmRSS of the launcher and of each process it started after `checkpoint`
@@ -55,6 +62,7 @@
 #include <string>
 #include <system_error>
 #include <thread>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -66,6 +74,7 @@
 #include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"
+#include "support/process.hpp"
 
 namespace {
 
@@ -77,6 +86,7 @@ const std::string kCoordinator = SENSORNET_COORDINATOR;
 const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
 const std::string kSensorAgent = SENSORNET_SENSOR_AGENT;
 const std::string kSourceDir = SENSORNET_SOURCE_DIR;
+const std::string kLauncher = SENSORNET_LAUNCHER;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -113,6 +123,12 @@ fs::path writeRandomScenario(const fs::path& dir, int states, int sensors, doubl
                       << "\n  sensors: " << sensors << "\n  rows_per_sensor: 1\n  seed: 1\n"
                       << "  budget: " << budget << "\n";
   return path;
+}
+
+std::vector<std::string> withFlags(std::vector<std::string> argv,
+                                   const std::vector<std::string>& extra) {
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
 }
 
 nlohmann::json readReport(const fs::path& path) {
@@ -255,21 +271,25 @@ struct LatencyRun {
   int received = 0;
 };
 
-std::optional<LatencyRun> latencyRun(const std::string& run, int agents) {
+// `extra`: flags every process gets (--security DIR).
+std::optional<LatencyRun> latencyRun(const std::string& run, int agents,
+                                     const std::vector<std::string>& extra = {}) {
   Processes processes(fs::temp_directory_path() / run);
   const fs::path report = processes.dir() / "report.json";
-  processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run, "--report",
-                                    report.string()});
+  processes.start("fusion_center", withFlags({kFusionCenter, "serve", "--run-id", run,
+                                              "--report", report.string()},
+                                             extra));
   for (int a = 0; a < agents; ++a) {
     const std::string sensors =
         agents == 1 ? "0-5" : std::to_string(a);  // 6 sensors: one each, or all in one
     processes.start("sensor-" + std::to_string(a),
-                    {kSensorAgent, "--run-id", run, "--sensors", sensors});
+                    withFlags({kSensorAgent, "--run-id", run, "--sensors", sensors}, extra));
   }
   BackgroundProcess& coordinator = processes.start(
-      "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario",
-                      kSourceDir + "/scenarios/default.yaml", "--surrogate", "uniform",
-                      "--episodes", "20", "--time-scale", "10"});
+      "coordinator", withFlags({kCoordinator, "serve", "--run-id", run, "--scenario",
+                                kSourceDir + "/scenarios/default.yaml", "--surrogate", "uniform",
+                                "--episodes", "20", "--time-scale", "10"},
+                               extra));
   const int code = coordinator.waitForExit(120s).value_or(-1);
   std::this_thread::sleep_for(1s);
   const nlohmann::json r = readReport(report);
@@ -549,6 +569,17 @@ class ThreadCpu {
     }
   }
 
+  // CPU seconds of every thread of the processes started as `process`.
+  [[nodiscard]] double cpuOf(const std::string& process) const {
+    double total = 0.0;
+    for (const auto& [tid, series] : threads_) {
+      if (series.name.starts_with(process + "/")) {
+        total += series.points.back().second - series.points.front().second;
+      }
+    }
+    return total;
+  }
+
   // The `count` threads with the highest peak share of one core over 1-second windows.
   [[nodiscard]] std::vector<ThreadLoad> busiest(std::size_t count) const {
     std::vector<ThreadLoad> loads;
@@ -616,6 +647,7 @@ struct OverloadRun {
   double wall_s = 0.0;
   std::string faults;  // kinds and how often ("overload, sensor_lag x6")
   std::vector<ThreadLoad> busiest;
+  double fusion_cpu_s = 0.0;  // all threads of the fusion center
 
   [[nodiscard]] bool keepsUp() const {
     return status == "completed" && lost_total == 0 && median_us < 1000.0;
@@ -644,25 +676,31 @@ std::string joined(const std::vector<long long>& values) {
 
 // One episode of the loosened default scenario at `total_rate_hz` shared equally by 6 sensors in
 // two processes; nullopt (after saying why) if the run produced no report.
-std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate_hz) {
+// `extra`: flags every process gets (--security DIR).
+std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate_hz,
+                                       const std::vector<std::string>& extra = {}) {
   Processes processes(fs::temp_directory_path() / run);
   const fs::path scenario = writeOverloadScenario(processes.dir());
   const fs::path schedule = writeConstantSchedule(processes.dir(), total_rate_hz / 6.0);
   const fs::path report = processes.dir() / "report.json";
   std::vector<std::pair<std::string, BackgroundProcess*>> watched;
   BackgroundProcess& fusion = processes.start(
-      "fusion_center", {kFusionCenter, "serve", "--run-id", run, "--report", report.string()});
+      "fusion_center",
+      withFlags({kFusionCenter, "serve", "--run-id", run, "--report", report.string()}, extra));
   watched.emplace_back("fusion_center", &fusion);
   for (const char* block : {"0-2", "3-5"}) {
-    watched.emplace_back(std::string("sensors-") + block,
-                         &processes.start(std::string("sensors-") + block,
-                                          {kSensorAgent, "--run-id", run, "--sensors", block}));
+    watched.emplace_back(
+        std::string("sensors-") + block,
+        &processes.start(std::string("sensors-") + block,
+                         withFlags({kSensorAgent, "--run-id", run, "--sensors", block}, extra)));
   }
   const auto start = std::chrono::steady_clock::now();
   BackgroundProcess& coordinator = processes.start(
-      "coordinator", {kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
-                      "--schedule", schedule.string(), "--episodes", "1", "--time-scale", "1",
-                      "--seed", "1"});
+      "coordinator",
+      withFlags({kCoordinator, "serve", "--run-id", run, "--scenario", scenario.string(),
+                 "--schedule", schedule.string(), "--episodes", "1", "--time-scale", "1",
+                 "--seed", "1"},
+                extra));
   // The run ends when the coordinator has the episode's report; the fusion center then writes
   // the final report and exits. Overload can take long to drain: give it minutes.
   ThreadCpu cpu;
@@ -696,6 +734,7 @@ std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate
   o.wall_s = wall;
   o.faults = faultKinds(r.value("faults", nlohmann::json::array()));
   o.busiest = cpu.busiest(4);
+  o.fusion_cpu_s = cpu.cpuOf("fusion_center");
   return o;
 }
 
@@ -776,10 +815,100 @@ void overload(const std::vector<double>& rates) {
               *highest, ddsperf_rate, ddsperf_rate > 0.0 ? *highest / ddsperf_rate : 0.0);
 }
 
+// ---- security (issue 12, part 3): the cost of DDS Security, secured against unsecured ----
+
+double fusionCpuPerMeasurementUs(const OverloadRun& o) {
+  return 1e6 * o.fusion_cpu_s / static_cast<double>(std::max(1LL, o.received_total));
+}
+
+// A fresh `sensornet pki init` in a temporary folder; empty if it failed (said why).
+std::string makeBenchPki() {
+  const fs::path dir = fs::temp_directory_path() / runId("pki", 0);
+  const sensornet::testing::ProcessResult r =
+      sensornet::testing::runProcess({kLauncher, "pki", "init", dir.string(), "--force"}, 120s);
+  if (r.exit_code != 0) {
+    std::printf("security: sensornet pki init failed: %s\n", r.err.c_str());
+    return {};
+  }
+  return dir.string();
+}
+
+// Per round, unsecured then secured: the latency run (default scenario at 10x, 6 one-sensor
+// processes, 20 episodes) and one overload episode at each of `rates` (6 sensors in 2 processes,
+// time scale 1). Latency: medians over rounds and the median of the per-round ratios. Fusion
+// throughput: the highest rate kept up (completed, nothing lost, median < 1 ms) and the fusion
+// center's CPU per measurement at each rate.
+void security(int rounds, const std::vector<double>& rates) {
+  const std::string pki = makeBenchPki();
+  if (pki.empty()) return;
+  const std::vector<std::string> secured = {"--security", pki};
+  std::printf("security: unsecured against secured (governance: discovery and liveliness "
+              "encrypted, payload encrypted, submessages signed), %d rounds\n",
+              rounds);
+  std::vector<double> plain_median, secure_median, plain_p99, secure_p99, ratio;
+  std::map<double, std::vector<double>> plain_cpu, secure_cpu;
+  std::map<double, int> plain_kept, secure_kept;
+  for (int round = 0; round < rounds; ++round) {
+    const auto a = latencyRun(runId("sec-plain", round), 6);
+    const auto b = latencyRun(runId("sec-secured", round), 6, secured);
+    if (!a || !b) return;
+    plain_median.push_back(a->median_us);
+    plain_p99.push_back(a->p99_us);
+    secure_median.push_back(b->median_us);
+    secure_p99.push_back(b->p99_us);
+    ratio.push_back(b->median_us / a->median_us);
+    std::printf("  round %d latency: unsecured median %.1f us (p99 %.1f), secured median %.1f us "
+                "(p99 %.1f); %d and %d measurements\n",
+                round, a->median_us, a->p99_us, b->median_us, b->p99_us, a->received,
+                b->received);
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      const int tag = round * 100 + static_cast<int>(i);
+      const auto p = overloadRun(runId("sec-plain-load", tag), rates[i]);
+      const auto s = overloadRun(runId("sec-secured-load", tag), rates[i], secured);
+      if (!p || !s) return;
+      for (const auto& [run, into, kept, name] :
+           {std::tuple{&*p, &plain_cpu, &plain_kept, "unsecured"},
+            std::tuple{&*s, &secure_cpu, &secure_kept, "secured"}}) {
+        const double fusion_cpu = fusionCpuPerMeasurementUs(*run);
+        (*into)[rates[i]].push_back(fusion_cpu);
+        (*kept)[rates[i]] += run->keepsUp() ? 1 : 0;
+        std::printf("  round %d %.0f/s %-9s: %s, received %lld, lost %lld, drain %.3f s, latency "
+                    "median %.0f us, p99 %.0f us, fusion center CPU %.1f us/measurement -> %s\n",
+                    round, rates[i], name, run->status.c_str(), run->received_total,
+                    run->lost_total, run->drain_s, run->median_us, run->p99_us, fusion_cpu,
+                    run->keepsUp() ? "keeps up" : "does not keep up");
+      }
+      std::fflush(stdout);
+    }
+  }
+  std::printf("security, medians of %d rounds (busy machine: other builds and benches run):\n",
+              rounds);
+  std::printf("  publish-to-fusion latency: unsecured %.1f us (p99 %.1f), secured %.1f us (p99 "
+              "%.1f); secured/unsecured %.2fx (median of per-round ratios)\n",
+              median(plain_median), median(plain_p99), median(secure_median),
+              median(secure_p99), median(ratio));
+  for (const double rate : rates) {
+    std::printf("  %.0f/s: fusion center CPU per measurement unsecured %.1f us, secured %.1f us "
+                "(%.2fx); kept up in %d/%d and %d/%d rounds\n",
+                rate, median(plain_cpu[rate]), median(secure_cpu[rate]),
+                median(secure_cpu[rate]) / median(plain_cpu[rate]), plain_kept[rate], rounds,
+                secure_kept[rate], rounds);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
+  if (what == "security") {  // emulator_bench security [rounds = 3] [total rates/s]
+    const std::vector<double> rates = parseRates(argc > 3 ? argv[3] : "10000,40000");
+    if (rates.empty()) {
+      std::fprintf(stderr, "emulator_bench security: expected rates such as 10000,40000\n");
+      return 2;
+    }
+    security(argc > 2 ? std::max(1, std::atoi(argv[2])) : 3, rates);
+    return 0;
+  }
   if (what == "memory") {  // emulator_bench memory [episodes = 5000] [checkpoint = 1000]
     return memory(argc > 2 ? std::max(2ULL, std::strtoull(argv[2], nullptr, 10)) : 5000,
                   argc > 3 ? std::max(1ULL, std::strtoull(argv[3], nullptr, 10)) : 1000);
