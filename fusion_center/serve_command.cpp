@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <deque>
@@ -90,20 +91,28 @@ struct Arrival {
   emulator::WriterId writer = 0;         // the DDS writer that sent it (publication handle)
 };
 
-// Arrivals handed from Cyclone's receive thread (the listener) to the main loop.
+// Arrivals handed from Cyclone's receive thread (the listener) to the main loop. Buffers are
+// swapped, not allocated: after the first few calls neither side allocates for the hand-off.
 class Inbox {
  public:
-  // Returns true if the inbox was empty before: the main loop may be asleep and needs a wake.
-  bool push(std::vector<Arrival> arrivals) {
+  // Moves `arrivals` in and leaves it empty (its capacity kept for the next call). Returns true
+  // if the inbox was empty before: the main loop may be asleep and needs a wake.
+  bool push(std::vector<Arrival>& arrivals) {
     std::lock_guard lock(mutex_);
     const bool was_empty = arrivals_.empty();
-    arrivals_.insert(arrivals_.end(), std::make_move_iterator(arrivals.begin()),
-                     std::make_move_iterator(arrivals.end()));
+    if (was_empty) {
+      std::swap(arrivals_, arrivals);
+    } else {
+      std::move(arrivals.begin(), arrivals.end(), std::back_inserter(arrivals_));
+    }
+    arrivals.clear();
     return was_empty;
   }
-  [[nodiscard]] std::vector<Arrival> drain() {
+  // Everything pushed so far, swapped into `into` (whose old contents are dropped).
+  void drainInto(std::vector<Arrival>& into) {
+    into.clear();
     std::lock_guard lock(mutex_);
-    return std::exchange(arrivals_, {});
+    std::swap(arrivals_, into);
   }
 
  private:
@@ -167,7 +176,8 @@ class FusionCenter {
     while (!end && !emulator::stopRequested()) {
       (void)waitset_.wait(10ms);
       noteOwnStall();
-      for (Arrival& arrival : inbox_.drain()) accept(std::move(arrival));
+      inbox_.drainInto(drained_);
+      for (Arrival& arrival : drained_) accept(std::move(arrival));
       end = follow();
       readTallies();
       readStatuses();
@@ -317,8 +327,9 @@ class FusionCenter {
   // In Cyclone's receive thread, as measurements are delivered: takes them, stamps their arrival
   // there (one thread hop after the wire, as in ddsperf) and hands them to the main loop.
   void onMeasurements() {
-    constexpr std::size_t kBatch = 64;
-    std::vector<Arrival> arrivals;
+    // Usually one sample a call: a small batch keeps the loan and its info array small.
+    constexpr std::size_t kBatch = 16;
+    std::vector<Arrival>& arrivals = taken_;  // Cyclone runs one call of a listener at a time
     for (;;) {
       const std::int64_t received_ns = wallNowNs();
       const std::size_t count = measurement_reader_.takeEach(
@@ -334,7 +345,7 @@ class FusionCenter {
           });
       if (count < kBatch) break;
     }
-    if (!arrivals.empty() && inbox_.push(std::move(arrivals))) waitset_.wake();
+    if (!arrivals.empty() && inbox_.push(arrivals)) waitset_.wake();
   }
 
   // Reads only what never changes after construction (the run id): safe in the receive thread.
@@ -959,6 +970,8 @@ class FusionCenter {
   dds::ReadCondition tally_ready_;
   dds::ReadCondition status_ready_;
   Inbox inbox_;
+  std::vector<Arrival> taken_;    // the listener's batch (receive thread only)
+  std::vector<Arrival> drained_;  // the main loop's (main thread only)
   // After what its callback touches (reader, waitset, inbox): it is destroyed before them, and
   // its destructor waits for a callback in progress.
   dds::DataAvailableListener arrivals_listener_;
