@@ -136,6 +136,10 @@ void ProgressWatcher::takeControls() {
       shut_down_ = true;
     } else if (c.command == sensornet_EPISODE_START && (!episode_ || c.episode >= *episode_)) {
       if (!episode_) sayAllReady();  // the coordinator starts only once every sensor is ready
+      if (episode_ && c.episode > *episode_) {
+        previous_episode_ = episode_;
+        previous_clock_ = clock_;
+      }
       episode_ = c.episode;
       clock_ = {c.start_wall_time_ns, c.time_scale};
     }
@@ -144,8 +148,12 @@ void ProgressWatcher::takeControls() {
 
 RunPosition ProgressWatcher::positionAt(std::int64_t wall_ns) const {
   if (!episode_ || shut_down_) return {};
-  RunPosition at{episode_, std::nullopt};
-  const double t = clock_.emulatedAt(wall_ns);
+  // The next episode is announced while the current one runs: before its start, the position
+  // is in the one announced before it.
+  const bool before_latest = previous_episode_ && wall_ns < clock_.start_wall_ns;
+  const emulator::EpisodeClock& clock = before_latest ? previous_clock_ : clock_;
+  RunPosition at{before_latest ? previous_episode_ : episode_, std::nullopt};
+  const double t = clock.emulatedAt(wall_ns);
   if (t >= 0.0 && t <= horizon_s_) at.emulated_time_s = t;
   return at;
 }

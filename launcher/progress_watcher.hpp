@@ -86,9 +86,12 @@ class ProgressWatcher {
   std::size_t ready_said_ = 0;     // the count last printed
   std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point ready_said_at_{};
-  std::optional<std::uint32_t> episode_;  // the latest episode started
   emulator::EpisodeSet printed_;  // as ranges: small over millions of episodes
+  std::optional<std::uint32_t> episode_;  // the latest episode announced
   emulator::EpisodeClock clock_;          // its clock
+  // The one announced before it: it still runs while the latest (announced ahead) waits.
+  std::optional<std::uint32_t> previous_episode_;
+  emulator::EpisodeClock previous_clock_;
   bool shut_down_ = false;
 };
 
