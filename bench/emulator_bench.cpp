@@ -35,7 +35,21 @@
 //               measurements/s: latency median and p99, secured/unsecured ratio per round, and
 //               the fusion center's CPU time per measurement and whether it keeps up.
 //
-//   emulator_bench [startup|latency|throughput|all] [rounds: latency 3, startup 3]
+//   turnaround  (issue 15) episodes back to back: the default scenario (T = 3 s, 6 one-sensor
+//               processes) for 1000 episodes at time scale 1000, 200 at 100 and 30 at 10; a
+//               probe on the run's topics stamps every EpisodeControl and Report. Per run:
+//               episodes per second against the emulated-time limit (time scale / T), wall
+//               seconds of overhead per episode ((last report - first start - episodes x T /
+//               time scale) / episodes), the median gap between an episode's end and the next
+//               one's start, the median from an episode's end to the publication of its last
+//               EpisodeTally and to its Report at the probe, and the whole run from the
+//               processes' start to the coordinator's exit. Median of 3 rounds
+//               unless told. SENSORNET_BENCH_PROGRAMS=<build dir> takes the coordinator, fusion
+//               center and sensor agent from another build (a baseline in the same run; give
+//               it fewer episodes: `turnaround 3 50,20,10`).
+//
+//   emulator_bench [startup|latency|throughput|turnaround|all] [rounds: latency 3, startup 3]
+//   emulator_bench turnaround [rounds = 3] [episodes at time scale 1000,100,10 = 1000,200,30]
 //   emulator_bench overload [total rates/s, comma-separated = 30000,45000,60000,90000,...]
 //   emulator_bench security [rounds = 3] [total rates/s = 10000,40000]
 //   emulator_bench memory [episodes = 5000] [checkpoint = 1000]
@@ -70,6 +84,7 @@
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
+#include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
@@ -896,6 +911,170 @@ void security(int rounds, const std::vector<double>& rates) {
   }
 }
 
+// The programs of a turnaround run: this build's, or SENSORNET_BENCH_PROGRAMS=<build dir>'s.
+struct Programs {
+  std::string coordinator = kCoordinator;
+  std::string fusion_center = kFusionCenter;
+  std::string sensor_agent = kSensorAgent;
+};
+
+Programs benchPrograms() {
+  Programs p;
+  if (const char* dir = std::getenv("SENSORNET_BENCH_PROGRAMS"); dir != nullptr && *dir != '\0') {
+    const fs::path d(dir);
+    p.coordinator = (d / "coordinator" / "coordinator").string();
+    p.fusion_center = (d / "fusion_center" / "fusion_center").string();
+    p.sensor_agent = (d / "sensor_agent" / "sensor_agent").string();
+  }
+  return p;
+}
+
+// One run of `episodes` episodes of the default scenario at `time_scale`, watched on the wire.
+struct TurnaroundRun {
+  bool completed = false;
+  int episodes_reported = 0;
+  double run_s = 0.0;             // first episode's start to the last Report
+  double whole_s = 0.0;           // processes started to the coordinator's exit
+  double overhead_s = 0.0;        // per episode: (run_s - emulated limit) / episodes
+  double gap_median_s = 0.0;      // an episode's end to the next one's start
+  double report_median_s = 0.0;   // an episode's end to its Report at the probe
+  double tally_median_s = 0.0;    // an episode's end to its last EpisodeTally's publication
+  double episodes_per_s = 0.0;
+};
+
+constexpr double kDefaultHorizonS = 3.0;  // scenarios/default.yaml
+
+std::optional<TurnaroundRun> turnaroundRun(const std::string& run, int episodes,
+                                           double time_scale) {
+  namespace em = sensornet::emulator;
+  const Programs programs = benchPrograms();
+  Processes processes(fs::temp_directory_path() / run);
+  const fs::path report = processes.dir() / "report.json";
+  em::RunOptions options;
+  options.run_id = run;
+  sensornet::dds::Domain domain(options.domainConfig());
+  sensornet::dds::Participant participant(domain);
+  sensornet::dds::Topic<sensornet_EpisodeControl> control_topic(participant);
+  sensornet::dds::Topic<sensornet_Report> report_topic(participant);
+  sensornet::dds::Reader<sensornet_EpisodeControl> controls(participant, control_topic);
+  sensornet::dds::Reader<sensornet_Report> reports(participant, report_topic);
+  sensornet::dds::Topic<sensornet_EpisodeTally> tally_topic(participant);
+  sensornet::dds::Reader<sensornet_EpisodeTally> tallies(participant, tally_topic);
+
+  const auto began = std::chrono::steady_clock::now();
+  processes.start("fusion_center", {programs.fusion_center, "serve", "--run-id", run,
+                                    "--report", report.string()});
+  for (int j = 0; j < 6; ++j) {
+    processes.start("sensor-" + std::to_string(j),
+                    {programs.sensor_agent, "--run-id", run, "--sensors", std::to_string(j)});
+  }
+  std::ostringstream scale;
+  scale << time_scale;
+  BackgroundProcess& coordinator = processes.start(
+      "coordinator", {programs.coordinator, "serve", "--run-id", run, "--scenario",
+                      kSourceDir + "/scenarios/default.yaml", "--episodes",
+                      std::to_string(episodes), "--time-scale", scale.str()});
+  std::map<std::uint32_t, std::int64_t> starts;    // episode -> announced start (wall ns)
+  std::map<std::uint32_t, std::int64_t> reported;  // episode -> Report seen at the probe
+  std::map<std::uint32_t, std::int64_t> tallied;   // episode -> its last tally's publication
+  std::optional<int> code;
+  while (!code && secondsSince(began) < 300.0) {
+    for (auto& c : controls.take(64).samples) {
+      if (c.sample->command == sensornet_EPISODE_START) {
+        starts[c.sample->episode] = c.sample->start_wall_time_ns;
+      }
+    }
+    const std::int64_t now = em::wallNowNs();
+    for (auto& r : reports.take(64).samples) reported.emplace(r.sample->episode, now);
+    for (auto& t : tallies.take(256).samples) {
+      std::int64_t& last = tallied[t.sample->episode];
+      last = std::max(last, t.sample->wall_time_ns);
+    }
+    code = coordinator.waitForExit(std::chrono::milliseconds(0));
+    if (!code) std::this_thread::sleep_for(500us);
+  }
+  TurnaroundRun t;
+  t.whole_s = secondsSince(began);
+  std::this_thread::sleep_for(1s);  // the fusion center writes the report
+  const nlohmann::json r = readReport(report);
+  t.completed = code == 0 && !r.is_null() && r.value("status", "") == "completed";
+  t.episodes_reported = static_cast<int>(reported.size());
+  if (starts.empty() || reported.empty()) return t;
+  const auto episode_ns = static_cast<std::int64_t>(1e9 * kDefaultHorizonS / time_scale);
+  std::vector<double> gaps, to_report, to_tally;
+  for (const auto& [e, start] : starts) {
+    if (const auto next = starts.find(e + 1); next != starts.end()) {
+      gaps.push_back(1e-9 * static_cast<double>(next->second - (start + episode_ns)));
+    }
+    if (const auto seen = reported.find(e); seen != reported.end()) {
+      to_report.push_back(1e-9 * static_cast<double>(seen->second - (start + episode_ns)));
+    }
+    if (const auto seen = tallied.find(e); seen != tallied.end()) {
+      to_tally.push_back(1e-9 * static_cast<double>(seen->second - (start + episode_ns)));
+    }
+  }
+  t.run_s = 1e-9 * static_cast<double>(reported.rbegin()->second - starts.begin()->second);
+  const double limit_s = episodes * kDefaultHorizonS / time_scale;
+  t.overhead_s = (t.run_s - limit_s) / episodes;
+  t.episodes_per_s = episodes / t.run_s;
+  t.gap_median_s = gaps.empty() ? 0.0 : median(gaps);
+  t.report_median_s = to_report.empty() ? 0.0 : median(to_report);
+  t.tally_median_s = to_tally.empty() ? 0.0 : median(to_tally);
+  return t;
+}
+
+// `episodes`: per time scale 1000, 100 and 10 (fewer for a slow baseline).
+void turnaround(int rounds, const std::vector<double>& episodes) {
+  struct Case {
+    double time_scale;
+    int episodes;
+  };
+  const std::vector<double> scales = {1000.0, 100.0, 10.0};
+  std::vector<Case> cases;
+  for (std::size_t i = 0; i < scales.size() && i < episodes.size(); ++i) {
+    cases.push_back({scales[i], std::max(2, static_cast<int>(episodes[i]))});
+  }
+  std::printf("turnaround: the default scenario (T = %g s), 6 sensor processes; median of %d "
+              "rounds%s\n",
+              kDefaultHorizonS, rounds,
+              std::getenv("SENSORNET_BENCH_PROGRAMS") != nullptr ? " (SENSORNET_BENCH_PROGRAMS)"
+                                                                 : "");
+  for (const Case& c : cases) {
+    std::vector<double> per_s, overhead, gap, to_report, to_tally, whole;
+    int completed = 0;
+    for (int round = 0; round < rounds; ++round) {
+      const auto t = turnaroundRun(
+          runId("turnaround" + std::to_string(static_cast<int>(c.time_scale)), round),
+          c.episodes, c.time_scale);
+      if (!t) continue;
+      completed += t->completed ? 1 : 0;
+      per_s.push_back(t->episodes_per_s);
+      overhead.push_back(t->overhead_s);
+      gap.push_back(t->gap_median_s);
+      to_report.push_back(t->report_median_s);
+      to_tally.push_back(t->tally_median_s);
+      whole.push_back(t->whole_s);
+      std::printf("  time scale %g, %d episodes, round %d: %s, %d reports seen; %.1f episodes/s "
+                  "(limit %.1f), overhead %.2f ms/episode, gap %.2f ms, end to last tally %.2f "
+                  "ms, end to report %.2f ms, whole run %.2f s\n",
+                  c.time_scale, c.episodes, round, t->completed ? "completed" : "NOT COMPLETED",
+                  t->episodes_reported, t->episodes_per_s, c.time_scale / kDefaultHorizonS,
+                  1e3 * t->overhead_s, 1e3 * t->gap_median_s, 1e3 * t->tally_median_s,
+                  1e3 * t->report_median_s, t->whole_s);
+      std::fflush(stdout);
+    }
+    if (per_s.empty()) continue;
+    std::printf("turnaround: time scale %g, %d episodes: %.1f episodes/s against a limit of %.1f "
+                "(%.0f%%), overhead %.2f ms/episode, gap %.2f ms, end to last tally %.2f ms, end "
+                "to report %.2f ms, whole run %.2f s; %d/%d rounds completed\n",
+                c.time_scale, c.episodes, median(per_s), c.time_scale / kDefaultHorizonS,
+                100.0 * median(per_s) * kDefaultHorizonS / c.time_scale, 1e3 * median(overhead),
+                1e3 * median(gap), 1e3 * median(to_tally), 1e3 * median(to_report),
+                median(whole), completed, rounds);
+    std::fflush(stdout);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -914,9 +1093,9 @@ int main(int argc, char** argv) {
                   argc > 3 ? std::max(1ULL, std::strtoull(argv[3], nullptr, 10)) : 1000);
   }
   if (what != "all" && what != "startup" && what != "latency" && what != "throughput" &&
-      what != "overload") {
+      what != "overload" && what != "turnaround") {
     std::fprintf(stderr,
-                 "usage: emulator_bench [startup|latency|throughput|all] [rounds]\n"
+                 "usage: emulator_bench [startup|latency|throughput|turnaround|all] [rounds]\n"
                  "       emulator_bench overload [total rates/s, comma-separated]\n");
     return 2;
   }
@@ -935,5 +1114,9 @@ int main(int argc, char** argv) {
   }
   if (what == "all" || what == "latency") latency(argc > 2 ? std::max(1, std::atoi(argv[2])) : 3);
   if (what == "all" || what == "throughput") throughput();
+  if (what == "all" || what == "turnaround") {
+    turnaround(what == "turnaround" && argc > 2 ? std::max(1, std::atoi(argv[2])) : 3,
+               parseRates(what == "turnaround" && argc > 3 ? argv[3] : "1000,200,30"));
+  }
   return 0;
 }
