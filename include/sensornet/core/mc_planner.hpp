@@ -27,8 +27,10 @@
 //    Refinement stops after 3 failures in a row, at max_iterations, at the time or episode
 //    budget, or when progress returns false.
 //  - Honesty: on fresh episodes (acceptance_episodes, another seed) the starts are scored again
-//    and the best of them becomes the reference; the refined schedule replaces it only if a
-//    paired one-sided t-test on those episodes says it is better at level 5%. The returned
+//    and raced: a start leaves when a paired test says it is worse than the leader (one-sided
+//    2.5%) or equal within 0.5%; while two remain the sample doubles (up to 8x, as time allows).
+//    The winner becomes the reference; the refined schedule replaces it only if a paired
+//    one-sided t-test on the same episodes says it is better at level 5%. The returned
 //    schedule is then scored on yet another fresh sample (report_episodes): mean and 95%
 //    half-width t_{0.975, E-1} s / √E.
 //  - Time: the screening sample shrinks (to >= 200 episodes, measured on a pilot) so that it
