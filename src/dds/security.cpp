@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/xml_text.hpp"
 
 namespace sensornet::dds {
 namespace {
@@ -96,33 +97,19 @@ void checkKeyMatches(X509* cert, const SecurityFiles& files) {
   }
 }
 
-std::string xmlEscaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 // "file:/abs/path"; a comma would split Cyclone's list of configuration fragments.
 std::string fileUri(const fs::path& path) {
   const std::string text = path.string();
   if (text.find(',') != std::string::npos) {
     throw InputError(text, "", "a path without ',' (Cyclone's configuration list splits on it)");
   }
-  return "file:" + xmlEscaped(text);
+  return "file:" + escapeXml(text);
 }
 
 std::string library(const std::string& name, const char* init, const char* finalize) {
   const fs::path dir = securityPluginDirectory();
   const std::string path = dir.empty() ? name : (dir / ("lib" + name + ".so")).string();
-  return "<Library path=\"" + xmlEscaped(path) + "\" initFunction=\"" + init +
+  return "<Library path=\"" + escapeXml(path) + "\" initFunction=\"" + init +
          "\" finalizeFunction=\"" + finalize + "\"/>";
 }
 

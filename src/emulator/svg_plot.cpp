@@ -51,21 +51,6 @@ std::string formatTick(double value) {
   return text;
 }
 
-std::string escapeXml(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 Scale::Scale(Interval data, Interval pixels, bool log) : data_(data), pixels_(pixels), log_(log) {
   if (log_ && !(data_.lo > 0.0 && data_.hi > 0.0)) {
     throw std::invalid_argument("a log scale needs a positive range");

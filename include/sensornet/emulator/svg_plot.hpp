@@ -21,6 +21,8 @@
 #include <utility>
 #include <vector>
 
+#include "sensornet/core/xml_text.hpp"
+
 namespace sensornet::emulator {
 
 struct Interval {
@@ -52,8 +54,6 @@ class Scale {
 [[nodiscard]] std::vector<double> decadeTicks(Interval range);
 // A tick label: up to 6 significant digits, no trailing zeros ("0.2", "1500", "1e-05").
 [[nodiscard]] std::string formatTick(double value);
-// Text made safe inside XML and HTML (& < > " ').
-[[nodiscard]] std::string escapeXml(const std::string& text);
 
 struct Axis {
   Axis(Interval range_, std::string label_, bool log_ = false)
