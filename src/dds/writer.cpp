@@ -1,7 +1,10 @@
 #include "sensornet/dds/writer.hpp"
 
+#include <memory>
+
 #include "sensornet/dds/dds_error.hpp"
 #include "sensornet/dds/waitset.hpp"
+#include "whc_instance_ref.h"
 
 namespace sensornet::dds::detail {
 namespace {
@@ -10,6 +13,16 @@ WriteResult interpret(dds_return_t result, const char* call) {
   if (result == DDS_RETCODE_TIMEOUT) return WriteResult::TimedOut;
   check(result, call);
   return WriteResult::Written;
+}
+
+// Whether `writer` keeps its latest samples for late joiners: its unregistrations always pass
+// through its history cache.
+bool transientLocal(dds_entity_t writer) {
+  const std::unique_ptr<dds_qos_t, decltype(&dds_delete_qos)> qos(dds_create_qos(),
+                                                                   &dds_delete_qos);
+  check(dds_get_qos(writer, qos.get()), "dds_get_qos");
+  dds_durability_kind_t kind = DDS_DURABILITY_VOLATILE;
+  return dds_qget_durability(qos.get(), &kind) && kind == DDS_DURABILITY_TRANSIENT_LOCAL;
 }
 
 }  // namespace
@@ -35,6 +48,19 @@ WriteResult WriterCore::disposeUntyped(const void* key_sample) {
 
 WriteResult WriterCore::unregisterUntyped(const void* key_sample) {
   return interpret(api().unregister_instance(handle(), key_sample), "dds_unregister_instance");
+}
+
+WriteResult WriterCore::unregisterWrittenUntyped(const void* key_sample) {
+  if (!transientLocal(handle())) {
+    check(DDS_RETCODE_PRECONDITION_NOT_MET, "unregisterWrittenInstance (a transient-local writer)");
+  }
+  // Looked up while the instance is surely in Cyclone's key-to-instance map.
+  const dds_instance_handle_t instance = dds_lookup_instance(handle(), key_sample);
+  const WriteResult result = unregisterUntyped(key_sample);
+  if (result == WriteResult::Written) {
+    (void)sensornet_release_unregistered_instance(handle(), instance);
+  }
+  return result;
 }
 
 std::uint32_t WriterCore::matchedReaders() const {

@@ -47,6 +47,7 @@ class WriterCore : public Entity {
   WriteResult writeUntyped(const void* sample, std::int64_t source_time_ns);
   WriteResult disposeUntyped(const void* key_sample);
   WriteResult unregisterUntyped(const void* key_sample);
+  WriteResult unregisterWrittenUntyped(const void* key_sample);
 
  private:
   dds_entity_t participant_ = 0;
@@ -73,6 +74,13 @@ class Writer : public detail::WriterCore {
   WriteResult dispose(const T& key_sample) { return disposeUntyped(&key_sample); }
   // Stops writing the instance; when no writer is left, readers see "no writers".
   WriteResult unregisterInstance(const T& key_sample) { return unregisterUntyped(&key_sample); }
+  // The same for an instance this writer wrote since its last unregistration, on a
+  // transient-local writer: also gives back what Cyclone 0.10 would keep of the instance for
+  // the writer's whole life (src/dds/whc_instance_ref.h), so that a writer of one instance per
+  // episode stays flat. Throws DdsError if the writer is not transient-local.
+  WriteResult unregisterWrittenInstance(const T& key_sample) {
+    return unregisterWrittenUntyped(&key_sample);
+  }
 };
 
 }  // namespace sensornet::dds
