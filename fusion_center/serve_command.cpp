@@ -845,7 +845,8 @@ class FusionCenter {
   // The Report topic keeps the last report of each episode for late joiners: an instance per
   // episode, held by this writer and by every reader until it is unregistered. Only the latest
   // kReportsKept stay registered (a restarted coordinator needs the last one), so that memory
-  // does not grow with the number of episodes.
+  // does not grow with the number of episodes (with Cyclone 0.10 only if the unregistration also
+  // gives back the key Cyclone keeps of every instance written: unregisterWrittenInstance).
   void forgetOldReports(std::uint32_t episode) {
     reports_registered_.push_back(episode);
     if (reports_registered_.size() <= kReportsKept) return;
@@ -853,7 +854,7 @@ class FusionCenter {
     key.run_id = dds::borrowString(options_.run.run_id);
     key.episode = reports_registered_.front();
     reports_registered_.pop_front();
-    (void)report_writer_.unregisterInstance(key);  // a timeout only keeps the old report longer
+    (void)report_writer_.unregisterWrittenInstance(key);  // a timeout keeps the report longer
   }
 
   // DESIGN.md's run outcome, as far as the fusion center saw it (the launcher adds what it saw
