@@ -55,6 +55,7 @@ struct ServeOptions {
   double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
   FailurePolicy on_sensor_failure = FailurePolicy::Replan;
   bool network_aware = false;
+  std::string arrivals;    // empty: the scenario's `arrivals:`; else poisson or timetable
   std::string state_path;  // the journal (empty: none)
   bool resume = false;     // start from the journal
   bool json = false;
@@ -723,6 +724,9 @@ int runServe(ServeOptions options) {
   run.scenario = parseScenarioYaml(run.yaml, options.scenario_path);
   run.digest = emulator::digestOf(run.yaml);
   run.seed = options.seed;
+  if (!options.arrivals.empty()) {
+    run.scenario.arrivals = parseArrivalMode(options.arrivals, "--arrivals", "arrivals");
+  }
   (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning
   if (options.network_aware && !run.scenario.network) {
     throw InputError(options.scenario_path, "network",
@@ -800,6 +804,11 @@ Subcommand addServeCommand(CLI::App& app) {
                 "plan the initial schedule and every re-plan for the rates the scenario's "
                 "network: section delivers (loss thins them, outages of every episode zero "
                 "them), with C lambda <= b on the planned rates; needs a network: section");
+  cmd->add_option("--arrivals", options->arrivals,
+                  "poisson or timetable: how every sensor's instants follow from its rates "
+                  "(timetable: deterministic, where the integrated rate is k - 1/2); overrides "
+                  "the scenario's arrivals: and is announced with the scenario")
+      ->check(CLI::IsMember({"poisson", "timetable"}));
   CLI::Option* state =
       cmd->add_option("--state", options->state_path,
                       "keep a journal of the run in FILE (JSON, replaced atomically after every "

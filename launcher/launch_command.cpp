@@ -81,6 +81,7 @@ struct LaunchOptions {
   bool no_html = false;  // no report page (report.html) beside the report
   std::string on_sensor_failure = "replan";
   std::string network_aware = "auto";  // auto: when the scenario has a network: section
+  std::string arrivals;  // poisson or timetable; empty: the scenario's `arrivals:`
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
@@ -219,6 +220,9 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   if (options.network_aware == "yes" ||
       (options.network_aware == "auto" && scenario.network.has_value())) {
     coordinator.emplace_back("--network-aware");
+  }
+  if (!options.arrivals.empty()) {
+    coordinator.insert(coordinator.end(), {"--arrivals", options.arrivals});
   }
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator), flags, plan.log_dir));
   return plan;
@@ -680,6 +684,14 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "section")
       ->check(CLI::IsMember({"auto", "yes", "no"}))
       ->capture_default_str();
+  cmd->add_option("--arrivals", options->arrivals,
+                  "how every sensor's instants follow from its rates: poisson (drawn afresh "
+                  "each episode) or timetable (deterministic, where the sensor's integrated "
+                  "rate reaches k - 1/2, the same every episode; across a re-plan the count "
+                  "continues on the rates in force); default: the scenario's arrivals:, else "
+                  "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
+                  "the schedule, not the run's cost")
+      ->check(CLI::IsMember({"poisson", "timetable"}));
   cmd->add_option("--require", options->require,
                   "make the run a CI gate: comma-separated criteria checked against the report "
                   "after the run, each printed as pass or FAIL with the value measured; any "

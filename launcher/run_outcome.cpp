@@ -148,6 +148,18 @@ std::string meetsText(const json& meets) {
   return "undetermined";
 }
 
+// The arrival mode of the run (the report's "arrivals"), and under timetables what the realized
+// cost line printed before it does not say: its bracket is about Poisson arrivals. A report
+// without the key (a rebuilt one, an older fusion center) says nothing of the mode.
+std::string arrivalsLine(const json& arrivals) {
+  const std::string mode =
+      arrivals.is_object() ? arrivals.value("mode", std::string("unknown")) : "not reported";
+  if (mode != "timetable") return "arrivals: " + mode;
+  return "arrivals: timetable (deterministic instants, the same every episode): the bracket "
+         "[info, cov] bounds the Poisson mean of the schedule, not this cost; meets_bracket only "
+         "says whether the cost lies in it";
+}
+
 }  // namespace
 
 int exitCodeOf(const std::string& status) {
@@ -273,6 +285,7 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
       shown(field(summary, "mean")).c_str(), interval.c_str(),
       shown(field(bracket, "info")).c_str(), shown(field(bracket, "cov")).c_str(),
       meetsText(field(summary, "meets_bracket")).c_str());
+  std::printf("%s\n", arrivalsLine(field(report, "arrivals")).c_str());
   std::printf("measurements: %s sent, %s received, %s lost, %s rejected\n",
               shown(field(summary, "sent")).c_str(), shown(field(summary, "received")).c_str(),
               shown(field(summary, "lost")).c_str(),
@@ -306,6 +319,7 @@ void printOutcomeJson(const RunOutcome& outcome, const fs::path& report_path) {
       field(outcome.report, "faults").is_array() ? outcome.report["faults"] : json::array();
   line["episodes"] = field(outcome.report, "episodes");
   line["episodes_planned"] = field(outcome.report, "episodes_planned");
+  line["arrivals"] = field(outcome.report, "arrivals");
   line["report"] = report_path.string();
   if (outcome.rebuilt) line["rebuilt_from"] = field(outcome.report, "rebuilt_from");
   if (outcome.write_problem) line["report_error"] = *outcome.write_problem;

@@ -172,7 +172,8 @@ class Agent {
 
   [[nodiscard]] std::vector<emulator::TimedArrival> timelineOf(std::uint32_t episode) const {
     return emulator::sensorTimeline(inputs_.book(), inputs_.plant(), inputs_.run().seed, episode,
-                                    live_sensors_, inputs_.scenario().horizon_s);
+                                    live_sensors_, inputs_.scenario().horizon_s,
+                                    inputs_.scenario().arrivals);
   }
 
   // The hosted sensors the coordinator has not declared dead (they publish nothing, no tally).

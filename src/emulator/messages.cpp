@@ -6,6 +6,7 @@
 #include <ctime>
 #include <vector>
 
+#include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/io/scenario_file.hpp"
@@ -48,6 +49,8 @@ dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
   sample.sensor_count = static_cast<std::uint32_t>(scenario.scenario.sensorCount());
   sample.state_dim = static_cast<std::uint32_t>(scenario.scenario.stateDim());
   sample.seed = scenario.seed;
+  const std::string arrivals(arrivalModeName(scenario.scenario.arrivals));
+  sample.arrivals = borrowString(arrivals);
   return writer.write(sample);
 }
 
@@ -69,6 +72,11 @@ RunScenario scenarioFromWire(const sensornet_Scenario& sample) {
     throw InputError(source, "state_dim/sensor_count/intervals/horizon_s",
                      "the dimensions of the YAML it carries");
   }
+  // The mode in force is the one announced, not the YAML's (--arrivals overrides it). The field
+  // was appended to the IDL; a writer that leaves it empty runs Poisson arrivals, as before it.
+  const std::string_view arrivals = viewString(sample.arrivals);
+  result.scenario.arrivals = arrivals.empty() ? ArrivalMode::Poisson
+                                              : parseArrivalMode(arrivals, source, "arrivals");
   return result;
 }
 

@@ -38,7 +38,9 @@ struct RunScenario {
 [[nodiscard]] dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
                                                const std::string& run_id,
                                                const RunScenario& scenario);
-// Parses the YAML, checks the digest and the announced dimensions; throws InputError.
+// Parses the YAML, checks the digest and the announced dimensions; throws InputError. The
+// arrival mode is the announced `arrivals` (scenario.arrivals as published), not the YAML's;
+// empty (a writer that does not set it) means Poisson.
 [[nodiscard]] RunScenario scenarioFromWire(const sensornet_Scenario& sample);
 
 [[nodiscard]] dds::WriteResult publishSchedule(dds::Writer<sensornet_Schedule>& writer,

@@ -6,11 +6,23 @@
 // version arrives is identical up to the new version's effective time: an agent just recomputes
 // it and carries on from where it was.
 //
+// With ArrivalMode::Timetable the instants are deterministic (arrival_timetable.hpp) and use no
+// randomness (seed and episode play no part): sensor j's k-th instant is where the composed
+// intensity of the versions in force, the old version's rates before a switch at s and the new
+// one's after it, integrates to k - 1/2. So a switch continues the count from Λ_j(s) of the old
+// version (it neither restarts at 0 nor jumps to the new version's own Λ_j(s)), the instants
+// before s are unchanged, and without a switch every episode has the same instants. Example: a
+// sensor at 2 Hz switched at s = 1.2 s to 5 Hz has Λ(s) = 2.4: instants 0.25 and 0.75 (Λ = 0.5,
+// 1.5) under the old version, then 1.2 + (2.5 - 2.4) / 5 = 1.22, 1.42, ... under the new one.
+//
 //   std::vector<TimedArrival> plan = sensorTimeline(book, plant, seed, episode, {0, 1}, T);
+//   std::vector<TimedArrival> fixed =
+//       sensorTimeline(book, plant, seed, episode, {0, 1}, T, ArrivalMode::Timetable);
 
 #include <cstdint>
 #include <vector>
 
+#include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
@@ -30,6 +42,7 @@ struct TimedArrival {
                                                        const EmulatedPlant& plant,
                                                        std::uint64_t seed, std::uint32_t episode,
                                                        const std::vector<int>& sensors,
-                                                       double horizon_s);
+                                                       double horizon_s,
+                                                       ArrivalMode mode = ArrivalMode::Poisson);
 
 }  // namespace sensornet::emulator
