@@ -12,7 +12,8 @@
 // Scale mode (issue 14, "plan at scale"): time, iterations, status and KKT residual against n
 // and M for the default optimizer and IPOPT in the same run, medians over the instances.
 //   planner_bench --scale [--instances 3] [--max-seconds 60] [--only pqn|ipopt] [--n N] [--m M]
-//                         [--markdown]
+//                         [--each] [--markdown]
+// --each adds one line per instance (J/trP0 to 10 digits, residual, iterations, time).
 
 #include <algorithm>
 #include <chrono>
@@ -57,6 +58,7 @@ struct Options {
   double max_seconds = 60.0;  // per solve, scale mode
   std::string only_method;    // scale mode: "pqn" or "ipopt" alone (empty: both)
   int only_m = 0;             // scale mode: just the rows with this M (0: all)
+  bool each = false;          // scale mode: also one line per instance (J to 10 digits)
 };
 
 struct Column {  // one surrogate at one sweep point, over the instances
@@ -238,6 +240,15 @@ void printScaleRow(const ScaleCase& c, const char* method, const ScaleColumn& co
   std::fflush(stdout);
 }
 
+// One line per instance, to compare optima between versions of the planner.
+void printInstances(const char* method, const ScaleColumn& col) {
+  for (std::size_t i = 0; i < col.seconds.size(); ++i) {
+    std::printf("    %s instance %zu: J/trP0 %.10g, kkt %.2e, it %.0f, evals %.0f, %.3f s\n", method,
+                i, col.objective[i], col.kkt[i], col.iterations[i], col.evaluations[i],
+                col.seconds[i]);
+  }
+}
+
 void runScale(const Options& options) {
   const std::vector<ScaleCase> cases = {
       {PlanSurrogate::Information, 20, 30},   {PlanSurrogate::Information, 20, 100},
@@ -277,6 +288,10 @@ void runScale(const Options& options) {
     const double ipopt_seconds = ipopt.seconds.empty() ? 0.0 : median(ipopt.seconds);
     if (!pqn.seconds.empty()) printScaleRow(c, "pqn", pqn, ipopt_seconds, options.markdown);
     if (!ipopt.seconds.empty()) printScaleRow(c, "ipopt", ipopt, 0.0, options.markdown);
+    if (options.each) {
+      printInstances("pqn", pqn);
+      printInstances("ipopt", ipopt);
+    }
   }
 }
 
@@ -318,12 +333,14 @@ int main(int argc, char** argv) {
       options.only_m = std::atoi(value().c_str());
     } else if (arg == "--only") {
       options.only_method = value();
+    } else if (arg == "--each") {
+      options.each = true;
     } else {
       std::fprintf(stderr,
                    "usage: planner_bench [--sweep sensors|states|both] [--instances K] "
                    "[--mc-runs R] [--method pqn|ipopt] [--tolerance T] [--substeps S] [--n N] [--markdown]\n"
                    "       planner_bench --scale [--instances K] [--max-seconds S] "
-                   "[--only pqn|ipopt] [--n N] [--m M] [--markdown]\n");
+                   "[--only pqn|ipopt] [--n N] [--m M] [--each] [--markdown]\n");
       return arg == "--help" ? 0 : 2;
     }
   }

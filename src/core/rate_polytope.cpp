@@ -26,16 +26,19 @@ double rowMultiplier(const Eigen::Ref<const Eigen::VectorXd>& c, const Eigen::Ve
   }
   if (load <= b) return 0.0;
   // Walk the breakpoints from the largest down: on (t_next, t) the active set is fixed and
-  // load(μ) = Σ_active c_j z_j - μ Σ_active c_j², linear.
-  std::sort(breakpoints.begin(), breakpoints.end(),
-            [](const auto& l, const auto& r) { return l.first > r.first; });
+  // load(μ) = Σ_active c_j z_j - μ Σ_active c_j², linear. A heap yields them in that order
+  // without sorting all of them: the root usually lies among the few largest (a sparse plan).
+  const auto smaller = [](const auto& l, const auto& r) { return l.first < r.first; };
+  std::make_heap(breakpoints.begin(), breakpoints.end(), smaller);
   double intercept = 0.0;  // Σ_active c_j z_j
   double slope = 0.0;      // Σ_active c_j²
-  for (std::size_t i = 0; i < breakpoints.size(); ++i) {
-    const auto [t, cj] = breakpoints[i];
+  for (auto end = breakpoints.end(); end != breakpoints.begin();) {
+    std::pop_heap(breakpoints.begin(), end, smaller);
+    --end;
+    const auto [t, cj] = *end;
     intercept += cj * cj * t;
     slope += cj * cj;
-    const double next = i + 1 < breakpoints.size() ? breakpoints[i + 1].first : 0.0;
+    const double next = end != breakpoints.begin() ? breakpoints.front().first : 0.0;
     // The root lies in [next, t] when load(next) >= b.
     if (intercept - next * slope >= b) return (intercept - b) / slope;
   }
