@@ -146,7 +146,7 @@ class FusionCenter {
         measurement_reader_(participant_, measurement_topic_),
         tally_reader_(participant_, tally_topic_),
         status_reader_(participant_, status_topic_),
-        report_writer_(participant_, report_topic_),
+        report_writer_(participant_, report_topic_, dds::reportWriterQos()),
         state_writer_(participant_, state_topic_),
         waitset_(participant_),
         tally_ready_(tally_reader_),

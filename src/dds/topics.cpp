@@ -43,6 +43,8 @@ Qos sensorStatusQos() {
 
 Qos reportQos() { return lastKnownState(1); }
 
+Qos reportWriterQos() { return reportQos().keepAll(); }
+
 Qos commandQos() { return Qos().reliable(kMaxBlockingTime).volatileDurability().keepAll(); }
 
 Qos commandReplyQos() { return lastKnownState(1); }
