@@ -2,9 +2,9 @@
 // A work-around for a memory leak of Cyclone DDS 0.10 (every 0.10.x; fixed upstream in 11.0 by
 // commit 5cbf5c0, "Fix tkmap_instance leak in WHC"): a writer's history cache takes a reference
 // on the key-to-instance map entry (tkmap) of every instance it indexes and never gives it back,
-// so the entry, its key and the pooled serialization buffer that holds the key (up to a few KiB)
-// outlive the instance's unregistration. A transient-local writer of one instance per episode
-// (the fusion center's Reports) then keeps ~2.3 KB per episode for the rest of its life.
+// so the entry and the serialized key it holds outlive the instance's unregistration. A writer
+// of one instance per episode (the fusion center's Reports) then keeps ~300 bytes per episode
+// for the rest of its life (measured, bench/README.md "Memory over long runs").
 //
 // Call it on the thread that has just unregistered, successfully, an instance that the writer
 // had written since its last unregistration (so that the history cache indexed it and has now
