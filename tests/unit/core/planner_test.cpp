@@ -167,6 +167,44 @@ TEST(RatePolytope, ProjectionSatisfiesTheVariationalInequality) {
   }
 }
 
+// The paper's budget {λ >= 0, 1'λ <= b} at planning scale (M = 1000, many ties and negative
+// entries): the projection is max(0, y - μ) with μ the root of Σ max(0, y_j - μ) = b, found here
+// independently by bisection (200 halvings of [0, max y]).
+TEST(RatePolytope, BudgetProjectionMatchesBisectionOnTheMultiplier) {
+  constexpr int kSensors = 1000;
+  ResourceConstraints constraints;
+  constraints.C = MatrixXd::Ones(1, kSensors);
+  constraints.b = VectorXd::Constant(1, 5.0);
+  const RatePolytope polytope(constraints);
+  Rng rng(17);
+  for (int trial = 0; trial < 20; ++trial) {
+    VectorXd y(kSensors);
+    for (int j = 0; j < kSensors; ++j) {
+      // Half the trials draw from 7 values only, so that many breakpoints tie.
+      const double draw = trial % 2 == 0 ? std::round(3.0 * rng.normal()) / 3.0 : rng.normal();
+      y(j) = 0.05 * draw + (trial % 4 == 1 ? 0.0 : 0.01);
+    }
+    const auto load = [&y](double mu) { return (y.array() - mu).cwiseMax(0.0).sum(); };
+    double mu = 0.0;
+    if (load(0.0) > 5.0) {
+      double low = 0.0, high = y.maxCoeff();
+      for (int i = 0; i < 200; ++i) {
+        const double middle = 0.5 * (low + high);
+        if (load(middle) > 5.0) {
+          low = middle;
+        } else {
+          high = middle;
+        }
+      }
+      mu = 0.5 * (low + high);
+    }
+    const VectorXd expected = (y.array() - mu).cwiseMax(0.0).matrix();
+    const VectorXd p = polytope.project(y);
+    ASSERT_TRUE(polytope.contains(p, 1e-12));
+    EXPECT_LE((p - expected).cwiseAbs().maxCoeff(), 1e-12) << "trial " << trial;
+  }
+}
+
 TEST(RatePolytope, ExcludedSensorsGetNoRate) {
   ResourceConstraints constraints;
   constraints.C = MatrixXd::Ones(1, 4);
