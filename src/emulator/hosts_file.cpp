@@ -12,6 +12,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/yaml_text.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -226,14 +227,7 @@ bool isHostIpv4Address(std::string_view text) {
 }
 
 HostsFile parseHostsYaml(const std::string& text, const std::string& source, int sensor_count) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "",
-                     "valid YAML (" + e.msg + ")");
-  }
-  return parseHostsTree(root, source, sensor_count);
+  return parseHostsTree(parseYamlText(text, source), source, sensor_count);
 }
 
 HostsFile loadHostsFile(const std::string& path, int sensor_count) {

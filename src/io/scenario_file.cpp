@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/io/yaml_text.hpp"
 #include "scenario_network.hpp"
 #include "yaml_reader.hpp"
 
@@ -150,13 +151,7 @@ void readArrivalMode(const YamlReader& in, const YAML::Node& node, Scenario& s) 
 }  // namespace
 
 Scenario parseScenarioYaml(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "",
-                     "valid YAML (" + e.msg + ")");
-  }
+  const YAML::Node root = parseYamlText(text, source);
   const YamlReader in(source);
   if (!root.IsMap()) in.fail(root, "(top level)", "a mapping with horizon, intervals, ...");
   in.rejectUnknownKeys(root, "", {"horizon", "intervals", "plant", "sensors", "cost",
