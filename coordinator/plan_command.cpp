@@ -19,7 +19,7 @@ namespace {
 
 struct PlanOptions {
   std::string scenario_path;
-  PlanSurrogate surrogate = PlanSurrogate::Information;
+  PlanSurrogate surrogate = PlanSurrogate::Covariance;
   std::string out_path;
   std::string warm_start_path;
   std::vector<int> excluded;

@@ -43,7 +43,7 @@ enum class FailurePolicy { Replan, Continue, Stop };
 struct ServeOptions {
   emulator::RunOptions run;
   std::string scenario_path;
-  PlanSurrogate surrogate = PlanSurrogate::Information;
+  PlanSurrogate surrogate = PlanSurrogate::Covariance;
   std::string schedule_path;
   int episodes = 20;
   double time_scale = 1.0;
@@ -681,9 +681,7 @@ emulator::CoordinatorJournal freshJournal(const ServeOptions& options,
   spdlog::info("bracket of schedule v1: [{:.6g}, {:.6g}]", initial.bracket.info,
                initial.bracket.cov);
   emulator::CoordinatorJournal journal = journalHeader(options, run);
-  journal.settings = emulator::initialSettings(
-      run.scenario,
-      initial.surrogate == "file" ? PlanSurrogate::Information : options.surrogate);
+  journal.settings = emulator::initialSettings(run.scenario, options.surrogate);
   journal.versions.push_back(std::move(initial));
   return journal;
 }
