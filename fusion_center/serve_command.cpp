@@ -6,6 +6,7 @@
 #include <chrono>
 #include <ctime>
 #include <deque>
+#include <filesystem>
 #include <iostream>
 #include <iterator>
 #include <limits>
@@ -212,12 +213,10 @@ class FusionCenter {
     const emulator::RunInputs::Update update = inputs_.poll();
     if (update.scenario_arrived) {
       const Scenario& s = inputs_.scenario();
-      if (episode_log_) {  // the entries are read back from the log for the report
-        report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim(),
-                        emulator::episodeLogPath(options_.report_path));
-      } else {
-        report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim());
-      }
+      std::optional<std::filesystem::path> read_back;  // the report's entries, from the log
+      if (episode_log_) read_back = emulator::episodeLogPath(options_.report_path);
+      report_.emplace(options_.run.run_id, inputs_.run().digest, s.sensorCount(), s.stateDim(),
+                      std::move(read_back));
       if (resumed_) {
         for (const json& entry : resumed_->entries()) report_->add(entry);
       }
@@ -445,20 +444,14 @@ class FusionCenter {
     }
   }
 
-  // A measurement the fusion would take if its writer spoke for the sensor (a foreign writer's
-  // sample that is malformed anyway is counted under the more telling reason by the fusion).
-  [[nodiscard]] bool wellFormed(const emulator::FusedMeasurement& m) const {
-    const Scenario& s = inputs_.scenario();
-    return m.sensor >= 0 && m.sensor < s.sensorCount() &&
-           m.z.size() == s.sensors[static_cast<std::size_t>(m.sensor)].H.rows() &&
-           m.z.allFinite() && m.time_s >= 0.0 && m.time_s <= s.horizon_s;
-  }
-
   void route(OpenEpisode& open, emulator::FusedMeasurement m, emulator::WriterId writer) {
     const int sensor = m.sensor;
-    if (wellFormed(m) && refuseForeign(measurement_claims_, measurement_reader_, "Measurement",
-                                       static_cast<std::uint32_t>(sensor), writer,
-                                       open.fusion->episode())) {
+    m.received_s = open.clock.emulatedAt(m.receive_wall_ns);
+    // A foreign writer's sample that is malformed anyway is counted under that more telling
+    // reason by the fusion.
+    if (!emulator::malformedMeasurement(inputs_.scenario(), m) &&
+        refuseForeign(measurement_claims_, measurement_reader_, "Measurement",
+                      static_cast<std::uint32_t>(sensor), writer, open.fusion->episode())) {
       return;
     }
     if (auto rejection = open.fusion->add(std::move(m))) {

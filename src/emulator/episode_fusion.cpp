@@ -197,27 +197,32 @@ void EpisodeFusion::scheduleChanged() {
   }
 }
 
-std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
-  const auto reject = [this](const char* reason, std::string detail) -> std::optional<Rejection> {
-    ++rejected_[reason];
-    return Rejection{reason, std::move(detail)};
-  };
+std::optional<Rejection> malformedMeasurement(const Scenario& scenario,
+                                              const FusedMeasurement& m) {
   const std::string who = "sensor " + std::to_string(m.sensor);
-  if (m.sensor < 0 || m.sensor >= scenario_.sensorCount()) {
-    return reject("unknown_sensor", who + " is not a sensor of the scenario");
+  if (m.sensor < 0 || m.sensor >= scenario.sensorCount()) {
+    return Rejection{"unknown_sensor", who + " is not a sensor of the scenario"};
   }
-  const auto j = static_cast<std::size_t>(m.sensor);
-  if (m.z.size() != scenario_.sensors[j].H.rows() || !m.z.allFinite()) {
-    return reject("malformed", who + ": z must hold " +
-                                   std::to_string(scenario_.sensors[j].H.rows()) +
-                                   " finite values");
+  const auto rows = scenario.sensors[static_cast<std::size_t>(m.sensor)].H.rows();
+  if (m.z.size() != rows || !m.z.allFinite()) {
+    return Rejection{"malformed", who + ": z must hold " + std::to_string(rows) + " finite values"};
   }
-  if (!(m.time_s >= 0.0 && m.time_s <= scenario_.horizon_s)) {
-    return reject("malformed", who + ": time outside [0, T]");
+  if (!(m.time_s >= 0.0 && m.time_s <= scenario.horizon_s)) {
+    return Rejection{"malformed", who + ": time outside [0, T]"};
   }
   if (!(m.network_delay_s >= 0.0 && std::isfinite(m.network_delay_s))) {
-    return reject("malformed", who + ": network delay not a finite number >= 0");
+    return Rejection{"malformed", who + ": network delay not a finite number >= 0"};
   }
+  return std::nullopt;
+}
+
+std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
+  if (auto rejection = malformedMeasurement(scenario_, m)) {
+    ++rejected_[rejection->reason];
+    return rejection;
+  }
+  const std::string who = "sensor " + std::to_string(m.sensor);
+  const auto j = static_cast<std::size_t>(m.sensor);
   SensorTally& tally = tallies_[j];
   if (!seen_.insert({m.sensor, m.seq}).second) {
     // Counted by finish(): the network's copies and the rest apart, once the tally says how many
@@ -352,6 +357,21 @@ std::string EpisodeFusion::incompleteReason() const {
   return reason;
 }
 
+double EpisodeFusion::receivedRealtimeCost(double realtime_cost) const {
+  std::vector<FusedMeasurement> received;
+  received.reserve(all_.size());
+  bool later = false;
+  for (const FusedMeasurement& m : all_) {
+    received.push_back(m);
+    const double held = m.received_s - m.time_s;  // as delay: arrives at time_s + held
+    if (held > m.network_delay_s) {
+      received.back().network_delay_s = held;
+      later = true;
+    }
+  }
+  return later ? realtimeCost(scenario_, switch_time_s_, received) : realtime_cost;
+}
+
 EpisodeResult EpisodeFusion::finish() {
   scheduleChanged();
   if (replay_) {
@@ -377,6 +397,7 @@ EpisodeResult EpisodeFusion::finish() {
     return m.network_delay_s > 0.0;
   });
   result.realtime_cost = delayed ? realtimeCost(scenario_, switch_time_s_, all_) : result.realized_cost;
+  result.received_realtime_cost = receivedRealtimeCost(result.realtime_cost);
   for (const ScheduleSegment& segment : segments_) result.versions.push_back(segment.version->version);
   result.switch_time_s = switch_time_s_;
   if (at_switch_) {

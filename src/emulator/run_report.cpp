@@ -76,6 +76,7 @@ json episodeEntry(const EpisodeResult& r) {
   return {{"episode", r.episode},
           {"realized_cost", numberOrNull(r.realized_cost)},
           {"realtime_cost", numberOrNull(r.realtime_cost)},
+          {"received_realtime_cost", numberOrNull(r.received_realtime_cost)},
           {"bracket", bracketJson(r.bracket)},
           {"delivered_bracket", bracketJson(r.delivered_bracket)},
           {"schedule_versions", r.versions},
@@ -103,7 +104,7 @@ EpisodeResult restartedEpisode(std::uint32_t episode, int sensor_count) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EpisodeResult r;
   r.episode = episode;
-  r.realized_cost = r.realtime_cost = r.nees = nan;
+  r.realized_cost = r.realtime_cost = r.received_realtime_cost = r.nees = nan;
   r.bracket = r.delivered_bracket = {nan, nan};
   r.sensors.resize(static_cast<std::size_t>(std::max(sensor_count, 0)));
   r.complete = false;
@@ -112,18 +113,13 @@ EpisodeResult restartedEpisode(std::uint32_t episode, int sensor_count) {
 }
 
 RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor_count,
-                     int state_dim)
+                     int state_dim, std::optional<std::filesystem::path> episode_log)
     : run_id_(std::move(run_id)),
       digest_(std::move(scenario_digest)),
       sensor_count_(sensor_count),
       state_dim_(state_dim),
+      episode_log_(std::move(episode_log)),
       sensor_totals_(static_cast<std::size_t>(std::max(sensor_count, 0))) {}
-
-RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor_count,
-                     int state_dim, std::filesystem::path episode_log)
-    : RunReport(std::move(run_id), std::move(scenario_digest), sensor_count, state_dim) {
-  episode_log_ = std::move(episode_log);
-}
 
 void RunReport::add(const json& e) {
   if (!episode_log_) episodes_.push_back(e);
@@ -165,6 +161,7 @@ void RunReport::add(const json& e) {
   cost_mean_ += delta / static_cast<double>(complete_count_);
   cost_squares_ += delta * (cost - cost_mean_);
   realtime_sum_ += e.value("realtime_cost", cost);
+  received_realtime_sum_ += e.value("received_realtime_cost", e.value("realtime_cost", cost));
   addBracket(bracket_sum_, e.at("bracket"));
   addBracket(delivered_bracket_sum_, e.value("delivered_bracket", e.at("bracket")));
   nees_sum_ += e.value("nees", 0.0);
@@ -186,6 +183,7 @@ RunSummary RunReport::summary() const {
     const double k = static_cast<double>(complete_count_);
     s.mean = cost_mean_;
     s.realtime_mean = realtime_sum_ / k;
+    s.received_realtime_mean = received_realtime_sum_ / k;
     s.bracket_mean = {bracket_sum_.info / k, bracket_sum_.cov / k};
     s.delivered_bracket_mean = {delivered_bracket_sum_.info / k, delivered_bracket_sum_.cov / k};
     s.nees_mean = nees_sum_ / k;
@@ -373,6 +371,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
         {"ci95_low", s.ci95_low},
         {"ci95_high", s.ci95_high},
         {"realtime_mean", s.realtime_mean},
+        {"received_realtime_mean", s.received_realtime_mean},
         {"bracket", bracketJson(s.bracket_mean)},
         {"meets_bracket", optionalJson(s.meets_bracket)},
         {"delivered_bracket", bracketJson(s.delivered_bracket_mean)},

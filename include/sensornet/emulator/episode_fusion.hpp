@@ -31,6 +31,12 @@
 // per measurement plus one per measurement it overtakes: about N (1 + λ d) steps for N
 // measurements at a total rate λ with delays around d.
 //
+// The real-time cost depends on the emulated network only, so a run reproduces it exactly. What
+// the fusion center really had by each instant is `received_realtime_cost`: the same cost with
+// each measurement arriving at max(time_s + network_delay_s, received_s), the instant it was
+// received on the episode's clock; it adds the real network's delay (a netem delay, a cut link)
+// and any stall of a process, and at high time scales the loopback latency times the scale.
+//
 // Accounting, per sensor (DESIGN.md): sent = received + lost + dropped_by_network. `sent` is the
 // sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
 // the highest seq received + 1), and the episode is incomplete. The emulated network (the
@@ -83,6 +89,10 @@ struct FusedMeasurement {
   std::int64_t publish_wall_ns = 0;
   std::int64_t receive_wall_ns = 0;
   double network_delay_s = 0.0;  // emulated seconds the emulated network held it back
+  // The emulated instant the fusion center received it (its receipt on the episode's clock;
+  // 0: not known, taken as time_s + network_delay_s). Differs from time_s + network_delay_s by
+  // what the real network and the processes added: real delay, a link cut, a stall.
+  double received_s = 0.0;
 };
 
 // What a sensor says of one episode at its end (the EpisodeTally topic).
@@ -123,6 +133,7 @@ struct EpisodeResult {
   std::uint32_t episode = 0;
   double realized_cost = 0.0;           // hindsight: every measurement, in timestamp order
   double realtime_cost = 0.0;           // what had arrived by each instant (see above)
+  double received_realtime_cost = 0.0;  // what had been received by each instant (see above)
   CostBracket bracket;
   CostBracket delivered_bracket;        // of the schedule the emulated network delivers
   std::vector<std::uint32_t> versions;  // in force during the episode, in time order
@@ -140,6 +151,12 @@ struct EpisodeResult {
   double drain_s = 0.0;
   std::uint64_t backlog = 0;
 };
+
+// Why the fusion refuses `m` on its face ("unknown_sensor" or "malformed": z of the wrong size or
+// not finite, time outside [0, T], a network delay that is not a finite number >= 0), or nullopt
+// when it is well formed for `scenario`. Counts nothing; EpisodeFusion::add counts what it refuses.
+[[nodiscard]] std::optional<Rejection> malformedMeasurement(const Scenario& scenario,
+                                                            const FusedMeasurement& m);
 
 // The real-time cost of an episode's measurements (see above) for `scenario`, stepping as
 // EpisodeFusion's filter does with its last switch point at switch_time_s (0: none).
@@ -205,6 +222,9 @@ class EpisodeFusion {
   // The bracket of `schedule` on what is left after the last switch, plus the realized part.
   [[nodiscard]] CostBracket bracketAfterSwitch(const RateSchedule& schedule) const;
   [[nodiscard]] CostBracket deliveredBracket() const;
+  // The real-time cost with each measurement arriving when it was received (see above), given
+  // the emulated one (the same number when nothing was received later than it was due).
+  [[nodiscard]] double receivedRealtimeCost(double realtime_cost) const;
 
   const Scenario& scenario_;
   const EmulatedPlant& plant_;

@@ -88,6 +88,7 @@ struct RunSummary {
   double ci95_low = 0.0;                  // max(0, mean - ci95)
   double ci95_high = 0.0;
   double realtime_mean = 0.0;             // mean real-time cost (EpisodeResult::realtime_cost)
+  double received_realtime_mean = 0.0;    // mean of EpisodeResult::received_realtime_cost
   CostBracket bracket_mean;
   std::optional<bool> meets_bracket;      // [ci95_low, ci95_high] meets [info, cov]
   CostBracket delivered_bracket_mean;     // of the schedules the emulated network delivered
@@ -117,12 +118,11 @@ inline constexpr const char* kRestartedReason = "fusion_center_restarted";
 
 class RunReport {
  public:
-  // Holds every entry (for small reports and tests).
-  RunReport(std::string run_id, std::string scenario_digest, int sensor_count, int state_dim);
-  // Holds none: `per_episode` is read back from `episode_log` (where every added entry was
-  // appended) when the report is written.
+  // Without `episode_log`, holds every entry (for small reports and tests); with it, holds none:
+  // `per_episode` is read back from the log (where every added entry was appended) when the
+  // report is written.
   RunReport(std::string run_id, std::string scenario_digest, int sensor_count, int state_dim,
-            std::filesystem::path episode_log);
+            std::optional<std::filesystem::path> episode_log = std::nullopt);
 
   // An episode entry (episodeEntry, or a line read back from the log).
   void add(const nlohmann::json& entry);
@@ -162,6 +162,7 @@ class RunReport {
   double cost_mean_ = 0.0;     // Welford: the running mean of the realized cost
   double cost_squares_ = 0.0;  // ... and the sum of squared deviations from it
   double realtime_sum_ = 0.0;
+  double received_realtime_sum_ = 0.0;
   CostBracket bracket_sum_;
   CostBracket delivered_bracket_sum_;
   double nees_sum_ = 0.0;

@@ -216,6 +216,55 @@ TEST(RealtimeCost, MatchesABruteForceScalarComputation) {
   EXPECT_GT(realtime - hindsight, 0.05);  // the example tells the two apart
 }
 
+// The cost of what was received by each instant: the same example, but the late arrivals come
+// from the real network (received_s) rather than the emulated one, and one measurement the
+// emulated network held back is received "earlier" than it was due (clock skew between hosts):
+// it counts from when it was due. The emulated real-time cost sees only the emulated delay:
+//   [0, 0.2): none;  [0.2, 0.5): measurement 1;  [0.5, 0.9): 1 and 2;  [0.9, 1]: all three.
+TEST(RealtimeCost, OfWhatWasReceivedMatchesABruteForceScalarComputation) {
+  const Scenario s = ScalarExample::scenario();
+  const EmulatedPlant plant(s, 1, 8);
+  ScheduleBook b;
+  (void)b.add(versionOf(1, RateSchedule(1.0, Eigen::MatrixXd::Constant(1, 1, 3.0))));
+  EpisodeFusion fusion(s, plant, b, 0, [](const ScheduleVersion&) { return CostBracket{}; });
+  const auto measurement = [](std::uint64_t seq, double time_s, double delay_s,
+                              double received_s) {
+    FusedMeasurement m;
+    m.sensor = 0;
+    m.seq = seq;
+    m.time_s = time_s;
+    m.version = 1;
+    m.z = Eigen::VectorXd::Constant(1, 0.25);
+    m.network_delay_s = delay_s;
+    m.received_s = received_s;
+    return m;
+  };
+  EXPECT_FALSE(fusion.add(measurement(1, 0.4, 0.1, 0.45)));  // due at 0.5: counts from 0.5
+  EXPECT_FALSE(fusion.add(measurement(0, 0.2, 0.0, 0.7)));
+  EXPECT_FALSE(fusion.add(measurement(2, 0.9, 0.0, 1.1)));   // received after T
+  fusion.setTally(0, {3});
+  const EpisodeResult result = fusion.finish();
+  using X = ScalarExample;
+  const double emulated = X::integral({}, 0.0, 0.2) + X::integral({0.2}, 0.2, 0.5) +
+                          X::integral({0.2, 0.4}, 0.5, 0.9) +
+                          X::integral({0.2, 0.4, 0.9}, 0.9, 1.0) +
+                          X::covarianceAt({0.2, 0.4, 0.9}, X::horizon);
+  const double received = X::realtimeCost();
+  EXPECT_NEAR(result.realtime_cost, emulated, 1e-11 * emulated);
+  EXPECT_NEAR(result.received_realtime_cost, received, 1e-11 * received);
+  EXPECT_GT(received - emulated, 0.05);  // the example tells the two apart
+}
+
+// Nothing received later than it was due: the received cost is the real-time cost itself.
+TEST_F(RealtimeCostTest, OfWhatWasReceivedEqualsTheRealtimeCostWhenNothingCameLate) {
+  const ScheduleBook b = book(2, 0.0);
+  std::vector<FusedMeasurement> all = measurements(b, 2, 0.05);
+  for (FusedMeasurement& m : all) m.received_s = m.time_s + 0.5 * m.network_delay_s;
+  const EpisodeResult r = fuse(b, 2, all);
+  EXPECT_GT(r.realtime_cost, r.realized_cost);
+  EXPECT_EQ(r.received_realtime_cost, r.realtime_cost);
+}
+
 TEST(RealtimeCost, RefusesANegativeOrNonFiniteDelay) {
   const Scenario s = ScalarExample::scenario();
   const EmulatedPlant plant(s, 1, 8);
