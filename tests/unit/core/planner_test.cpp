@@ -253,6 +253,39 @@ TEST(Planner, ReturnsFeasibleFirstOrderOptimalSchedulesForBothSurrogates) {
   }
 }
 
+// Coarse intervals and high rates: T = 2 in 4 intervals, budget 12 over two sensors, so one RK4
+// step of the default two per interval (h = 0.25) times the stiffness (up to 2||A|| + 12) is far
+// outside RK4's stability interval and the covariance-form transcription overflowed at the
+// uniform start ("failed: no finite cost at the start point"). Both forms must converge to a
+// finite transcription cost near the accurate rollout's. Near, not to O(h^4): on intervals this
+// coarse the information form's transcription is 7% off (its -YQY term is stiff where Y grows
+// with the rates; the step rule bounds only what keeps the step stable), the covariance form's
+// 0.15%.
+TEST(Planner, ConvergesOnCoarseIntervalsWithHighRates) {
+  Scenario s;
+  s.horizon_s = 2.0;
+  s.intervals = 4;
+  s.plant.A = (MatrixXd(2, 2) << 0.0, 1.0, 0.0, -0.5).finished();
+  s.plant.Q = (MatrixXd(2, 2) << 0.0, 0.0, 0.0, 1.0).finished();
+  s.plant.P0 = 10.0 * MatrixXd::Identity(2, 2);
+  s.sensors.push_back({(MatrixXd(1, 2) << 1.0, 0.0).finished(), MatrixXd::Constant(1, 1, 1.0)});
+  s.sensors.push_back({(MatrixXd(1, 2) << 0.0, 1.0).finished(), MatrixXd::Constant(1, 1, 0.5)});
+  s.cost.W = MatrixXd::Identity(2, 2);
+  s.cost.WT = MatrixXd::Identity(2, 2);
+  s.constraints.C = MatrixXd::Ones(1, 2);
+  s.constraints.b = Eigen::VectorXd::Constant(1, 12.0);
+  for (const auto surrogate : {PlanSurrogate::Information, PlanSurrogate::Covariance}) {
+    PlanRequest request;
+    request.surrogate = surrogate;
+    const PlanResult plan = planSchedule(s, request);
+    EXPECT_EQ(plan.status, "optimal") << describe(surrogate);
+    expectFeasibleAndStationary(s, plan, 1e-6);
+    ASSERT_TRUE(std::isfinite(plan.discretized_objective)) << describe(surrogate);
+    EXPECT_NEAR(plan.discretized_objective, plan.objective, 0.1 * plan.objective)
+        << describe(surrogate);
+  }
+}
+
 // One sensor whose λ̄ = 2 comes from the second row (the first, λ <= 5, does not bind): more
 // measurements always lower either surrogate, so the answer is λ̄ everywhere.
 TEST(Planner, SingleSensorGetsItsMaximumRateEverywhere) {
