@@ -94,7 +94,9 @@ struct PlanRequest {
   double tolerance = 1e-6;
   int max_iterations = 500;
   double max_seconds = 120.0;  // wall time of the solve (mc: of the whole plan)
-  int substeps = 2;  // RK4 steps per interval of the transcription (bench/README.md: 2 suffice)
+  // RK4 steps per interval of the transcription, at least (bench/README.md: 2 suffice on the
+  // paper's family); more where the rates and A make the flow stiff for the interval length.
+  int substeps = 2;
   PlanMethod method = PlanMethod::ProjectedGradient;
   // Optional; called after every solver iteration from the calling thread. Returning false
   // stops the solve (status "stopped"). An exception it throws propagates.
