@@ -175,7 +175,7 @@ Subcommand addPlanCommand(CLI::App& app) {
                   "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
                   "(objective = mean +- 95% half-width on fresh episodes; 55 s by default)")
       ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
-      ->capture_default_str();
+      ->option_text("info|cov|uniform|mc [cov]");
   cmd->add_option("--out", options->out_path, "schedule file to write (JSON, written atomically)")
       ->required();
   cmd->add_option("--warm-start", options->warm_start_path,
@@ -188,7 +188,8 @@ Subcommand addPlanCommand(CLI::App& app) {
   cmd->add_option("--method", options->method,
                   "optimizer: pqn (projected quasi-Newton, default) or ipopt (interior point, "
                   "L-BFGS Hessian)")
-      ->transform(CLI::CheckedTransformer(methods, CLI::ignore_case));
+      ->transform(CLI::CheckedTransformer(methods, CLI::ignore_case))
+      ->option_text("pqn|ipopt [pqn]");
   cmd->add_option("--tolerance", options->tolerance,
                   "stop when the scale-free projected-gradient residual is below this")
       ->capture_default_str()

@@ -761,7 +761,7 @@ Subcommand addServeCommand(CLI::App& app) {
                   "how to plan the initial schedule: info, cov, uniform or mc (the expected "
                   "realized cost by Monte Carlo; up to a minute)")
       ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
-      ->capture_default_str();
+      ->option_text("info|cov|uniform|mc [cov]");
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning");
   cmd->add_option("--episodes", options->episodes, "episodes to run")
