@@ -30,7 +30,8 @@ class RealtimeCost {
     initial_ = work_.covariance();
   }
 
-  [[nodiscard]] double of(const std::vector<FusedMeasurement>& all) {
+  // NaN when it would re-fuse more than max_refused measurements (see realtimeCost).
+  [[nodiscard]] double of(const std::vector<FusedMeasurement>& all, std::size_t max_refused) {
     const std::vector<std::size_t> order = arrivalOrder(all);
     const std::vector<Key> earliest = earliestKeyFrom(all, order);
     double now = 0.0;
@@ -64,6 +65,7 @@ class RealtimeCost {
         current = propagate(now, current, arrival, &cost);
         now = arrival;
         current = refuseFrom(checkpoints_.insert(after, {key, Eigen::MatrixXd()}), now);
+        if (refused_ > max_refused) return std::numeric_limits<double>::quiet_NaN();
       }
     }
     current = propagate(now, current, horizon_s_, &cost);
@@ -119,6 +121,7 @@ class RealtimeCost {
       t = at;
       covariance = update(t, covariance, std::get<1>(it->key));
       it->covariance = covariance;
+      ++refused_;
     }
     return propagate(t, covariance, arrival, nullptr);
   }
@@ -151,13 +154,14 @@ class RealtimeCost {
   Eigen::VectorXd zero_mean_;
   Eigen::MatrixXd initial_;  // P0
   std::deque<Checkpoint> checkpoints_;  // the set so far, in timestamp order
+  std::size_t refused_ = 0;             // measurements fused again by refuseFrom
 };
 
 }  // namespace
 
 double realtimeCost(const Scenario& scenario, double switch_time_s,
-                    const std::vector<FusedMeasurement>& measurements) {
-  return RealtimeCost(scenario, switch_time_s).of(measurements);
+                    const std::vector<FusedMeasurement>& measurements, std::size_t max_refused) {
+  return RealtimeCost(scenario, switch_time_s).of(measurements, max_refused);
 }
 
 std::uint64_t faultyRejections(const RejectionCounts& rejected) {
@@ -369,7 +373,10 @@ double EpisodeFusion::receivedRealtimeCost(double realtime_cost) const {
       later = true;
     }
   }
-  return later ? realtimeCost(scenario_, switch_time_s_, received) : realtime_cost;
+  if (!later) return realtime_cost;
+  // Bounded: under overload the fusion center receives whole bursts of one sensor after later
+  // measurements of others, and each such measurement re-fuses everything after it.
+  return realtimeCost(scenario_, switch_time_s_, received, 2 * received.size() + 10000);
 }
 
 EpisodeResult EpisodeFusion::finish() {

@@ -161,7 +161,12 @@ void RunReport::add(const json& e) {
   cost_mean_ += delta / static_cast<double>(complete_count_);
   cost_squares_ += delta * (cost - cost_mean_);
   realtime_sum_ += e.value("realtime_cost", cost);
-  received_realtime_sum_ += e.value("received_realtime_cost", e.value("realtime_cost", cost));
+  if (const auto received = e.find("received_realtime_cost");
+      received == e.end() || received->is_number()) {  // null: not computed (overload)
+    received_realtime_sum_ += received == e.end() ? e.value("realtime_cost", cost)
+                                                  : received->get<double>();
+    ++received_realtime_count_;
+  }
   addBracket(bracket_sum_, e.at("bracket"));
   addBracket(delivered_bracket_sum_, e.value("delivered_bracket", e.at("bracket")));
   nees_sum_ += e.value("nees", 0.0);
@@ -183,7 +188,10 @@ RunSummary RunReport::summary() const {
     const double k = static_cast<double>(complete_count_);
     s.mean = cost_mean_;
     s.realtime_mean = realtime_sum_ / k;
-    s.received_realtime_mean = received_realtime_sum_ / k;
+    s.received_realtime_mean =
+        received_realtime_count_ > 0
+            ? received_realtime_sum_ / static_cast<double>(received_realtime_count_)
+            : std::numeric_limits<double>::quiet_NaN();
     s.bracket_mean = {bracket_sum_.info / k, bracket_sum_.cov / k};
     s.delivered_bracket_mean = {delivered_bracket_sum_.info / k, delivered_bracket_sum_.cov / k};
     s.nees_mean = nees_sum_ / k;
@@ -371,7 +379,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
         {"ci95_low", s.ci95_low},
         {"ci95_high", s.ci95_high},
         {"realtime_mean", s.realtime_mean},
-        {"received_realtime_mean", s.received_realtime_mean},
+        {"received_realtime_mean", numberOrNull(s.received_realtime_mean)},
         {"bracket", bracketJson(s.bracket_mean)},
         {"meets_bracket", optionalJson(s.meets_bracket)},
         {"delivered_bracket", bracketJson(s.delivered_bracket_mean)},

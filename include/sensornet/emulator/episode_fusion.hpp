@@ -62,6 +62,8 @@
 // episode (deliveredSchedule of network.hpp: rates thinned by loss, zero in the episode's
 // outages) instead of the planned one; without a `network:` section it is the bracket.
 
+#include <cstddef>
+#include <limits>
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
@@ -133,7 +135,9 @@ struct EpisodeResult {
   std::uint32_t episode = 0;
   double realized_cost = 0.0;           // hindsight: every measurement, in timestamp order
   double realtime_cost = 0.0;           // what had arrived by each instant (see above)
-  double received_realtime_cost = 0.0;  // what had been received by each instant (see above)
+  // What had been received by each instant (see above); NaN when its computation would fuse
+  // more than 2 N + 10,000 of the N measurements a second time (an overloaded fusion center).
+  double received_realtime_cost = 0.0;
   CostBracket bracket;
   CostBracket delivered_bracket;        // of the schedule the emulated network delivers
   std::vector<std::uint32_t> versions;  // in force during the episode, in time order
@@ -159,9 +163,13 @@ struct EpisodeResult {
                                                             const FusedMeasurement& m);
 
 // The real-time cost of an episode's measurements (see above) for `scenario`, stepping as
-// EpisodeFusion's filter does with its last switch point at switch_time_s (0: none).
-[[nodiscard]] double realtimeCost(const Scenario& scenario, double switch_time_s,
-                                  const std::vector<FusedMeasurement>& measurements);
+// EpisodeFusion's filter does with its last switch point at switch_time_s (0: none); NaN when
+// it would have to fuse more than max_refused measurements a second time (arrivals far out of
+// timestamp order).
+[[nodiscard]] double realtimeCost(
+    const Scenario& scenario, double switch_time_s,
+    const std::vector<FusedMeasurement>& measurements,
+    std::size_t max_refused = std::numeric_limits<std::size_t>::max());
 
 class EpisodeFusion {
  public:

@@ -88,7 +88,7 @@ struct RunSummary {
   double ci95_low = 0.0;                  // max(0, mean - ci95)
   double ci95_high = 0.0;
   double realtime_mean = 0.0;             // mean real-time cost (EpisodeResult::realtime_cost)
-  double received_realtime_mean = 0.0;    // mean of EpisodeResult::received_realtime_cost
+  double received_realtime_mean = 0.0;    // mean of received_realtime_cost where computed (NaN: none)
   CostBracket bracket_mean;
   std::optional<bool> meets_bracket;      // [ci95_low, ci95_high] meets [info, cov]
   CostBracket delivered_bracket_mean;     // of the schedules the emulated network delivered
@@ -163,6 +163,7 @@ class RunReport {
   double cost_squares_ = 0.0;  // ... and the sum of squared deviations from it
   double realtime_sum_ = 0.0;
   double received_realtime_sum_ = 0.0;
+  std::uint32_t received_realtime_count_ = 0;  // complete episodes with it computed
   CostBracket bracket_sum_;
   CostBracket delivered_bracket_sum_;
   double nees_sum_ = 0.0;

@@ -125,6 +125,15 @@ TEST_F(RealtimeCostTest, IsAboveTheHindsightCostWithDelayWhichLeavesHindsightUnc
   }
 }
 
+// Arrivals far out of timestamp order make every late one re-fuse what follows it: past the
+// given bound the computation gives up (NaN) instead of holding the fusion center's loop.
+TEST_F(RealtimeCostTest, GivesUpPastItsBoundOnMeasurementsFusedAgain) {
+  const ScheduleBook b = book(1, 0.0);
+  const std::vector<FusedMeasurement> all = measurements(b, 1, 0.3);
+  EXPECT_TRUE(std::isfinite(realtimeCost(scenario_, 0.0, all)));
+  EXPECT_TRUE(std::isnan(realtimeCost(scenario_, 0.0, all, 0)));
+}
+
 // The scalar plant dx = a x dt + sqrt(q) dW, z = x + v with v ~ N(0, r), W = W_T = 1, T = 1.
 // Measurement 1 taken at 0.2 arrives at 0.7, measurement 2 taken at 0.4 arrives at 0.5, and
 // measurement 3 taken at 0.9 arrives at 1.1, after T. The covariance known at time t is:
