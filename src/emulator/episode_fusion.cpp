@@ -362,18 +362,15 @@ std::string EpisodeFusion::incompleteReason() const {
 }
 
 double EpisodeFusion::receivedRealtimeCost(double realtime_cost) const {
-  std::vector<FusedMeasurement> received;
-  received.reserve(all_.size());
-  bool later = false;
-  for (const FusedMeasurement& m : all_) {
-    received.push_back(m);
-    const double held = m.received_s - m.time_s;  // as delay: arrives at time_s + held
-    if (held > m.network_delay_s) {
-      received.back().network_delay_s = held;
-      later = true;
-    }
+  // As a delay: a measurement received at received_s arrives at time_s + (received_s - time_s).
+  const auto receivedLate = [](const FusedMeasurement& m) {
+    return m.received_s - m.time_s > m.network_delay_s;
+  };
+  if (std::none_of(all_.begin(), all_.end(), receivedLate)) return realtime_cost;
+  std::vector<FusedMeasurement> received = all_;
+  for (FusedMeasurement& m : received) {
+    if (receivedLate(m)) m.network_delay_s = m.received_s - m.time_s;
   }
-  if (!later) return realtime_cost;
   // Bounded: under overload the fusion center receives whole bursts of one sensor after later
   // measurements of others, and each such measurement re-fuses everything after it.
   return realtimeCost(scenario_, switch_time_s_, received, 2 * received.size() + 10000);

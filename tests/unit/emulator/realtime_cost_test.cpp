@@ -180,6 +180,27 @@ class ScalarExample {
            integral({0.2, 0.4, 0.9}, 0.9, 1.0) + covarianceAt({0.2, 0.4, 0.9}, horizon);
   }
 
+  // Measurement `seq` of the one sensor, taken at time_s, held back delay_s by the emulated
+  // network and received at received_s (0: when due).
+  static FusedMeasurement measurement(std::uint64_t seq, double time_s, double delay_s,
+                                      double received_s = 0.0) {
+    FusedMeasurement m;
+    m.sensor = 0;
+    m.seq = seq;
+    m.time_s = time_s;
+    m.version = 1;
+    m.z = Eigen::VectorXd::Constant(1, 0.25);
+    m.network_delay_s = delay_s;
+    m.received_s = received_s;
+    return m;
+  }
+
+  static ScheduleBook book() {
+    ScheduleBook b;
+    (void)b.add(versionOf(1, RateSchedule(1.0, Eigen::MatrixXd::Constant(1, 1, 3.0))));
+    return b;
+  }
+
   static Scenario scenario() {
     Scenario s;
     s.horizon_s = horizon;
@@ -199,23 +220,12 @@ class ScalarExample {
 TEST(RealtimeCost, MatchesABruteForceScalarComputation) {
   const Scenario s = ScalarExample::scenario();
   const EmulatedPlant plant(s, 1, 8);
-  ScheduleBook b;
-  (void)b.add(versionOf(1, RateSchedule(1.0, Eigen::MatrixXd::Constant(1, 1, 3.0))));
+  const ScheduleBook b = ScalarExample::book();
   EpisodeFusion fusion(s, plant, b, 0, [](const ScheduleVersion&) { return CostBracket{}; });
-  const auto measurement = [](std::uint64_t seq, double time_s, double delay_s) {
-    FusedMeasurement m;
-    m.sensor = 0;
-    m.seq = seq;
-    m.time_s = time_s;
-    m.version = 1;
-    m.z = Eigen::VectorXd::Constant(1, 0.25);
-    m.network_delay_s = delay_s;
-    return m;
-  };
   // In arrival order, as the network delivers them.
-  EXPECT_FALSE(fusion.add(measurement(1, 0.4, 0.1)));
-  EXPECT_FALSE(fusion.add(measurement(0, 0.2, 0.5)));
-  EXPECT_FALSE(fusion.add(measurement(2, 0.9, 0.2)));
+  EXPECT_FALSE(fusion.add(ScalarExample::measurement(1, 0.4, 0.1)));
+  EXPECT_FALSE(fusion.add(ScalarExample::measurement(0, 0.2, 0.5)));
+  EXPECT_FALSE(fusion.add(ScalarExample::measurement(2, 0.9, 0.2)));
   fusion.setTally(0, {3});
   const EpisodeResult result = fusion.finish();
   const double realtime = ScalarExample::realtimeCost();
@@ -233,24 +243,11 @@ TEST(RealtimeCost, MatchesABruteForceScalarComputation) {
 TEST(RealtimeCost, OfWhatWasReceivedMatchesABruteForceScalarComputation) {
   const Scenario s = ScalarExample::scenario();
   const EmulatedPlant plant(s, 1, 8);
-  ScheduleBook b;
-  (void)b.add(versionOf(1, RateSchedule(1.0, Eigen::MatrixXd::Constant(1, 1, 3.0))));
+  const ScheduleBook b = ScalarExample::book();
   EpisodeFusion fusion(s, plant, b, 0, [](const ScheduleVersion&) { return CostBracket{}; });
-  const auto measurement = [](std::uint64_t seq, double time_s, double delay_s,
-                              double received_s) {
-    FusedMeasurement m;
-    m.sensor = 0;
-    m.seq = seq;
-    m.time_s = time_s;
-    m.version = 1;
-    m.z = Eigen::VectorXd::Constant(1, 0.25);
-    m.network_delay_s = delay_s;
-    m.received_s = received_s;
-    return m;
-  };
-  EXPECT_FALSE(fusion.add(measurement(1, 0.4, 0.1, 0.45)));  // due at 0.5: counts from 0.5
-  EXPECT_FALSE(fusion.add(measurement(0, 0.2, 0.0, 0.7)));
-  EXPECT_FALSE(fusion.add(measurement(2, 0.9, 0.0, 1.1)));   // received after T
+  EXPECT_FALSE(fusion.add(ScalarExample::measurement(1, 0.4, 0.1, 0.45)));  // due at 0.5: counts from 0.5
+  EXPECT_FALSE(fusion.add(ScalarExample::measurement(0, 0.2, 0.0, 0.7)));
+  EXPECT_FALSE(fusion.add(ScalarExample::measurement(2, 0.9, 0.0, 1.1)));   // received after T
   fusion.setTally(0, {3});
   const EpisodeResult result = fusion.finish();
   using X = ScalarExample;
@@ -277,8 +274,7 @@ TEST_F(RealtimeCostTest, OfWhatWasReceivedEqualsTheRealtimeCostWhenNothingCameLa
 TEST(RealtimeCost, RefusesANegativeOrNonFiniteDelay) {
   const Scenario s = ScalarExample::scenario();
   const EmulatedPlant plant(s, 1, 8);
-  ScheduleBook b;
-  (void)b.add(versionOf(1, RateSchedule(1.0, Eigen::MatrixXd::Constant(1, 1, 3.0))));
+  const ScheduleBook b = ScalarExample::book();
   EpisodeFusion fusion(s, plant, b, 0, [](const ScheduleVersion&) { return CostBracket{}; });
   FusedMeasurement m;
   m.time_s = 0.5;
