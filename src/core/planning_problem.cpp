@@ -73,6 +73,12 @@ PlanningProblem::PlanningProblem(const Scenario& scenario, const PlanRequest& re
     unit = std::max(unit, max_rates(j));
   }
   if (unit > 0.0 && std::isfinite(unit)) rate_unit_ = unit;
+  sensor_information_.resize(scenario.sensorCount());
+  const std::vector<Eigen::MatrixXd> increments = scenario.informationIncrements();
+  for (int j = 0; j < scenario.sensorCount(); ++j) {
+    const double trace = increments[static_cast<std::size_t>(j)].trace();
+    sensor_information_(j) = std::isfinite(trace) && trace > 0.0 ? trace : 1.0;
+  }
   if (request.warm_start) rates_ = request.warm_start->rates();
   const bool warm = request.warm_start && request.surrogate != PlanSurrogate::Uniform;
   const Eigen::VectorXd uniform = polytope_.uniformRates();

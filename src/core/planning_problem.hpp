@@ -56,6 +56,9 @@ class PlanningProblem {
   [[nodiscard]] double largestChange(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) const;
   // <a, b> over the planned rows.
   [[nodiscard]] double inner(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) const;
+  // tr S_j = tr(H_j' R_j^-1 H_j) per sensor (1 where it is not a positive number): how much a
+  // unit of rate of sensor j adds to the information, the scale of its rates' curvature.
+  [[nodiscard]] const Eigen::VectorXd& sensorInformation() const { return sensor_information_; }
 
  private:
   RatePolytope polytope_;
@@ -64,6 +67,7 @@ class PlanningProblem {
   std::vector<int> in_service_;
   double rate_unit_;
   Eigen::MatrixXd rates_;
+  Eigen::VectorXd sensor_information_;
 };
 
 // |J|, the unit of cost in the scale-free measures (1 when J is 0 or not finite).
