@@ -434,7 +434,7 @@ class ProjectedQuasiNewton {
   // (the second derivative of <W, (Y + λ S_j)^-1>), with the covariance P replaced by the
   // identity: tr S_j |g_kj|. (With P at the interval's start it took more iterations: n = 50,
   // M = 1000: 281 against 249.) Empty for the covariance form, where it did not help (n = 20,
-  // M = 30: 143-230 iterations against 128-159).
+  // M = 30: 133-234 iterations against 114-159).
   [[nodiscard]] Eigen::VectorXd inverseDiagonal(const BindingFace& face) const {
     if (problem_.transcription().form() != SurrogateForm::Information) return Eigen::VectorXd();
     const Eigen::VectorXd& information = problem_.sensorInformation();
