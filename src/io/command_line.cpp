@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <malloc.h>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,10 @@ void configureLogging(const std::string& program, const std::string& level) {
   spdlog::set_default_logger(std::move(logger));
 }
 
+void keepLargeBlocksMapped() { (void)::mallopt(M_MMAP_THRESHOLD, kMmapThresholdBytes); }
+
 int runProgram(const std::string& program, const std::function<int()>& body) {
+  keepLargeBlocksMapped();
   try {
     return body();
   } catch (const InputError& e) {

@@ -31,7 +31,19 @@ inline constexpr int kExitBadInput = 2;   // bad input: a file, a flag, a value
 // (trace, debug, info, warn, error, off).
 void configureLogging(const std::string& program, const std::string& level = "info");
 
-// Runs `body`, turning InputError into "program: error: <message>" with kExitBadInput and any
+// Blocks of at least this size are mapped by themselves and given back to the system when freed.
+inline constexpr int kMmapThresholdBytes = 128 * 1024;
+
+// Fixes glibc's mmap threshold at kMmapThresholdBytes (runProgram does it first). Cyclone DDS
+// receives into 1 MiB buffers, malloc'ed and freed when the last sample in them is gone. glibc
+// maps blocks that large by themselves, but after the first is freed it raises its threshold to
+// that size (its dynamic threshold) and from then on carves them from a thread's heap, whose
+// freed pages stay resident: over 100,000 episodes the fusion center, the coordinator and the
+// launcher grew by ~20 bytes/episode (1.13-1.17x; bench/README.md, "Memory that stays flat").
+// With the threshold fixed they stay mapped and go back when freed (1.04-1.08x).
+void keepLargeBlocksMapped();
+
+// Runs `body` (after keepLargeBlocksMapped), turning InputError into "program: error: <message>" with kExitBadInput and any
 // other exception into "program: error: <message>" with kExitFailure.
 int runProgram(const std::string& program, const std::function<int()>& body);
 
