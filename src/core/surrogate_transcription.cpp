@@ -196,11 +196,22 @@ class InformationDynamics {
   // thread runs it, so the result does not depend on the thread count.
   void rateGradients(const std::vector<Segment>& segments, int threads, MatrixXd& gradient) const {
     const std::size_t count = segments.size();
+    // In blocks of kRowBlock rows, so that neither the product nor Eigen's packing buffers are
+    // heap blocks above glibc's mmap threshold (fixed at 128 KiB by every program): each such
+    // block was mapped and faulted in afresh per interval and evaluation.
+    constexpr Index kRowBlock = 128;
+    const Index total_rows = rows_.rows.rows();
     const auto work = [&](std::size_t begin, std::size_t end) {
-      MatrixXd product(rows_.rows.rows(), n_);
+      MatrixXd product(std::min(kRowBlock, total_rows), n_);
+      VectorXd per_row(total_rows);
       for (std::size_t slot = begin; slot < end; ++slot) {
-        product.noalias() = rows_.rows * interval_adjoints_[slot];
-        const VectorXd per_row = (product.array() * rows_.rows.array()).rowwise().sum();
+        for (Index first = 0; first < total_rows; first += kRowBlock) {
+          const Index block_rows = std::min(kRowBlock, total_rows - first);
+          const auto block = rows_.rows.middleRows(first, block_rows);
+          product.topRows(block_rows).noalias() = block * interval_adjoints_[slot];
+          per_row.segment(first, block_rows) =
+              (product.topRows(block_rows).array() * block.array()).rowwise().sum();
+        }
         gradient.row(segments[slot].interval) = sumPerSensor(rows_, per_row).transpose();
       }
     };

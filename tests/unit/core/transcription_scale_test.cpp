@@ -78,9 +78,10 @@ TEST(InformationTranscriptionAtScale, GradientWithZeroRatesOnTwoThreadsMatchesCe
 // With A = 0, Q = 0 and W = 0 the flow is Y' = U_k on interval k, which RK4 integrates exactly:
 // Y(T) = Y0 + h Σ_k U_k, J = <W_T, Y(T)^{-1}> and ∂J/∂λ_kj = -h <Y(T)^{-1} W_T Y(T)^{-1}, S_j>,
 // computed here from Scenario::informationIncrements, on an instance large enough that the
-// gradient products run on two threads (N M n² = 30 x 120 x 400 > 1e6).
+// gradient products run on two threads (N M n² = 30 x 300 x 400 > 1e6) and in blocks of rows
+// (300 = 128 + 128 + 44).
 TEST(InformationTranscriptionAtScale, GradientMatchesTheClosedFormOfADriftFreePlant) {
-  Scenario s = paperScenario(20, 120, 30, 3);
+  Scenario s = paperScenario(20, 300, 30, 3);
   s.plant.A.setZero();
   s.plant.Q.setZero();
   s.cost.WT = MatrixXd::Identity(20, 20) + 0.1 * MatrixXd::Ones(20, 20);
