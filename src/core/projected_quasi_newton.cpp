@@ -47,7 +47,7 @@ class BindingFace {
   // candidate for the bound however large it is now.
   BindingFace(const PlanningProblem& problem, const MatrixXd& x, const MatrixXd& gradient,
               const MatrixXd& gradient_point, double epsilon)
-      : problem_(problem), zero_push_(MatrixXd::Zero(x.rows(), x.cols())) {
+      : problem_(problem) {
     for (int k = problem.firstInterval(); k < problem.intervals(); ++k) {
       intervals_.push_back(bind(k, x, gradient, gradient_point, epsilon));
     }
@@ -153,9 +153,14 @@ class BindingFace {
     return true;
   }
 
-  // The reduced gradient g + C_A' μ on the rates held at zero (0 elsewhere): the direction
-  // that pushes them onto the bound.
-  [[nodiscard]] const MatrixXd& zeroPush() const { return zero_push_; }
+  // The rates held at zero with their reduced gradient g + C_A' μ (> 0): the direction that
+  // pushes them onto the bound.
+  struct Push {
+    int k;
+    int j;
+    double reduced;
+  };
+  [[nodiscard]] const std::vector<Push>& zeroPushes() const { return zero_pushes_; }
 
  private:
   struct Interval {
@@ -254,7 +259,7 @@ class BindingFace {
       }
       if (reduced > 0.0) {
         held.push_back(j);
-        zero_push_(k, j) = reduced;
+        zero_pushes_.push_back({k, j, reduced});
       } else {
         interval.free.push_back(j);
       }
@@ -265,7 +270,7 @@ class BindingFace {
   }
 
   const PlanningProblem& problem_;
-  MatrixXd zero_push_;
+  std::vector<Push> zero_pushes_;  // a list, not an N x M matrix: faces are copied
   Eigen::Index free_count_ = 0;
   std::vector<Interval> intervals_;
 };
@@ -280,10 +285,18 @@ class LimitedMemoryInverse {
  public:
   explicit LimitedMemoryInverse(const PlanningProblem& problem) : problem_(problem) {}
 
+  // The oldest pair's storage is reused once the memory is full (N x M each: fresh blocks
+  // would be mapped and faulted in every iteration under a fixed mmap threshold).
   void add(const MatrixXd& s, const MatrixXd& y) {
-    pairs_.push_back({s.transpose(), y.transpose(), Eigen::VectorXd(), Eigen::VectorXd(), 0.0,
-                      false});
-    if (static_cast<int>(pairs_.size()) > kMemory) pairs_.pop_front();
+    Pair pair{MatrixXd(), MatrixXd(), Eigen::VectorXd(), Eigen::VectorXd(), 0.0, false};
+    if (static_cast<int>(pairs_.size()) >= kMemory) {
+      pair.s_transposed = std::move(pairs_.front().s_transposed);
+      pair.y_transposed = std::move(pairs_.front().y_transposed);
+      pairs_.pop_front();
+    }
+    pair.s_transposed = s.transpose();
+    pair.y_transposed = y.transpose();
+    pairs_.push_back(std::move(pair));
   }
 
   // H v on the face (v and the result compact), or nothing when no pair has positive
@@ -344,13 +357,15 @@ class LimitedMemoryInverse {
   std::optional<BindingFace> face_;
 };
 
-// The gradient restricted to the variables: planned rows, sensors in service.
-MatrixXd masked(const PlanningProblem& problem, const MatrixXd& gradient) {
-  MatrixXd result = MatrixXd::Zero(gradient.rows(), gradient.cols());
-  for (int k = problem.firstInterval(); k < problem.intervals(); ++k) {
-    for (const int j : problem.inService()) result(k, j) = gradient(k, j);
+// The gradient restricted to the variables (planned rows, sensors in service), in place.
+MatrixXd masked(const PlanningProblem& problem, MatrixXd gradient) {
+  gradient.topRows(problem.firstInterval()).setZero();
+  std::vector<bool> in_service(static_cast<std::size_t>(gradient.cols()), false);
+  for (const int j : problem.inService()) in_service[static_cast<std::size_t>(j)] = true;
+  for (Eigen::Index j = 0; j < gradient.cols(); ++j) {
+    if (!in_service[static_cast<std::size_t>(j)]) gradient.col(j).setZero();
   }
-  return result;
+  return gradient;
 }
 
 struct Iterate {
@@ -404,7 +419,7 @@ class ProjectedQuasiNewton {
   Iterate evaluate(const MatrixXd& x) {
     ++evaluations_;
     CostGradient cg = problem_.transcription().costAndGradient(x);
-    return {x, cg.cost, masked(problem_, cg.gradient)};
+    return {x, cg.cost, masked(problem_, std::move(cg.gradient))};
   }
 
   // L-BFGS in the tangent space of the binding face, rates held at zero sent there, searched
@@ -419,11 +434,8 @@ class ProjectedQuasiNewton {
     const Eigen::VectorXd v = face.compact(current_.gradient);
     const std::optional<Eigen::VectorXd> hv = memory_.apply(face, v, inverseDiagonal(face));
     MatrixXd direction = face.expand(hv ? Eigen::VectorXd(-*hv) : Eigen::VectorXd(-(alpha_ * sigma_) * v));
-    const MatrixXd& push = face.zeroPush();
-    for (int k = problem_.firstInterval(); k < problem_.intervals(); ++k) {
-      for (const int j : problem_.inService()) {
-        if (push(k, j) > 0.0) direction(k, j) = -std::max(current_.x(k, j), sigma_ * push(k, j));
-      }
+    for (const BindingFace::Push& push : face.zeroPushes()) {
+      direction(push.k, push.j) = -std::max(current_.x(push.k, push.j), sigma_ * push.reduced);
     }
     face.keepRowsBinding(direction);
     return arcSearch(direction);
