@@ -219,7 +219,8 @@ double ddsperfStartupSeconds(int process_count, int repeat) {
   Processes processes(fs::temp_directory_path() / run);
   const fs::path hub_config = processes.dir() / "hub.xml";
   std::ofstream(hub_config) << sensornet::dds::loopbackConfigXml();
-  const std::string hub_uri = "file://" + hub_config.string();
+  const std::string loopback_uri = "file://" + hub_config.string();
+  const std::string hub_uri = loopback_uri + "," + sensornet::dds::hubConfigXml();
   const std::string domain = std::to_string(sensornet::dds::domainIdForRun(run));
   const std::string duration = "75";
   {
@@ -230,7 +231,7 @@ double ddsperfStartupSeconds(int process_count, int repeat) {
   const auto start = std::chrono::steady_clock::now();
   {
     const ScopedEnvironment leaf("CYCLONEDDS_URI",
-                                 hub_uri + "," + sensornet::dds::leafConfigXml());
+                                 loopback_uri + "," + sensornet::dds::leafConfigXml());
     for (int p = 0; p < process_count; ++p) {
       processes.start("pub-" + std::to_string(p),
                       {"/usr/bin/ddsperf", "-i", domain, "-D", duration, "pub", "1Hz"});

@@ -37,7 +37,7 @@ void validateDomainConfig(const DomainConfig& config) {
 DomainConfig DomainConfig::loopback(dds_domainid_t domain_id, std::string partition,
                                     DiscoveryRole role) {
   std::string xml = loopbackConfigXml();
-  if (role == DiscoveryRole::Leaf) xml += "," + leafConfigXml();
+  xml += "," + (role == DiscoveryRole::Leaf ? leafConfigXml() : hubConfigXml());
   return DomainConfig{domain_id, std::move(partition), std::move(xml), {}, {}};
 }
 
@@ -80,6 +80,13 @@ const std::string& leafConfigXml() {
   static const std::string xml =
       R"(<CycloneDDS><Domain Id="any"><Discovery><ParticipantIndex>none</ParticipantIndex>)"
       R"(</Discovery></Domain></CycloneDDS>)";
+  return xml;
+}
+
+const std::string& hubConfigXml() {
+  static const std::string xml =
+      R"(<CycloneDDS><Domain Id="any"><Internal><HeartbeatInterval max="1 s">1 s</HeartbeatInterval>)"
+      R"(</Internal></Domain></CycloneDDS>)";
   return xml;
 }
 

@@ -35,6 +35,12 @@ inline constexpr dds_domainid_t kMaxDomainId = 230;
 // - Leaf: a sensor agent. It takes no index (arbitrary ports, nobody can probe it) and probes
 //   the hubs' ports; a hub answers the leaf's announcement directly. Leaves never discover one
 //   another, which they never talk to anyway.
+// A hub also asks for acknowledgements once a second instead of every 100 ms (hubConfigXml):
+// while leaves join, every hub writer with data some of them still lack heartbeats *all* its
+// readers (Cyclone sends one heartbeat to every matched reader as soon as two are behind), and
+// each leaf that joins restarts that at the fastest rate. At 100 ms, 200 sensor processes
+// starting at once made 3x the packets and took twice as long (bench/README.md, "Start-up at
+// scale"). Leaves keep 100 ms: their measurements are what must be repaired promptly.
 enum class DiscoveryRole { Hub, Leaf };
 
 struct DomainConfig {
@@ -77,6 +83,8 @@ void validateRunId(std::string_view run_id, const std::string& source);
 // What a leaf adds to a configuration (Cyclone reads a comma-separated list of XML fragments,
 // the later ones overriding): participant index none.
 [[nodiscard]] const std::string& leafConfigXml();
+// What a hub adds: heartbeats once a second (see DiscoveryRole).
+[[nodiscard]] const std::string& hubConfigXml();
 
 class Domain : public Entity {
  public:

@@ -54,7 +54,7 @@ TEST(RunIsolation, ForRunGivesTheSameDomainAndPartitionEveryTime) {
   const DomainConfig b = DomainConfig::forRun("run-42");
   EXPECT_EQ(a.domain_id, b.domain_id);
   EXPECT_EQ(a.partition, "sensornet/run-42");
-  EXPECT_EQ(a.cyclone_config, loopbackConfigXml());
+  EXPECT_EQ(a.cyclone_config, b.cyclone_config);
 }
 
 TEST(RunIsolation, DomainIdsStayInTheSafeRangeAndSpreadOverIt) {
@@ -108,12 +108,24 @@ TEST(LoopbackConfig, NamesLoopbackUnicastAndTheRaisedLimits) {
 TEST(LoopbackConfig, ALeafTakesNoParticipantIndexAndCyclonesAcceptsTheFragment) {
   const DomainConfig hub = DomainConfig::forRun("leaf-config-test");
   const DomainConfig leaf = DomainConfig::forRun("leaf-config-test", DiscoveryRole::Leaf);
-  EXPECT_EQ(hub.cyclone_config, loopbackConfigXml());
   EXPECT_EQ(leaf.cyclone_config, loopbackConfigXml() + "," + leafConfigXml());
   EXPECT_NE(leafConfigXml().find("<ParticipantIndex>none</ParticipantIndex>"), std::string::npos);
+  EXPECT_EQ(leaf.cyclone_config.find("HeartbeatInterval>1 s<"), std::string::npos);
   EXPECT_EQ(leaf.domain_id, hub.domain_id);
   EXPECT_EQ(leaf.partition, hub.partition);
   const Domain domain(leaf);  // Cyclone parses the combined configuration
+  EXPECT_GT(domain.handle(), 0);
+}
+
+// A hub heartbeats once a second (DiscoveryRole): the fragment comes last, so it overrides the
+// shipped 100 ms, and Cyclone accepts the combination.
+TEST(LoopbackConfig, AHubHeartbeatsOnceASecondAndCycloneAcceptsTheFragment) {
+  const DomainConfig hub = DomainConfig::forRun("hub-config-test");
+  EXPECT_EQ(hub.cyclone_config, loopbackConfigXml() + "," + hubConfigXml());
+  EXPECT_NE(hubConfigXml().find(R"(<HeartbeatInterval max="1 s">1 s</HeartbeatInterval>)"),
+            std::string::npos);
+  EXPECT_EQ(hubConfigXml().find("ParticipantIndex"), std::string::npos);  // the shipped auto
+  const Domain domain(hub);
   EXPECT_GT(domain.handle(), 0);
 }
 
