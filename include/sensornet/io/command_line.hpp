@@ -31,8 +31,11 @@ inline constexpr int kExitBadInput = 2;   // bad input: a file, a flag, a value
 // (trace, debug, info, warn, error, off).
 void configureLogging(const std::string& program, const std::string& level = "info");
 
-// Blocks of at least this size are mapped by themselves and given back to the system when freed.
-inline constexpr int kMmapThresholdBytes = 128 * 1024;
+// Blocks of at least this size are mapped by themselves and given back to the system when freed:
+// below Cyclone's 1 MiB receive buffers, above the planner's N x M matrices at M = 1000 (240 KB
+// at N = 30; at glibc's initial 128 KiB each of those was mapped and faulted in afresh, and
+// `coordinator plan` at n = 50, M = 1000 took 1.4x as long).
+inline constexpr int kMmapThresholdBytes = 512 * 1024;
 
 // Fixes glibc's mmap threshold at kMmapThresholdBytes (runProgram does it first). Cyclone DDS
 // receives into 1 MiB buffers, malloc'ed and freed when the last sample in them is gone. glibc
