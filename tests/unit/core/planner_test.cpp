@@ -301,6 +301,16 @@ TEST(Planner, SingleSensorGetsItsMaximumRateEverywhere) {
   }
 }
 
+// A random scenario (3 states, 6 intervals) made drift-free for convexOptimum: A = 0, Q = 0,
+// P0 = 4 I.
+Scenario driftFreeScenario(std::uint64_t seed, int sensors) {
+  Scenario s = smallRandomScenario(seed, 3, sensors, 6);
+  s.plant.A.setZero();
+  s.plant.Q.setZero();
+  s.plant.P0 = 4.0 * MatrixXd::Identity(3, 3);
+  return s;
+}
+
 // With A = 0, Q = 0 and W = 0 the information form is Y(T) = Y0 + h Σ_k Σ_j λ_kj S_j, so
 // J = <W_T, Y(T)^{-1}> depends on the rates only through the time averages λ̄_j = Σ_k λ_kj / N,
 // which range over the same polytope: the convex problem min <W_T, (Y0 + T Σ_j λ_j S_j)^{-1}>
@@ -359,10 +369,7 @@ double convexOptimum(const Scenario& s) {
 
 TEST(Planner, MatchesAnIndependentSolveOfTheConvexInformationProblem) {
   for (std::uint64_t seed = 1; seed <= 2; ++seed) {
-    Scenario s = smallRandomScenario(seed, 3, 5, 6);
-    s.plant.A.setZero();
-    s.plant.Q.setZero();
-    s.plant.P0 = 4.0 * MatrixXd::Identity(3, 3);
+    const Scenario s = driftFreeScenario(seed, 5);
     const double optimum = convexOptimum(s);
     const PlanResult plan = planSchedule(s, {});
     expectFeasibleAndStationary(s, plan, 1e-6);
@@ -377,10 +384,7 @@ TEST(Planner, MatchesAnIndependentSolveOfTheConvexInformationProblem) {
 // reaches the optimum of the independent convex solve.
 TEST(Planner, MatchesTheConvexSolveWithSensorNoiseFourDecadesApart) {
   for (std::uint64_t seed = 3; seed <= 4; ++seed) {
-    Scenario s = smallRandomScenario(seed, 3, 6, 6);
-    s.plant.A.setZero();
-    s.plant.Q.setZero();
-    s.plant.P0 = 4.0 * MatrixXd::Identity(3, 3);
+    Scenario s = driftFreeScenario(seed, 6);
     for (std::size_t j = 0; j < s.sensors.size(); ++j) {
       s.sensors[j].R *= std::pow(10.0, -2.0 + 4.0 * static_cast<double>(j) / 5.0);
     }
