@@ -197,8 +197,9 @@ class InformationDynamics {
   void rateGradients(const std::vector<Segment>& segments, int threads, MatrixXd& gradient) const {
     const std::size_t count = segments.size();
     // In blocks of kRowBlock rows, so that neither the product nor Eigen's packing buffers are
-    // heap blocks above glibc's mmap threshold (fixed at 128 KiB by every program): each such
-    // block was mapped and faulted in afresh per interval and evaluation.
+    // heap blocks above glibc's mmap threshold, which every program fixes (kMmapThresholdBytes,
+    // sensornet/io/command_line.hpp): a block above it is mapped and faulted in afresh per
+    // interval and evaluation (the unblocked product of M sensor rows grows past it with M).
     constexpr Index kRowBlock = 128;
     const Index total_rows = rows_.rows.rows();
     const auto work = [&](std::size_t begin, std::size_t end) {

@@ -42,12 +42,13 @@ inline constexpr int kMmapThresholdBytes = 512 * 1024;
 // maps blocks that large by themselves, but after the first is freed it raises its threshold to
 // that size (its dynamic threshold) and from then on carves them from a thread's heap, whose
 // freed pages stay resident: over 100,000 episodes the fusion center, the coordinator and the
-// launcher grew by ~20 bytes/episode (1.13-1.17x; bench/README.md, "Memory that stays flat").
-// With the threshold fixed they stay mapped and go back when freed (1.04-1.08x).
+// launcher grew by ~20 bytes/episode (1.13-1.17x; bench/README.md, "Memory over long runs").
+// With the threshold fixed they stay mapped and go back when freed (1.04-1.05x).
 void keepLargeBlocksMapped();
 
-// Runs `body` (after keepLargeBlocksMapped), turning InputError into "program: error: <message>" with kExitBadInput and any
-// other exception into "program: error: <message>" with kExitFailure.
+// Runs `body` (after keepLargeBlocksMapped), turning InputError into
+// "program: error: <message>" with kExitBadInput and any other exception into
+// "program: error: <message>" with kExitFailure.
 int runProgram(const std::string& program, const std::function<int()>& body);
 
 // Parses the command line. Returns an exit code when the program must stop now (--help printed,
