@@ -201,9 +201,16 @@ TEST_F(TimetableLaunch, ALiveExclusionContinuesTheCountOnTheComposedIntensity) {
   RunningProgram launcher(argv, 120s);
   ASSERT_TRUE(
       waitUntil([&] { return readJsonLines(dir_ / "x" / "report.jsonl").size() >= 1; }, 60s));
-  const ProcessResult replan = runProcess(
-      {kLauncher, "replan", "--run-id", run_id, "--exclude", "0", "--timeout", "60"}, 70s);
-  EXPECT_EQ(replan.exit_code, 0) << replan.out << replan.err;
+  // A re-plan lands within the running episode when it can; early in an episode (before the
+  // first fused covariance) or at its very end it lands at the next one's start instead (the
+  // reply says "not in episode"). Excluding sensor 0 again re-plans the same settings, so a few
+  // tries make sure one switch lands within an episode on a loaded machine too.
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const ProcessResult replan = runProcess(
+        {kLauncher, "replan", "--run-id", run_id, "--exclude", "0", "--timeout", "60"}, 70s);
+    ASSERT_EQ(replan.exit_code, 0) << replan.out << replan.err;
+    if (replan.out.find("not in episode") == std::string::npos) break;
+  }
   const ProcessResult& r = launcher.result();
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
 
