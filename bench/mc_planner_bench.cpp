@@ -54,10 +54,22 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0.0 : s / static_cast<double>(v.size());
 }
 
+// One instance's paired comparison of mc with the best of the other three, kept for the verdict
+// over the whole sweep: with K instances, K tests at 95% each would call about K / 40 instances
+// "worse" by chance alone, so the sweep's own verdict holds the false-alarm rate of the whole
+// family at 5% (Bonferroni: each interval at 1 - 0.05 / K).
+struct Paired {
+  double mean = 0.0;            // of J_mc - J_best per episode, / tr(P0)
+  double standard_error = 0.0;  // of that mean
+  double degrees_of_freedom = 0.0;
+  double ratio = 0.0;  // mean J_mc / mean J_best
+};
+
 struct Point {
   int n = 0, m = 0;
   int better = 0, same = 0, worse = 0, improved = 0;
   std::vector<double> mc_seconds, episodes, ratio, info, cov, uniform, mc, best_of_three;
+  std::vector<Paired> paired;
 };
 
 std::vector<double> evaluate(const sensornet::Scenario& scenario,
@@ -111,8 +123,8 @@ void runInstance(Point& point, int i, const Options& options) {
     costs.push_back(evaluate(scenario, s, options.eval_runs, eval_seed));
     means.push_back(mean(costs.back()) / normalizer);
   }
-  const auto best = static_cast<std::size_t>(std::min_element(means.begin(), means.begin() + 3) -
-                                             means.begin());
+  const auto best =
+      static_cast<std::size_t>(std::min_element(means.begin(), means.begin() + 3) - means.begin());
   std::vector<double> d(costs[3].size());
   for (std::size_t e = 0; e < d.size(); ++e) d[e] = (costs[3][e] - costs[best][e]) / normalizer;
   const double md = mean(d);
@@ -121,6 +133,8 @@ void runInstance(Point& point, int i, const Options& options) {
   const double runs = static_cast<double>(d.size());
   const double half =
       sensornet::studentTQuantile(0.975, runs - 1.0) * std::sqrt(sq / (runs - 1.0) / runs);
+  point.paired.push_back(
+      {md, std::sqrt(sq / (runs - 1.0) / runs), runs - 1.0, means[3] / means[best]});
   const char* verdict = md - half > 0.0 ? "WORSE" : (md + half < 0.0 ? "better" : "n.s.");
   if (md - half > 0.0) {
     ++point.worse;
@@ -136,20 +150,22 @@ void runInstance(Point& point, int i, const Options& options) {
   point.best_of_three.push_back(means[best]);
   point.ratio.push_back(means[3] / means[best]);
   if (options.verbose) {
-    std::printf("  n=%d M=%d #%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
-                "%lld episodes, %.1f s) mc-best %+.5f +- %.5f %s\n",
-                point.n, point.m, i, means[0], means[1], means[2], means[3],
-                plan.objective / normalizer, plan.objective_half_width / normalizer,
-                plan.status.c_str(), plan.episodes, point.mc_seconds.back(), md, half, verdict);
+    std::printf(
+        "  n=%d M=%d #%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
+        "%lld episodes, %.1f s) mc-best %+.5f +- %.5f %s\n",
+        point.n, point.m, i, means[0], means[1], means[2], means[3], plan.objective / normalizer,
+        plan.objective_half_width / normalizer, plan.status.c_str(), plan.episodes,
+        point.mc_seconds.back(), md, half, verdict);
     std::fflush(stdout);
   }
 }
 
 void printHeader(bool markdown) {
   if (markdown) {
-    std::printf("| n | M | info MC/trP0 | cov MC/trP0 | uniform MC/trP0 | mc MC/trP0 | mc / best "
-                "(median) | mc / best (mean) | better / n.s. / worse | refined kept | mc s | "
-                "episodes |\n");
+    std::printf(
+        "| n | M | info MC/trP0 | cov MC/trP0 | uniform MC/trP0 | mc MC/trP0 | mc / best "
+        "(median) | mc / best (mean) | better / n.s. / worse | refined kept | mc s | "
+        "episodes |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   } else {
     std::printf("%3s %4s | %8s %8s %8s %8s | %7s %7s | %8s | %4s | %6s %9s\n", "n", "M", "info",
@@ -167,6 +183,36 @@ void printPoint(const Point& p, bool markdown) {
               median(p.ratio), mean(p.ratio), p.better, p.same, p.worse, p.improved,
               median(p.mc_seconds), median(p.episodes));
   std::fflush(stdout);
+}
+
+// The verdict over every instance run: per instance at 95% and with the family-wise 5%, and the
+// mean of mc / best over instances with its 95% t interval.
+void printSweepVerdict(const std::vector<Paired>& all_instances) {
+  const auto k = static_cast<double>(all_instances.size());
+  if (all_instances.size() < 2) return;
+  int worse = 0, better = 0, family_worse = 0, family_better = 0;
+  std::vector<double> ratios;
+  for (const Paired& p : all_instances) {
+    const double per_test = sensornet::studentTQuantile(0.975, p.degrees_of_freedom);
+    const double family = sensornet::studentTQuantile(1.0 - 0.025 / k, p.degrees_of_freedom);
+    worse += p.mean - per_test * p.standard_error > 0.0;
+    better += p.mean + per_test * p.standard_error < 0.0;
+    family_worse += p.mean - family * p.standard_error > 0.0;
+    family_better += p.mean + family * p.standard_error < 0.0;
+    ratios.push_back(p.ratio);
+  }
+  const double m = mean(ratios);
+  double sq = 0.0;
+  for (double r : ratios) sq += (r - m) * (r - m);
+  const double half = sensornet::studentTQuantile(0.975, k - 1.0) * std::sqrt(sq / (k - 1.0) / k);
+  std::printf(
+      "\nall %.0f instances: mc significantly worse than the best of info, cov and "
+      "uniform on %d at 95%% per instance (about %.1f expected by chance if mc equalled "
+      "the best everywhere), on %d with the family-wise false-alarm rate held at 5%% "
+      "(Bonferroni); better on %d (%d family-wise); mean mc / best %.4f, 95%% interval "
+      "[%.4f, %.4f], median %.4f\n",
+      k, worse, 0.025 * k, family_worse, better, family_better, m, m - half, m + half,
+      median(ratios));
 }
 
 Point runPoint(int n, int m, const Options& options) {
@@ -215,7 +261,8 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: mc_planner_bench [--sweep sensors|states|both] [--instances K] "
-                   "[--eval-runs R] [--max-seconds S] [--n N] [--m M] [--gradient-episodes G] [--screening-episodes S] "
+                   "[--eval-runs R] [--max-seconds S] [--n N] [--m M] [--gradient-episodes G] "
+                   "[--screening-episodes S] "
                    "[--gradient-sensors K] [--verbose] [--markdown]\n");
       return arg == "--help" ? 0 : 2;
     }
@@ -224,24 +271,32 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mc_planner_bench: --sweep expects sensors, states or both\n");
     return 2;
   }
-  std::printf("mc_planner_bench: %d instances per point, independent evaluation %d episodes, mc "
-              "planner max %.1f s; costs / tr(P0), medians over instances\n",
-              options.instances, options.eval_runs, options.max_seconds);
+  std::printf(
+      "mc_planner_bench: %d instances per point, independent evaluation %d episodes, mc "
+      "planner max %.1f s; costs / tr(P0), medians over instances\n",
+      options.instances, options.eval_runs, options.max_seconds);
   const auto start = std::chrono::steady_clock::now();
+  std::vector<Paired> all_instances;
+  const auto run = [&](int n, int m) {
+    const Point point = runPoint(n, m, options);
+    printPoint(point, options.markdown);
+    all_instances.insert(all_instances.end(), point.paired.begin(), point.paired.end());
+  };
   if (options.sweep != "states") {
     std::printf("\nsensor sweep (n = 5)\n");
     printHeader(options.markdown);
     for (int m = 30; m <= 100; m += 10) {
-      if (options.only_m == 0 || options.only_m == m) printPoint(runPoint(5, m, options), options.markdown);
+      if (options.only_m == 0 || options.only_m == m) run(5, m);
     }
   }
   if (options.sweep != "sensors") {
     std::printf("\nstate sweep (M = 30)\n");
     printHeader(options.markdown);
     for (int n = 2; n <= 20; n += 2) {
-      if (options.only_n == 0 || options.only_n == n) printPoint(runPoint(n, 30, options), options.markdown);
+      if (options.only_n == 0 || options.only_n == n) run(n, 30);
     }
   }
+  printSweepVerdict(all_instances);
   std::printf("\ntotal %.0f s\n", secondsSince(start));
   return 0;
 }
