@@ -14,7 +14,7 @@ Scenario twoSensorScenario() {
   Scenario s = generateRandomScenario(spec);
   // Overlapping coupling constraints of Section II-B: sensors (1,2) and (2,3).
   s.constraints.C = (Eigen::MatrixXd(2, 3) << 1, 1, 0, 0, 1, 1).finished();
-  s.constraints.b = Eigen::Vector2d(4.0, 6.0);
+  s.constraints.b = (Eigen::VectorXd(2) << 4.0, 6.0).finished();
   return s;
 }
 
