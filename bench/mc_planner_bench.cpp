@@ -65,6 +65,16 @@ struct Paired {
   double ratio = 0.0;  // mean J_mc / mean J_best
 };
 
+// The half-width of the two-sided (1 - alpha) t interval of E[J_mc - J_best], and the verdict:
+// +1 entirely above 0 (mc significantly worse), -1 entirely below (better), 0 not significant.
+double halfWidth(const Paired& p, double alpha) {
+  return sensornet::studentTQuantile(1.0 - 0.5 * alpha, p.degrees_of_freedom) * p.standard_error;
+}
+int verdict(const Paired& p, double alpha) {
+  const double half = halfWidth(p, alpha);
+  return p.mean - half > 0.0 ? 1 : (p.mean + half < 0.0 ? -1 : 0);
+}
+
 struct Point {
   int n = 0, m = 0;
   int better = 0, same = 0, worse = 0, improved = 0;
@@ -131,18 +141,12 @@ void runInstance(Point& point, int i, const Options& options) {
   double sq = 0.0;
   for (double x : d) sq += (x - md) * (x - md);
   const double runs = static_cast<double>(d.size());
-  const double half =
-      sensornet::studentTQuantile(0.975, runs - 1.0) * std::sqrt(sq / (runs - 1.0) / runs);
-  point.paired.push_back(
-      {md, std::sqrt(sq / (runs - 1.0) / runs), runs - 1.0, means[3] / means[best]});
-  const char* verdict = md - half > 0.0 ? "WORSE" : (md + half < 0.0 ? "better" : "n.s.");
-  if (md - half > 0.0) {
-    ++point.worse;
-  } else if (md + half < 0.0) {
-    ++point.better;
-  } else {
-    ++point.same;
-  }
+  const Paired paired{md, std::sqrt(sq / (runs - 1.0) / runs), runs - 1.0, means[3] / means[best]};
+  point.paired.push_back(paired);
+  const int v = verdict(paired, 0.05);
+  point.worse += v > 0;
+  point.better += v < 0;
+  point.same += v == 0;
   point.info.push_back(means[0]);
   point.cov.push_back(means[1]);
   point.uniform.push_back(means[2]);
@@ -155,7 +159,8 @@ void runInstance(Point& point, int i, const Options& options) {
         "%lld episodes, %.1f s) mc-best %+.5f +- %.5f %s\n",
         point.n, point.m, i, means[0], means[1], means[2], means[3], plan.objective / normalizer,
         plan.objective_half_width / normalizer, plan.status.c_str(), plan.episodes,
-        point.mc_seconds.back(), md, half, verdict);
+        point.mc_seconds.back(), md, halfWidth(paired, 0.05),
+        v > 0 ? "WORSE" : (v < 0 ? "better" : "n.s."));
     std::fflush(stdout);
   }
 }
@@ -193,12 +198,10 @@ void printSweepVerdict(const std::vector<Paired>& all_instances) {
   int worse = 0, better = 0, family_worse = 0, family_better = 0;
   std::vector<double> ratios;
   for (const Paired& p : all_instances) {
-    const double per_test = sensornet::studentTQuantile(0.975, p.degrees_of_freedom);
-    const double family = sensornet::studentTQuantile(1.0 - 0.025 / k, p.degrees_of_freedom);
-    worse += p.mean - per_test * p.standard_error > 0.0;
-    better += p.mean + per_test * p.standard_error < 0.0;
-    family_worse += p.mean - family * p.standard_error > 0.0;
-    family_better += p.mean + family * p.standard_error < 0.0;
+    worse += verdict(p, 0.05) > 0;
+    better += verdict(p, 0.05) < 0;
+    family_worse += verdict(p, 0.05 / k) > 0;
+    family_better += verdict(p, 0.05 / k) < 0;
     ratios.push_back(p.ratio);
   }
   const double m = mean(ratios);
