@@ -35,6 +35,7 @@
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "support/sanitizer.hpp"
 
 namespace sensornet {
 namespace {
@@ -305,6 +306,7 @@ TEST_F(Trust, SixteenSecondStallIsReportedAsDegradedWithExactCounts) {
 // happens, every measurement a sensor sent is accounted for, and the run is never "completed"
 // with anything lost, rejected or incomplete.
 TEST_F(Trust, OverloadIsFullyFusedOrReportedNeverCompletedWithLosses) {
+  if (sensornet::testing::kAddressSanitizer) GTEST_SKIP() << sensornet::testing::kNoCapacity;
   std::string yaml = testing::readText(kDefaultScenario);
   const auto at = yaml.find("constraints:");
   ASSERT_NE(at, std::string::npos);

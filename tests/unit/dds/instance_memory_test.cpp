@@ -27,7 +27,7 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "support/glibc_heap.hpp"
+#include "support/sanitizer.hpp"
 
 namespace sensornet::dds {
 namespace {
@@ -105,7 +105,7 @@ double growthPerEpisode(const std::function<void(std::uint32_t, std::uint32_t)>&
 }
 
 TEST_F(ReportInstances, MemoryStaysFlatOverThousandsOfEpisodesWithOldOnesUnregistered) {
-  if (!sensornet::testing::kGlibcHeap) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
+  if (sensornet::testing::kAddressSanitizer) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
   const double per_episode = growthPerEpisode([this](auto from, auto to) { run(from, to); });
   // Kept per episode without the release: ~300 bytes (the key and its buffer). Bound: 40.
   EXPECT_LT(per_episode, 40.0) << "live heap grew by " << per_episode << " bytes per episode";
@@ -128,7 +128,7 @@ TEST(DdsChild, DISABLED_TakeReports) {
 }
 
 TEST_F(ReportInstances, MemoryStaysFlatWithAReaderInAnotherProcess) {
-  if (!sensornet::testing::kGlibcHeap) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
+  if (sensornet::testing::kAddressSanitizer) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
   testing::ChildProcess child("TakeReports", testing::isolatedDomain());
   ASSERT_TRUE(child.waitReady(10s));
   ASSERT_TRUE(writer_.waitForReaders(1, 10s));

@@ -9,7 +9,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/io/command_line.hpp"
-#include "support/glibc_heap.hpp"
+#include "support/sanitizer.hpp"
 
 namespace sensornet {
 namespace {
@@ -37,7 +37,7 @@ std::size_t mappedWhileAlive() {
 // after it is freed. Inside runProgram every one of them is mapped (removing the mallopt call
 // from keepLargeBlocksMapped makes the second and third counts 0).
 TEST(RunProgram, ReceiveBufferSizedBlocksStayMappedAfterOneIsFreed) {
-  if (!sensornet::testing::kGlibcHeap) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
+  if (sensornet::testing::kAddressSanitizer) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
   std::size_t first = 0, second = 0, third = 0;
   const int code = runProgram("test", [&] {
     first = mappedWhileAlive();
