@@ -75,10 +75,23 @@ int verdict(const Paired& p, double alpha) {
   return p.mean - half > 0.0 ? 1 : (p.mean + half < 0.0 ? -1 : 0);
 }
 
+// How many of `instances` the test at `alpha` calls better (-1), not significant (0), worse (+1).
+int countVerdicts(const std::vector<Paired>& instances, double alpha, int which) {
+  int count = 0;
+  for (const Paired& p : instances) count += verdict(p, alpha) == which;
+  return count;
+}
+
+std::vector<double> ratiosOf(const std::vector<Paired>& instances) {
+  std::vector<double> ratios;
+  for (const Paired& p : instances) ratios.push_back(p.ratio);
+  return ratios;
+}
+
 struct Point {
   int n = 0, m = 0;
-  int better = 0, same = 0, worse = 0, improved = 0;
-  std::vector<double> mc_seconds, episodes, ratio, info, cov, uniform, mc, best_of_three;
+  int improved = 0;
+  std::vector<double> mc_seconds, episodes, info, cov, uniform, mc;
   std::vector<Paired> paired;
 };
 
@@ -144,15 +157,10 @@ void runInstance(Point& point, int i, const Options& options) {
   const Paired paired{md, std::sqrt(sq / (runs - 1.0) / runs), runs - 1.0, means[3] / means[best]};
   point.paired.push_back(paired);
   const int v = verdict(paired, 0.05);
-  point.worse += v > 0;
-  point.better += v < 0;
-  point.same += v == 0;
   point.info.push_back(means[0]);
   point.cov.push_back(means[1]);
   point.uniform.push_back(means[2]);
   point.mc.push_back(means[3]);
-  point.best_of_three.push_back(means[best]);
-  point.ratio.push_back(means[3] / means[best]);
   if (options.verbose) {
     std::printf(
         "  n=%d M=%d #%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
@@ -185,8 +193,10 @@ void printPoint(const Point& p, bool markdown) {
                            : "%3d %4d | %8.4f %8.4f %8.4f %8.4f | %7.3f %7.3f | %2d/%2d/%2d | %4d "
                              "| %6.1f %9.0f\n";
   std::printf(format, p.n, p.m, median(p.info), median(p.cov), median(p.uniform), median(p.mc),
-              median(p.ratio), mean(p.ratio), p.better, p.same, p.worse, p.improved,
-              median(p.mc_seconds), median(p.episodes));
+              median(ratiosOf(p.paired)), mean(ratiosOf(p.paired)),
+              countVerdicts(p.paired, 0.05, -1), countVerdicts(p.paired, 0.05, 0),
+              countVerdicts(p.paired, 0.05, 1), p.improved, median(p.mc_seconds),
+              median(p.episodes));
   std::fflush(stdout);
 }
 
@@ -195,15 +205,11 @@ void printPoint(const Point& p, bool markdown) {
 void printSweepVerdict(const std::vector<Paired>& all_instances) {
   const auto k = static_cast<double>(all_instances.size());
   if (all_instances.size() < 2) return;
-  int worse = 0, better = 0, family_worse = 0, family_better = 0;
-  std::vector<double> ratios;
-  for (const Paired& p : all_instances) {
-    worse += verdict(p, 0.05) > 0;
-    better += verdict(p, 0.05) < 0;
-    family_worse += verdict(p, 0.05 / k) > 0;
-    family_better += verdict(p, 0.05 / k) < 0;
-    ratios.push_back(p.ratio);
-  }
+  const int worse = countVerdicts(all_instances, 0.05, 1);
+  const int better = countVerdicts(all_instances, 0.05, -1);
+  const int family_worse = countVerdicts(all_instances, 0.05 / k, 1);
+  const int family_better = countVerdicts(all_instances, 0.05 / k, -1);
+  const std::vector<double> ratios = ratiosOf(all_instances);
   const double m = mean(ratios);
   double sq = 0.0;
   for (double r : ratios) sq += (r - m) * (r - m);
