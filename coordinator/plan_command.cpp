@@ -164,11 +164,7 @@ Subcommand addPlanCommand(CLI::App& app) {
       "J(P_info) <= E[J] <= J(P_cov). Example:\n  coordinator plan --scenario "
       "scenarios/default.yaml --surrogate info --out plan.json --json");
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
-  const std::map<std::string, PlanSurrogate> surrogates = {
-      {"info", PlanSurrogate::Information},
-      {"cov", PlanSurrogate::Covariance},
-      {"uniform", PlanSurrogate::Uniform},
-      {"mc", PlanSurrogate::MonteCarlo}};
+  const std::map<std::string, PlanSurrogate> surrogates = wordMap<PlanSurrogate>();
   cmd->add_option("--surrogate", options->surrogate,
                   "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
                   "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "

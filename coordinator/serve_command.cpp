@@ -752,11 +752,7 @@ Subcommand addServeCommand(CLI::App& app) {
   emulator::addRunOptions(*cmd, options->run);
   options->run.security_role = dds::SecurityRole::Coordinator;
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
-  const std::map<std::string, PlanSurrogate> surrogates = {
-      {"info", PlanSurrogate::Information},
-      {"cov", PlanSurrogate::Covariance},
-      {"uniform", PlanSurrogate::Uniform},
-      {"mc", PlanSurrogate::MonteCarlo}};
+  const std::map<std::string, PlanSurrogate> surrogates = wordMap<PlanSurrogate>();
   cmd->add_option("--surrogate", options->surrogate,
                   "how to plan the initial schedule: info, cov, uniform or mc (the expected "
                   "realized cost by Monte Carlo; up to a minute)")

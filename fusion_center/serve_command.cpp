@@ -188,7 +188,7 @@ class FusionCenter {
     // when a signal stopped the run: the launcher names the process that caused it).
     for (auto& [number, open] : open_) {
       closeUnsettled(number, open, end ? "the run ended" : "the run was stopped",
-                     end ? "stall" : "cut_short");
+                     end ? emulator::FaultKind::Stall : emulator::FaultKind::CutShort);
     }
     for (auto& [number, open] : open_) finishEpisode(number, open);
     open_.clear();
@@ -429,7 +429,7 @@ class FusionCenter {
           ") claims sensor " + std::to_string(sensor) + " while its first writer (publication " +
           std::to_string(claims.ownerOf(j)) + ") lives; its samples are kept out";
       spdlog::warn("{}", detail);
-      faults_.push_back(emulator::faultEntry(emulator::kForeignWriter, kProcess, j, episode,
+      faults_.push_back(emulator::faultEntry(emulator::FaultKind::ForeignWriter, kProcess, j, episode,
                                              std::nullopt, detail));
     }
     return true;
@@ -510,7 +510,7 @@ class FusionCenter {
   void lateTally(const sensornet_EpisodeTally& t) {
     if (closed_without_.erase({t.episode, static_cast<int>(t.sensor_id)}) == 0) return;
     faults_.push_back(emulator::faultEntry(
-        "late_tally", kProcess, static_cast<int>(t.sensor_id), t.episode, std::nullopt,
+        emulator::FaultKind::LateTally, kProcess, static_cast<int>(t.sensor_id), t.episode, std::nullopt,
         "sensor " + std::to_string(t.sensor_id) + " reported " + std::to_string(t.sent) +
             " measurements sent in episode " + std::to_string(t.episode) +
             " after the episode had been closed without them"));
@@ -657,7 +657,7 @@ class FusionCenter {
 
   // Names every sensor the episode still waits for in the faults (the episode is incomplete).
   void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why,
-                      const char* silent_kind = "stall") {
+                      emulator::FaultKind silent_kind = emulator::FaultKind::Stall) {
     for (const int j : open.fusion->unsettled()) {
       const emulator::SensorTally& t = open.fusion->tally(j);
       std::string detail;
@@ -671,7 +671,7 @@ class FusionCenter {
                  " measurements arrived); the episode was closed when " + why;
         closed_without_.insert({number, j});
       }
-      faults_.push_back(emulator::faultEntry(t.tallied ? "lost" : silent_kind, kProcess, j, number,
+      faults_.push_back(emulator::faultEntry(t.tallied ? emulator::FaultKind::Lost : silent_kind, kProcess, j, number,
                                              open.fusion->fusedTime(), detail));
       spdlog::warn("episode {}: {}", number, detail);
     }
@@ -767,7 +767,7 @@ class FusionCenter {
     }
     if (result.drain_s > options_.keep_up_limit_s) {
       faults_.push_back(emulator::faultEntry(
-          "overload", kProcess, std::nullopt, number, std::nullopt,
+          emulator::FaultKind::Overload, kProcess, std::nullopt, number, std::nullopt,
           "the fusion center had all of episode " + std::to_string(number) + " only " +
               formatSeconds(result.drain_s) + " s after its last tally (up to " +
               std::to_string(open.backlog) + " measurements waiting)"));
@@ -781,7 +781,7 @@ class FusionCenter {
       }
       if (t.max_lag_s > options_.keep_up_limit_s) {
         faults_.push_back(emulator::faultEntry(
-            "sensor_lag", "sensor_agent", static_cast<int>(j), number, std::nullopt,
+            emulator::FaultKind::SensorLag, "sensor_agent", static_cast<int>(j), number, std::nullopt,
             "sensor " + std::to_string(j) + " published up to " + formatSeconds(t.max_lag_s) +
                 " s behind the emulated clock in episode " + std::to_string(number)));
       }
@@ -857,7 +857,7 @@ class FusionCenter {
     if (resumed_) noteRestart();
     if (!end) return "interrupted";
     if (end->aborted) {
-      faults_.push_back(emulator::faultEntry("run_aborted", "coordinator", std::nullopt,
+      faults_.push_back(emulator::faultEntry(emulator::FaultKind::RunAborted, "coordinator", std::nullopt,
                                              std::nullopt, std::nullopt, end->detail));
       return "failed";
     }
@@ -870,7 +870,7 @@ class FusionCenter {
     const emulator::RunSummary s = report_->summary();
     if (s.episodes < end->episodes_run) {
       faults_.push_back(emulator::faultEntry(
-          "missing_episodes", kProcess, std::nullopt, std::nullopt, std::nullopt,
+          emulator::FaultKind::MissingEpisodes, kProcess, std::nullopt, std::nullopt, std::nullopt,
           "the coordinator ran " + std::to_string(end->episodes_run) + " episodes, " +
               std::to_string(s.episodes) + " were fused"));
     }
@@ -880,7 +880,7 @@ class FusionCenter {
         if (reason == emulator::kNetworkDuplicate) continue;  // scripted, not a fault
         reasons += (reasons.empty() ? "" : ", ") + std::to_string(count) + " " + reason;
       }
-      faults_.push_back(emulator::faultEntry("rejected", kProcess, std::nullopt, std::nullopt,
+      faults_.push_back(emulator::faultEntry(emulator::FaultKind::Rejected, kProcess, std::nullopt, std::nullopt,
                                              std::nullopt,
                                              "samples refused on the wire: " + reasons));
     }
@@ -895,7 +895,7 @@ class FusionCenter {
     for (const std::uint32_t e : lost) episodes += (episodes.empty() ? "" : ", ") + std::to_string(e);
     faults_.insert(faults_.begin(),
                    emulator::faultEntry(
-                       "restarted", kProcess, std::nullopt,
+                       emulator::FaultKind::Restarted, kProcess, std::nullopt,
                        lost.empty() ? std::nullopt : std::optional<std::uint32_t>(*lost.rbegin()),
                        std::nullopt,
                        "the fusion center was restarted and resumed from " +

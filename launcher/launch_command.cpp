@@ -28,6 +28,7 @@
 #include "run_outcome.hpp"
 #include "run_supervisor.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/planner.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
@@ -647,7 +648,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
                   "or mc (E[J] itself by Monte Carlo, up to a minute). Default cov: its realized "
                   "cost beat uniform and info on the paper's sweeps (bench/README.md)")
-      ->check(CLI::IsMember({"uniform", "info", "cov", "mc"}))
+      ->check(CLI::IsMember(wordTexts<PlanSurrogate>()))
       ->capture_default_str();
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "run_files.hpp"
+#include "sensornet/core/planner.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
@@ -186,9 +187,10 @@ Subcommand addReplanCommand(CLI::App& app) {
   CLI::Option_group* change = cmd->add_option_group("change", "what to change (exactly one)");
   change
       ->add_option("--surrogate", options->surrogate,
-                   "re-plan with this surrogate: info (eq. 11), cov (eq. 15) or mc (E[J] "
-                   "itself by Monte Carlo; takes up to the coordinator's plan time limit)")
-      ->check(CLI::IsMember({"info", "cov", "mc"}));
+                   "re-plan with this surrogate: info (eq. 11), cov (eq. 15), uniform (no "
+                   "optimization: the budget spread evenly) or mc (E[J] itself by Monte Carlo; "
+                   "takes up to the coordinator's plan time limit)")
+      ->check(CLI::IsMember(wordTexts<PlanSurrogate>()));
   change->add_option("--exclude", options->exclude, "re-plan with these sensor ids at rate zero")
       ->delimiter(',');
   change

@@ -215,7 +215,7 @@ RunOutcome settleRun(const RunEnd& end) {
   }
   if (outcome.status == "completed" &&
       finishedEpisodes(*report) < static_cast<std::uint64_t>(end.episodes_planned)) {
-    faults.push_back({"episodes_missing",
+    faults.push_back({std::string(wordOf(emulator::FaultKind::MissingEpisodes)),
                       kFusionCenter,
                       {},
                       {},

@@ -7,11 +7,12 @@ packages=(
   cmake ninja-build g++ pkg-config
   cyclonedds-dev cyclonedds-tools
   libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
-  coinor-libipopt-dev
+  coinor-libipopt-dev liblapack-dev libblas-dev  # IPOPT's CMake link line names -llapack -lblas
   libgtest-dev libgmock-dev docker-compose
   fastddsgen libfastrtps-dev  # a second DDS vendor: the interoperability test (Fast DDS 2.9)
   chromium  # headless, for the report page's browser test
   openssl libssl-dev  # secured runs: `sensornet pki init` runs openssl; certificates checked with libcrypto
+  iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
 )
 
 missing=()

@@ -15,6 +15,12 @@
 # It refuses a NAME already in use or a SUBNET already on an interface (tests running in
 # parallel pick their own), and removes what it made if any step fails.
 #
+# Where Docker runs (or anything else that sets the FORWARD policy to DROP and loads
+# br_netfilter, so that bridged frames pass iptables' FORWARD chain), up also inserts one rule,
+# `-i NAME-br -o NAME-br -j ACCEPT`, tagged with the comment "sensornet-netns NAME", so that the
+# namespaces reach each other across the bridge; down removes every rule with that tag. Without
+# iptables on the machine there is nothing to allow and nothing is added.
+#
 # down stops what still runs in NAME's namespaces (SIGKILL to the pids `ip netns pids` lists:
 # only processes started inside them), then deletes the namespaces, the veths and the bridge.
 # It succeeds when there is nothing to remove, so it can run in any cleanup path.
@@ -33,8 +39,24 @@ check_name() {
   [[ "$1" =~ ^[a-z0-9]{1,8}$ ]] || { echo "$0: NAME: expected 1 to 8 lowercase letters or digits, got '$1'" >&2; exit 2; }
 }
 
+# The FORWARD rule that lets frames cross NAME's bridge, and only it (see above).
+forward_rule() { echo "FORWARD -i $1-br -o $1-br -m comment --comment sensornet-netns-$1 -j ACCEPT"; }
+
+allow_forwarding() {
+  command -v iptables >/dev/null || return 0
+  # shellcheck disable=SC2046
+  iptables -I $(forward_rule "$1")
+}
+
+remove_forwarding() {
+  command -v iptables >/dev/null || return 0
+  # shellcheck disable=SC2046
+  while iptables -D $(forward_rule "$1") 2>/dev/null; do :; done
+}
+
 down() {
   local name=$1 ns pid
+  remove_forwarding "$name"
   for ns in $(ip netns list | awk '{print $1}' | grep -E "^${name}-h[0-9]+$" || true); do
     for pid in $(ip netns pids "$ns" 2>/dev/null || true); do
       kill -KILL "$pid" 2>/dev/null || true
@@ -65,6 +87,7 @@ up() {
   ip link add "${name}-br" type bridge
   ip addr add "${subnet}.254/24" dev "${name}-br"
   ip link set "${name}-br" up
+  allow_forwarding "$name"
   for (( i = 1; i <= count; i++ )); do
     ns="${name}-h${i}"
     ip netns add "$ns"

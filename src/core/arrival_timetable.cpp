@@ -56,15 +56,11 @@ void forEachStretch(const RateSchedule& schedule, int sensor, double t0, double 
 
 }  // namespace
 
-std::string_view arrivalModeName(ArrivalMode mode) {
-  return mode == ArrivalMode::Timetable ? "timetable" : "poisson";
-}
+std::string_view arrivalModeName(ArrivalMode mode) { return wordOf(mode); }
 
 ArrivalMode parseArrivalMode(std::string_view text, const std::string& source,
                              const std::string& field) {
-  if (text == "poisson") return ArrivalMode::Poisson;
-  if (text == "timetable") return ArrivalMode::Timetable;
-  throw InputError(source, field, "poisson or timetable, got '" + std::string(text) + "'");
+  return parseWord<ArrivalMode>(text, source, field);
 }
 
 double integratedIntensity(const RateSchedule& schedule, int sensor, double t0, double t1) {

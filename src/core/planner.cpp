@@ -60,19 +60,7 @@ SurrogateForm formOf(PlanSurrogate surrogate) {
                                                 : SurrogateForm::Information;
 }
 
-std::string_view describe(PlanSurrogate surrogate) {
-  switch (surrogate) {
-    case PlanSurrogate::Information:
-      return "info";
-    case PlanSurrogate::Covariance:
-      return "cov";
-    case PlanSurrogate::Uniform:
-      return "uniform";
-    case PlanSurrogate::MonteCarlo:
-      return "mc";
-  }
-  return "unknown";
-}
+std::string_view describe(PlanSurrogate surrogate) { return wordOf(surrogate); }
 
 double kktResidual(const Scenario& scenario, const RateSchedule& schedule, SurrogateForm form,
                    const PlanRequest& request) {

@@ -129,11 +129,8 @@ std::set<int> sensorSet(const Fields& f, const json& object, const std::string& 
 }
 
 PlanSurrogate surrogateOf(const Fields& f, const std::string& name, const std::string& field) {
-  if (name == "info") return PlanSurrogate::Information;
-  if (name == "cov") return PlanSurrogate::Covariance;
-  if (name == "uniform") return PlanSurrogate::Uniform;
-  if (name == "mc") return PlanSurrogate::MonteCarlo;
-  f.fail(field, "info, cov, uniform or mc, got '" + name + "'");
+  if (const auto surrogate = lookUpWord<PlanSurrogate>(name)) return *surrogate;
+  f.fail(field, wordChoices<PlanSurrogate>() + ", got '" + name + "'");
 }
 
 ReplanSettings settingsFrom(const Fields& f, const json& s, const Scenario& scenario) {

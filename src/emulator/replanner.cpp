@@ -111,18 +111,7 @@ void Replanner::noteFailed(std::span<const std::uint32_t> sensors, std::uint64_t
 Replan Replanner::changeSurrogate(std::string_view surrogate, const ScheduleBook& book,
                                   const RunMoment& now, std::uint64_t command_id) const {
   ReplanSettings settings = settings_;
-  if (surrogate == "info") {
-    settings.surrogate = PlanSurrogate::Information;
-  } else if (surrogate == "cov") {
-    settings.surrogate = PlanSurrogate::Covariance;
-  } else if (surrogate == "uniform") {
-    settings.surrogate = PlanSurrogate::Uniform;
-  } else if (surrogate == "mc") {
-    settings.surrogate = PlanSurrogate::MonteCarlo;
-  } else {
-    throw InputError(sourceOf(command_id), "surrogate",
-                     "info, cov, uniform or mc, got '" + std::string(surrogate) + "'");
-  }
+  settings.surrogate = parseWord<PlanSurrogate>(surrogate, sourceOf(command_id), "surrogate");
   return plan(std::move(settings), book, now, command_id);
 }
 

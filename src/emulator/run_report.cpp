@@ -528,10 +528,10 @@ json parseReportWithoutEpisodes(std::istream& in, std::size_t* listed) {
   return report;
 }
 
-json faultEntry(const std::string& kind, const std::string& process, std::optional<int> sensor,
+json faultEntry(FaultKind kind, const std::string& process, std::optional<int> sensor,
                 std::optional<std::uint32_t> episode, std::optional<double> emulated_time_s,
                 const std::string& detail) {
-  return {{"kind", kind},
+  return {{"kind", std::string(wordOf(kind))},
           {"process", process},
           {"sensor", sensor ? json(*sensor) : json(nullptr)},
           {"episode", episode ? json(*episode) : json(nullptr)},

@@ -9,11 +9,19 @@
 #include <string>
 #include <string_view>
 
+#include "sensornet/core/words.hpp"
+
 namespace sensornet {
 
 enum class ArrivalMode {
   Poisson,    // a Poisson process of intensity λ_j(t), drawn afresh in every episode
   Timetable,  // the instants where Λ_j(t) = ∫_0^t λ_j reaches k - 1/2, the same every episode
+};
+
+template <>
+struct Words<ArrivalMode> {
+  static constexpr std::array<WordOf<ArrivalMode>, 2> kTable{
+      {{ArrivalMode::Poisson, "poisson"}, {ArrivalMode::Timetable, "timetable"}}};
 };
 
 // "poisson" or "timetable".

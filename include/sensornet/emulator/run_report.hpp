@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "sensornet/core/scenario.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
@@ -196,7 +197,7 @@ inline constexpr double kLatencyQuantileRelativeError = 5.76e-4;  // 10^(1/4000)
 [[nodiscard]] nlohmann::json latencyHistogram(const std::vector<double>& latencies_s);
 
 // One fault of a run, as the report lists it. Optional parts are null when unknown.
-[[nodiscard]] nlohmann::json faultEntry(const std::string& kind, const std::string& process,
+[[nodiscard]] nlohmann::json faultEntry(FaultKind kind, const std::string& process,
                                         std::optional<int> sensor, std::optional<std::uint32_t> episode,
                                         std::optional<double> emulated_time_s,
                                         const std::string& detail);

@@ -137,7 +137,7 @@ json sampleReport() {
     report.addLatencies(e.latencies_s);
     report.add(episodeEntry(e));
   }
-  json faults = json::array({faultEntry("sensor_died", "sensor_agent", 1, 1, 0.5, "killed <9>")});
+  json faults = json::array({faultEntry(FaultKind::SensorDied, "sensor_agent", 1, 1, 0.5, "killed <9>")});
   return report.toJson("degraded", faults, json::array());
 }
 

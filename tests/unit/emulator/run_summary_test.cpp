@@ -177,7 +177,7 @@ TEST(RunReport, WritesPerEpisodeFromItsLogAsTheWholeDocumentWouldRead) {
     }
   }
   std::ofstream(log_path, std::ios::app) << "{\"episode\": 40, \"realiz";  // torn
-  const json faults = json::array({faultEntry("stall", "fusion_center", 1, 3, 0.5, "x")});
+  const json faults = json::array({faultEntry(FaultKind::Stall, "fusion_center", 1, 3, 0.5, "x")});
   const json extra = {{"written_at", "2026-11-30T21:00:00Z"}, {"arrivals", {{"mode", "poisson"}}}};
   const json whole = held.toJson("degraded", faults, json::array(), extra);
   const json head = streamed.toJsonWithoutEpisodes("degraded", faults, json::array(), extra);
