@@ -1,8 +1,8 @@
 #pragma once
 // The emulated plant of a run: one ground truth x(t) of dx = A x dt + dw (E[dw dw'] = Q dt,
 // x(0) ~ N(m0, P0)) per episode that every process computes for itself and gets bit for bit
-// the same, from the run seed and the episode number alone (DESIGN.md, "Numerical ground
-// rules"). Sensors sample it at their arrival instants; the fusion center at T for the NEES.
+// the same, from the run seed and the episode number alone (docs/ARCHITECTURE.md, "Numerical
+// ground rules"). Sensors sample it at their arrival instants; the fusion center at T for the NEES.
 //
 //   const EmulatedPlant plant(scenario, seed);
 //   const std::int64_t tick = plant.tickAt(1.234);             // arrival instants fall on ticks

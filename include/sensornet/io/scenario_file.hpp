@@ -1,6 +1,6 @@
 #pragma once
-// Reading and writing the file contracts of DESIGN.md: scenario files (YAML, explicit or
-// random-plant form) and schedule files (JSON). Every malformed input throws InputError naming
+// Reading and writing the file contracts of docs/ARCHITECTURE.md ("File contracts"): scenario
+// files (YAML, explicit or random-plant form) and schedule files (JSON). Every malformed input throws InputError naming
 // the file, the field and what was expected.
 //
 //   Scenario s = loadScenarioFile("scenarios/default.yaml");

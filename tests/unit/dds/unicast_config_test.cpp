@@ -33,7 +33,7 @@ TEST(UnicastConfig, BindsToTheHostListsTheHubsAndAllowsNoMulticast) {
   EXPECT_NE(hub.find("<Peer Address=\"10.78.0.1\"/>"), std::string::npos);
   EXPECT_NE(hub.find("<Peer Address=\"10.78.0.254\"/>"), std::string::npos);
   EXPECT_NE(hub.find("<ParticipantIndex>auto</ParticipantIndex>"), std::string::npos);
-  // The stall tolerance of the loopback configuration (DESIGN.md: 10 s absorbed).
+  // The stall tolerance of the loopback configuration (docs/ARCHITECTURE.md: 10 s absorbed).
   EXPECT_NE(hub.find("<LeaseDuration>20 s</LeaseDuration>"), std::string::npos);
   const std::string leaf = unicastConfigXml("10.78.0.2", {"10.78.0.1"}, DiscoveryRole::Leaf);
   EXPECT_NE(leaf.find("<ParticipantIndex>none</ParticipantIndex>"), std::string::npos);
