@@ -25,7 +25,8 @@ const double kNan = std::numeric_limits<double>::quiet_NaN();
 constexpr const char* kInk = "#1b2a49";      // darkest: the main series
 constexpr const char* kMid = "#4a74b4";      // middle
 constexpr const char* kAccent = "#e0891c";   // light-middle orange: what went wrong, p99
-constexpr const char* kPale = "#cfdbee";     // pale: bands, expected
+constexpr const char* kPale = "#cfdbee";     // pale: expected counts
+constexpr const char* kSand = "#e9e1cf";     // pale and warm: the bracket, apart from the interval
 constexpr const char* kGrey = "#8c8c8c";
 
 double number(const json& j, const char* key) {
@@ -121,15 +122,13 @@ RunningMean runningMean(const json& per_episode) {
   return r;
 }
 
-std::string costPlot(const json& report) {
-  const json& per_episode = report.at("per_episode");
-  if (per_episode.empty()) return note("Realized cost per episode", "The run fused no episode.");
-  const RunningMean running = runningMean(per_episode);
+// The cost axis: what the complete episodes, the brackets and the interval span. An incomplete
+// episode's cost (cut short, aborted) joins only if it does not stretch the axis past half as
+// much again: one aborted episode must not flatten the rest (it is drawn at the top edge).
+Interval costRange(const json& per_episode, const RunningMean& running) {
   Extent y;
-  Extent x;
   for (const json& e : per_episode) {
-    x.add(number(e, "episode"));
-    y.add(number(e, "realized_cost"));
+    if (e.value("complete", false)) y.add(number(e, "realized_cost"));
     if (e.contains("bracket")) {
       y.add(number(e.at("bracket"), "info"));
       y.add(number(e.at("bracket"), "cov"));
@@ -137,8 +136,24 @@ std::string costPlot(const json& report) {
   }
   y.add(running.low);
   y.add(running.high);
-  if (y.empty()) return note("Realized cost per episode", "No episode has a finite cost.");
-  const Interval y_range = niceRange({std::min(0.0, y.lo), y.hi}, 5);
+  for (const json& e : per_episode) {
+    const double cost = number(e, "realized_cost");
+    if (y.empty() || (!e.value("complete", false) && cost <= 1.5 * y.hi)) y.add(cost);
+  }
+  if (y.empty()) return {kNan, kNan};
+  return niceRange({std::min(0.0, y.lo), y.hi}, 5);
+}
+
+std::string costPlot(const json& report) {
+  const json& per_episode = report.at("per_episode");
+  if (per_episode.empty()) return note("Realized cost per episode", "The run fused no episode.");
+  const RunningMean running = runningMean(per_episode);
+  Extent x;
+  for (const json& e : per_episode) x.add(number(e, "episode"));
+  const Interval y_range = costRange(per_episode, running);
+  if (!std::isfinite(y_range.lo)) {
+    return note("Realized cost per episode", "No episode has a finite cost.");
+  }
   SvgPlot plot(SvgPlot::Frame{}, episodeAxis(x.lo, x.hi, "episode"),
                Axis{y_range, "cost J (state units²)"});
   for (const json& e : per_episode) {
@@ -146,11 +161,11 @@ std::string costPlot(const json& report) {
     if (!e.contains("bracket")) continue;
     const double info = number(e.at("bracket"), "info");
     const double cov = number(e.at("bracket"), "cov");
-    plot.rect(k - 0.5, k + 0.5, info, cov, Style::area(kPale),
+    plot.rect(k - 0.5, k + 0.5, info, cov, Style::area(kSand),
               "episode " + formatTick(k) + ": bracket [" + formatTick(info) + ", " +
                   formatTick(cov) + "]");
   }
-  Style interval = Style::area(kMid, 0.35);
+  Style interval = Style::area(kMid, 0.45);
   plot.band(running.episodes, running.low, running.high, interval, "95% interval of the mean");
   plot.polyline(running.episodes, running.mean, Style::line(kInk, 2.0), "running mean");
   for (const json& v : report.value("schedule_versions", json::array())) {
@@ -158,16 +173,19 @@ std::string costPlot(const json& report) {
     plot.vline(number(v, "effective_episode") - 0.5, Style::line(kGrey, 1.2, "5 3"),
                "v" + formatTick(number(v, "version")));
   }
+  bool off_scale = false;
   for (const json& e : per_episode) {
     const bool complete = e.value("complete", false);
     const double k = number(e, "episode");
     const double cost = number(e, "realized_cost");
-    plot.circle(k, cost, 3.5,
+    const bool above = cost > y_range.hi;
+    off_scale = off_scale || above;
+    plot.circle(k, above ? y_range.hi : cost, 3.5,
                 complete ? Style::outlined(kInk, kInk) : Style::outlined("white", kAccent),
                 "episode " + formatTick(k) + ": " + formatTick(cost) +
-                    (complete ? "" : " (incomplete)"));
+                    (complete ? "" : " (incomplete)") + (above ? ", off the scale" : ""));
   }
-  plot.legend({{"bracket in force", Style::area(kPale)},
+  plot.legend({{"bracket in force", Style::area(kSand)},
                {"realized cost", Style::outlined(kInk, kInk)},
                {"incomplete", Style::outlined("white", kAccent)},
                {"running mean", Style::line(kInk, 2.0)},
@@ -176,7 +194,11 @@ std::string costPlot(const json& report) {
                 "Each dot is one episode's realized cost J(P); the shaded box behind it is the "
                 "bracket [J(P<sub>info</sub>), J(P<sub>cov</sub>)] of the schedule in force. The "
                 "line is the running mean over complete episodes with its 95% Student-t interval; "
-                "dashed rules mark the episodes where a new schedule version took effect.");
+                "dashed rules mark the episodes where a new schedule version took effect." +
+                    std::string(off_scale ? " An incomplete episode whose cost lies far above "
+                                            "the rest sits on the top edge (its value is in "
+                                            "its tooltip)."
+                                          : ""));
 }
 
 // ---- 2. schedule heat maps --------------------------------------------------------------------
@@ -195,72 +217,225 @@ std::string rampColour(double fraction) {
   return text;
 }
 
-double largestRate(const json& versions) {
-  double largest = 0.0;
+// The schedule versions as the page reads them, in the order they were published.
+struct PageVersion {
+  double version = 0.0;
+  double episode = 0.0;  // effective from this episode ...
+  double time_s = 0.0;   // ... at this emulated time within it
+  std::vector<std::vector<double>> rates;  // [interval][sensor]
+};
+
+std::vector<PageVersion> pageVersions(const json& versions) {
+  std::vector<PageVersion> out;
   for (const json& v : versions) {
-    for (const json& row : v.value("rates", json::array())) {
-      for (const double r : numbers(row)) largest = std::max(largest, std::isfinite(r) ? r : 0.0);
-    }
+    if (!v.contains("rates") || !v.at("rates").is_array() || v.at("rates").empty()) continue;
+    PageVersion p{number(v, "version"), number(v, "effective_episode"),
+                  number(v, "effective_time_s"), {}};
+    for (const json& row : v.at("rates")) p.rates.push_back(numbers(row));
+    out.push_back(std::move(p));
   }
-  return largest;
+  return out;
 }
 
-std::string heatMap(const json& v, std::size_t index, double largest) {
-  const json& rates = v.at("rates");
-  const double horizon = number(v, "horizon_s");
-  const auto intervals = static_cast<double>(rates.size());
-  const std::size_t sensors = rates.empty() ? 0 : rates.front().size();
-  SvgPlot::Frame frame;
-  frame.height = frame.top + frame.bottom + std::clamp(16.0 * static_cast<double>(sensors), 64.0, 420.0);
-  Axis y{{-0.5, static_cast<double>(sensors) - 0.5}, "sensor"};
-  const double every = std::max(1.0, std::ceil(static_cast<double>(sensors) / 20.0));
-  for (double j = 0; j < static_cast<double>(sensors); j += every) y.ticks.push_back(j);
-  SvgPlot plot(frame, Axis{{0.0, horizon}, "emulated time t (s)"}, y);
-  const double step = horizon / intervals;
-  for (std::size_t k = 0; k < rates.size(); ++k) {
-    const std::vector<double> row = numbers(rates[k]);
-    for (std::size_t j = 0; j < row.size(); ++j) {
-      const double t0 = step * static_cast<double>(k);
-      const auto s = static_cast<double>(j);
-      plot.rect(t0, t0 + step, s - 0.5, s + 0.5,
-                Style::area(rampColour(largest > 0.0 ? row[j] / largest : 0.0)),
-                "sensor " + std::to_string(j) + ", t in [" + formatTick(t0) + ", " +
-                    formatTick(t0 + step) + ") s: " + formatTick(row[j]) + " Hz");
+// The version in force at time t of an episode: the latest published whose effective point is
+// at or before (episode, t), as the schedule book decides it.
+const PageVersion* versionInForce(const std::vector<PageVersion>& versions, double episode,
+                                  double t) {
+  for (auto it = versions.rbegin(); it != versions.rend(); ++it) {
+    if (it->episode < episode || (it->episode == episode && it->time_s <= t)) return &*it;
+  }
+  return nullptr;
+}
+
+// An episode's pieces [from, to) of emulated time, each under one version.
+struct Piece {
+  double from = 0.0;
+  double to = 0.0;
+  const PageVersion* version = nullptr;
+};
+
+std::vector<Piece> piecesOf(const std::vector<PageVersion>& versions, double episode,
+                            double horizon) {
+  std::vector<double> breaks = {0.0};
+  for (const PageVersion& v : versions) {
+    if (v.episode == episode && v.time_s > 0.0 && v.time_s < horizon) breaks.push_back(v.time_s);
+  }
+  std::sort(breaks.begin(), breaks.end());
+  std::vector<Piece> pieces;
+  for (std::size_t i = 0; i < breaks.size(); ++i) {
+    const double to = i + 1 < breaks.size() ? breaks[i + 1] : horizon;
+    if (to <= breaks[i]) continue;
+    if (const PageVersion* v = versionInForce(versions, episode, breaks[i])) {
+      pieces.push_back({breaks[i], to, v});
     }
   }
-  const double version = number(v, "version");
-  if (index > 0) {
-    plot.vline(number(v, "effective_time_s"), Style::line(kAccent, 2.0, "6 3"),
-               "switch: episode " + formatTick(number(v, "effective_episode")) + ", t = " +
-                   formatTick(number(v, "effective_time_s")) + " s");
+  return pieces;
+}
+
+// The rate of `sensor` in interval k of version v (0 where the version lacks it).
+double rateOf(const PageVersion& v, std::size_t k, std::size_t sensor) {
+  if (k >= v.rates.size() || sensor >= v.rates[k].size()) return 0.0;
+  return std::isfinite(v.rates[k][sensor]) ? v.rates[k][sensor] : 0.0;
+}
+
+// At most this many columns and cells in the map: past them, a column is the mean rate over a
+// block of episodes instead of one interval of one episode.
+constexpr double kMaxMapColumns = 600.0;
+constexpr double kMaxMapCells = 40000.0;
+
+struct MapShape {
+  double first = 0.0, last = 0.0;  // episodes shown
+  std::size_t intervals = 0, sensors = 0;
+  double horizon = 1.0;
+};
+
+// One cell per interval of every episode, split where a version switches within it.
+void drawDetailedMap(SvgPlot& plot, const std::vector<PageVersion>& versions, const MapShape& m,
+                     double largest) {
+  const double step = m.horizon / static_cast<double>(m.intervals);
+  for (double e = m.first; e <= m.last; e += 1.0) {
+    for (const Piece& piece : piecesOf(versions, e, m.horizon)) {
+      for (std::size_t k = 0; k < m.intervals; ++k) {
+        const double t0 = std::max(piece.from, step * static_cast<double>(k));
+        const double t1 = std::min(piece.to, step * static_cast<double>(k + 1));
+        if (t1 <= t0) continue;
+        for (std::size_t j = 0; j < m.sensors; ++j) {
+          const double rate = rateOf(*piece.version, k, j);
+          const auto s = static_cast<double>(j);
+          plot.rect(e + t0 / m.horizon, e + t1 / m.horizon, s - 0.5, s + 0.5,
+                    Style::area(rampColour(largest > 0.0 ? rate / largest : 0.0)),
+                    "sensor " + std::to_string(j) + ", episode " + formatTick(e) + ", t in [" +
+                        formatTick(t0) + ", " + formatTick(t1) + ") s: " + formatTick(rate) +
+                        " Hz (v" + formatTick(piece.version->version) + ")");
+        }
+      }
+    }
   }
-  plot.legend({{"0 Hz", Style::outlined(rampColour(0.0), kGrey)},
-               {formatTick(0.5 * largest) + " Hz", Style::area(rampColour(0.5))},
-               {formatTick(largest) + " Hz", Style::area(rampColour(1.0))}});
-  const std::string id = "plot-schedule-" + std::to_string(index);
-  return plot.svg(id, "Schedule version " + formatTick(version)) + "<p class=\"sub\">Version " +
-         formatTick(version) + " (" + escapeXml(v.value("surrogate", std::string("?"))) +
-         "), in force from episode " + formatTick(number(v, "effective_episode")) + " at t = " +
-         formatTick(number(v, "effective_time_s")) + " s; bracket [" +
-         formatTick(number(v.value("bracket", json::object()), "info")) + ", " +
-         formatTick(number(v.value("bracket", json::object()), "cov")) + "].</p>\n";
+}
+
+// Per sensor, ∫ λ_j dt over one episode: its expected count.
+std::vector<double> expectedCounts(const std::vector<PageVersion>& versions, const MapShape& m,
+                                   double episode) {
+  const double step = m.horizon / static_cast<double>(m.intervals);
+  std::vector<double> counts(m.sensors, 0.0);
+  for (const Piece& piece : piecesOf(versions, episode, m.horizon)) {
+    for (std::size_t k = 0; k < m.intervals; ++k) {
+      const double t0 = std::max(piece.from, step * static_cast<double>(k));
+      const double t1 = std::min(piece.to, step * static_cast<double>(k + 1));
+      if (t1 <= t0) continue;
+      for (std::size_t j = 0; j < m.sensors; ++j) counts[j] += (t1 - t0) * rateOf(*piece.version, k, j);
+    }
+  }
+  return counts;
+}
+
+// One column per block of episodes: each sensor's mean rate over the block.
+void drawBlockMap(SvgPlot& plot, const std::vector<PageVersion>& versions, const MapShape& m,
+                  double largest, double per_column) {
+  std::map<const PageVersion*, std::vector<double>> whole;  // episodes without a switch
+  for (double from = m.first; from <= m.last; from += per_column) {
+    const double to = std::min(m.last, from + per_column - 1.0);
+    std::vector<double> total(m.sensors, 0.0);
+    for (double e = from; e <= to; e += 1.0) {
+      const std::vector<Piece> pieces = piecesOf(versions, e, m.horizon);
+      std::vector<double> counts;
+      if (pieces.size() == 1) {
+        auto [it, fresh] = whole.try_emplace(pieces.front().version);
+        if (fresh) it->second = expectedCounts(versions, m, e);
+        counts = it->second;
+      } else {
+        counts = expectedCounts(versions, m, e);
+      }
+      for (std::size_t j = 0; j < m.sensors; ++j) total[j] += counts[j];
+    }
+    const double span = (to - from + 1.0) * m.horizon;
+    for (std::size_t j = 0; j < m.sensors; ++j) {
+      const double rate = total[j] / span;
+      const auto s = static_cast<double>(j);
+      plot.rect(from, to + 1.0, s - 0.5, s + 0.5,
+                Style::area(rampColour(largest > 0.0 ? rate / largest : 0.0)),
+                "sensor " + std::to_string(j) + ", episodes " + formatTick(from) + "-" +
+                    formatTick(to) + ": mean " + formatTick(rate) + " Hz");
+    }
+  }
+}
+
+std::string versionTable(const json& versions) {
+  std::string t = "<table class=\"versions\"><tr><th>version</th><th>surrogate</th>"
+                  "<th>in force from</th><th>bracket [info, cov]</th></tr>\n";
+  for (const json& v : versions) {
+    const json bracket = v.value("bracket", json::object());
+    t += "<tr><td>v" + formatTick(number(v, "version")) + "</td><td>" +
+         escapeXml(v.value("surrogate", std::string("?"))) + "</td><td>episode " +
+         formatTick(number(v, "effective_episode")) + ", t = " +
+         formatTick(number(v, "effective_time_s")) + " s</td><td>[" +
+         formatTick(number(bracket, "info")) + ", " + formatTick(number(bracket, "cov")) +
+         "]</td></tr>\n";
+  }
+  return t + "</table>\n";
 }
 
 std::string schedulePlots(const json& report) {
-  const json versions = report.value("schedule_versions", json::array());
-  const std::string heading = "Schedule versions (rates per sensor over time)";
-  std::string maps;
-  const double largest = largestRate(versions);
-  for (std::size_t i = 0; i < versions.size(); ++i) {
-    const json& v = versions[i];
-    if (!v.contains("rates") || !v.at("rates").is_array() || v.at("rates").empty()) continue;
-    maps += heatMap(v, i, largest);
+  const json versions_json = report.value("schedule_versions", json::array());
+  const std::string heading = "Schedule in force (rates per sensor over the run)";
+  const std::vector<PageVersion> versions = pageVersions(versions_json);
+  if (versions.empty()) return note(heading, "The report carries no schedule rates.");
+  MapShape m;
+  m.intervals = versions.front().rates.size();
+  for (const PageVersion& v : versions) {
+    for (const auto& row : v.rates) m.sensors = std::max(m.sensors, row.size());
   }
-  if (maps.empty()) return note(heading, "The report carries no schedule rates.");
-  return figure("schedule", heading, maps,
-                "Each map is one schedule version: rows are sensors, columns the schedule's "
-                "intervals, darker is a higher rate λ<sub>j</sub>(t). The dashed rule marks the "
-                "emulated time at which a later version took effect (in the episode named).");
+  for (const json& v : versions_json) {
+    if (number(v, "horizon_s") > 0.0) m.horizon = number(v, "horizon_s");
+  }
+  Extent episodes;
+  for (const json& e : report.at("per_episode")) episodes.add(number(e, "episode"));
+  for (const PageVersion& v : versions) episodes.add(v.episode);
+  m.first = std::max(0.0, episodes.lo);
+  m.last = std::max(m.first, episodes.hi);
+  double largest = 0.0;
+  for (const PageVersion& v : versions) {
+    for (const auto& row : v.rates) {
+      for (const double r : row) largest = std::max(largest, std::isfinite(r) ? r : 0.0);
+    }
+  }
+  const double count = m.last - m.first + 1.0;
+  const auto sensors = static_cast<double>(m.sensors);
+  SvgPlot::Frame frame;
+  frame.height = frame.top + frame.bottom + std::clamp(16.0 * sensors, 64.0, 420.0);
+  Axis x({m.first, m.last + 1.0}, "episode (each spans its horizon, " + formatTick(m.horizon) +
+                                      " s of emulated time)");
+  if (count <= 20.0) {
+    for (double k = m.first; k <= m.last + 1.0; k += 1.0) x.ticks.push_back(k);
+  }
+  Axis y{{-0.5, sensors - 0.5}, "sensor"};
+  const double every = std::max(1.0, std::ceil(sensors / 20.0));
+  for (double j = 0; j < sensors; j += every) y.ticks.push_back(j);
+  SvgPlot plot(frame, x, y);
+  const double cells = count * static_cast<double>(m.intervals) * sensors;
+  const bool detailed = count * static_cast<double>(m.intervals) <= kMaxMapColumns &&
+                        cells <= kMaxMapCells;
+  if (detailed) {
+    drawDetailedMap(plot, versions, m, largest);
+  } else {
+    const double columns = std::max(1.0, std::min(kMaxMapColumns, std::floor(kMaxMapCells / sensors)));
+    drawBlockMap(plot, versions, m, largest, std::ceil(count / columns));
+  }
+  for (std::size_t i = 1; i < versions.size(); ++i) {
+    plot.vline(versions[i].episode + versions[i].time_s / m.horizon,
+               Style::line(kAccent, 1.6, "6 3"), "v" + formatTick(versions[i].version));
+  }
+  plot.legend({{"0 Hz", Style::outlined(rampColour(0.0), kGrey)},
+               {formatTick(0.5 * largest) + " Hz", Style::area(rampColour(0.5))},
+               {formatTick(largest) + " Hz", Style::area(rampColour(1.0))},
+               {"a new version takes effect", Style::line(kAccent, 1.6, "6 3")}});
+  return figure("schedule", heading, plot.svg("plot-schedule", heading) + versionTable(versions_json),
+                std::string("Rows are sensors, time runs left to right through the episodes; "
+                            "darker is a higher rate λ<sub>j</sub>(t) of the version in force. ") +
+                    (detailed ? "Each cell is one interval of the schedule in one episode."
+                              : "Each column is the mean rate over a block of episodes (too many "
+                                "episodes to draw every interval).") +
+                    " Dashed rules mark where a new version took effect.");
 }
 
 // ---- 3. per-sensor counts ---------------------------------------------------------------------
@@ -377,9 +552,14 @@ std::string tracePlot(const json& report) {
     extentOf(s.value("cov", json::object()));
   }
   if (x.empty() || y.empty()) return note(heading, "The covariance traces are empty.");
+  // A log axis: the covariance falls by orders of magnitude within the first measurements, and
+  // on a linear axis everything after them is flat. Linear only if a value is not positive.
+  const bool log = y.lo > 0.0;
+  const Interval y_range = log ? Interval{y.lo / 1.25, y.hi * 1.25}
+                               : niceRange({std::min(0.0, y.lo), y.hi}, 5);
   SvgPlot plot(SvgPlot::Frame{}, Axis{{x.lo, x.hi}, "emulated time t (s)"},
-               Axis{niceRange({std::min(0.0, y.lo), y.hi}, 5),
-                    "⟨" + weight + ", P(t)⟩ (state units²)"});
+               Axis{y_range, "⟨" + weight + ", P(t)⟩ (state units², " +
+                                 (log ? "log scale)" : "linear)"), log});
   std::vector<LegendEntry> legend;
   const char* shades[] = {kInk, kMid, "#9db3d6"};
   std::size_t i = 0;
@@ -446,7 +626,9 @@ std::string faultPlot(const json& report) {
     plot.circle(at, rows[kind], 5.0, Style::outlined(kAccent, kInk),
                 kind + ": " + f.value("detail", std::string()));
     const auto cell = [](const json& v) {
-      return v.is_null() ? std::string("–") : escapeXml(v.is_string() ? v.get<std::string>() : v.dump());
+      if (v.is_null()) return std::string("–");
+      if (v.is_number()) return escapeXml(formatTick(v.get<double>()));
+      return escapeXml(v.is_string() ? v.get<std::string>() : v.dump());
     };
     table += "<tr><td>" + escapeXml(kind) + "</td><td>" + cell(f.value("process", json())) +
              "</td><td>" + cell(f.value("sensor", json())) + "</td><td>" +
@@ -473,11 +655,25 @@ std::string summaryTable(const json& report) {
   t += row("status", report.value("status", std::string("?")));
   t += row("episodes (complete)", formatTick(number(s, "episodes")) + " (" +
                                       formatTick(number(s, "episodes_complete")) + ")");
-  t += row("mean realized cost", formatTick(number(s, "mean")) + ", 95% interval [" +
-                                     formatTick(number(s, "ci95_low")) + ", " +
-                                     formatTick(number(s, "ci95_high")) + "]");
-  t += row("mean bracket", "[" + formatTick(number(bracket, "info")) + ", " +
-                               formatTick(number(bracket, "cov")) + "]");
+  // Nothing that was not measured is printed as a number: no mean without a complete episode,
+  // no interval without two.
+  const double complete = number(s, "episodes_complete");
+  const double mean = number(s, "mean");
+  std::string cost = "not measured (no complete episode)";
+  if (complete >= 1.0 && std::isfinite(mean)) {
+    cost = formatTick(mean);
+    const double low = number(s, "ci95_low");
+    const double high = number(s, "ci95_high");
+    cost += complete >= 2.0 && std::isfinite(low) && std::isfinite(high)
+                ? ", 95% interval [" + formatTick(low) + ", " + formatTick(high) + "]"
+                : ", no 95% interval (one complete episode)";
+  }
+  t += row("mean realized cost", cost);
+  const double info = number(bracket, "info");
+  const double cov = number(bracket, "cov");
+  t += row("mean bracket", complete >= 1.0 && std::isfinite(info) && std::isfinite(cov)
+                               ? "[" + formatTick(info) + ", " + formatTick(cov) + "]"
+                               : "not measured (no complete episode)");
   t += row("meets the bracket", meets.is_boolean() ? (meets.get<bool>() ? "yes" : "no")
                                                    : "undetermined (fewer than 2 complete episodes)");
   t += row("sent / received / lost", formatTick(number(s, "sent")) + " / " +

@@ -94,6 +94,50 @@ std::vector<double> decadeTicks(Interval range) {
   return ticks;
 }
 
+std::vector<double> logTicks(Interval range) {
+  std::vector<double> ticks = decadeTicks(range);
+  if (ticks.size() >= 3) return ticks;
+  ticks.clear();
+  for (double e = std::floor(std::log10(range.lo)); e <= std::ceil(std::log10(range.hi)); e += 1) {
+    for (const double m : {1.0, 2.0, 5.0}) {
+      const double tick = m * std::pow(10.0, e);
+      if (tick >= range.lo * (1 - 1e-9) && tick <= range.hi * (1 + 1e-9)) ticks.push_back(tick);
+    }
+  }
+  return ticks;
+}
+
+std::vector<PlacedLabel> layOutRuleLabels(const std::vector<double>& at,
+                                          const std::vector<std::string>& labels, double left,
+                                          double right, double top, double row_height) {
+  constexpr double kGap = 3.0;  // between a rule and its label, and between labels
+  std::vector<std::size_t> order(std::min(at.size(), labels.size()));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return at[a] < at[b]; });
+  std::vector<PlacedLabel> placed(order.size());
+  std::vector<std::vector<Interval>> rows;  // the pixel spans taken in each row
+  for (const std::size_t i : order) {
+    const double width = kRuleLabelCharPx * static_cast<double>(labels[i].size());
+    PlacedLabel p;
+    p.anchor_end = at[i] + kGap + width > right && at[i] - kGap - width >= left;
+    const double from = p.anchor_end ? at[i] - kGap - width : at[i] + kGap;
+    p.x = p.anchor_end ? at[i] - kGap : at[i] + kGap;
+    const Interval span{from - kGap, from + width + kGap};
+    std::size_t row = 0;
+    for (; row < rows.size(); ++row) {
+      const bool clear = std::none_of(rows[row].begin(), rows[row].end(), [&](const Interval& t) {
+        return span.lo < t.hi && t.lo < span.hi;
+      });
+      if (clear) break;
+    }
+    if (row == rows.size()) rows.emplace_back();
+    rows[row].push_back(span);
+    p.y = top + row_height * static_cast<double>(row + 1);
+    placed[i] = p;
+  }
+  return placed;
+}
+
 Style Style::line(const std::string& colour, double width, const std::string& dash) {
   Style s;
   s.stroke = colour;
@@ -123,8 +167,8 @@ SvgPlot::SvgPlot(Frame frame, Axis x, Axis y)
       y_(std::move(y)),
       x_scale_(x_.range, {frame_.left, frame_.width - frame_.right}, x_.log),
       y_scale_(y_.range, {frame_.height - frame_.bottom, frame_.top}, y_.log) {
-  if (x_.ticks.empty()) x_.ticks = x_.log ? decadeTicks(x_.range) : niceTicks(x_.range, 8);
-  if (y_.ticks.empty()) y_.ticks = y_.log ? decadeTicks(y_.range) : niceTicks(y_.range, 5);
+  if (x_.ticks.empty()) x_.ticks = x_.log ? logTicks(x_.range) : niceTicks(x_.range, 8);
+  if (y_.ticks.empty()) y_.ticks = y_.log ? logTicks(y_.range) : niceTicks(y_.range, 5);
 }
 
 void SvgPlot::polyline(const std::vector<double>& xs, const std::vector<double>& ys,
@@ -192,10 +236,21 @@ void SvgPlot::vline(double x, const Style& style, const std::string& label) {
             "\" y2=\"" + formatPixels(frame_.height - frame_.bottom) + "\"" +
             styleAttributes(style) + "/>\n";
   if (!label.empty()) {
-    overlay_ += "<text x=\"" + formatPixels(px(x) + 3.0) + "\" y=\"" +
-                formatPixels(frame_.top + 12.0) + "\" class=\"rule\">" + escapeXml(label) +
-                "</text>\n";
+    rule_at_.push_back(px(x));
+    rule_text_.push_back(label);
   }
+}
+
+std::string SvgPlot::ruleLabelsSvg() const {
+  const std::vector<PlacedLabel> placed =
+      layOutRuleLabels(rule_at_, rule_text_, 2.0, frame_.width - 2.0, frame_.top);
+  std::string s;
+  for (std::size_t i = 0; i < placed.size(); ++i) {
+    s += "<text x=\"" + formatPixels(placed[i].x) + "\" y=\"" + formatPixels(placed[i].y) +
+         "\" class=\"rule\"" + (placed[i].anchor_end ? " text-anchor=\"end\"" : "") + ">" +
+         escapeXml(rule_text_[i]) + "</text>\n";
+  }
+  return s;
 }
 
 void SvgPlot::legend(const std::vector<LegendEntry>& entries) {
@@ -272,7 +327,7 @@ std::string SvgPlot::svg(const std::string& id, const std::string& title) const 
        formatPixels(plot_w) + "\" height=\"" + formatPixels(plot_h) + "\"/></clipPath></defs>\n";
   s += axesSvg();
   s += "<g class=\"marks\" clip-path=\"url(#" + escapeXml(id) + "-area)\">\n" + marks_ + "</g>\n";
-  s += overlay_;
+  s += ruleLabelsSvg();
   s += legendSvg();
   return s + "</svg>\n";
 }

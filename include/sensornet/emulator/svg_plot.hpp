@@ -52,6 +52,9 @@ class Scale {
 [[nodiscard]] Interval niceRange(Interval range, int count);
 // Powers of ten within [lo, hi] (lo > 0), for a log axis.
 [[nodiscard]] std::vector<double> decadeTicks(Interval range);
+// The ticks of a log axis: the powers of ten within [lo, hi], and where fewer than three of
+// them fall inside, also 2 and 5 times a power of ten.
+[[nodiscard]] std::vector<double> logTicks(Interval range);
 // A tick label: up to 6 significant digits, no trailing zeros ("0.2", "1500", "1e-05").
 [[nodiscard]] std::string formatTick(double value);
 
@@ -127,10 +130,31 @@ class SvgPlot {
   Axis y_;
   Scale x_scale_;
   Scale y_scale_;
+  [[nodiscard]] std::string ruleLabelsSvg() const;
+
   std::string marks_;
-  std::string overlay_;  // rule labels, above the marks and unclipped
+  std::vector<double> rule_at_;         // pixel x of each labelled rule
+  std::vector<std::string> rule_text_;  // ... and its label (laid out when the svg is written)
   std::vector<LegendEntry> legend_;
 };
+
+// Where the label of a vertical rule goes: its text starts at x (anchor start) or ends there
+// (anchor end), on the baseline y.
+struct PlacedLabel {
+  double x = 0.0;
+  double y = 0.0;
+  bool anchor_end = false;
+};
+
+// Lays out the labels of vertical rules at pixel positions `at` (any order) so that none
+// overlaps another and none leaves [left, right]: each goes right of its rule if it fits there,
+// else left of it, on the first row below `top` where it clears every label already placed
+// (rows `row_height` apart). Widths are estimated from the text (kRuleLabelCharPx a character).
+inline constexpr double kRuleLabelCharPx = 6.6;  // 11 px sans-serif, with room to spare
+[[nodiscard]] std::vector<PlacedLabel> layOutRuleLabels(const std::vector<double>& at,
+                                                        const std::vector<std::string>& labels,
+                                                        double left, double right, double top,
+                                                        double row_height = 12.0);
 
 // Writes a number of pixels as the builder does (two decimals).
 [[nodiscard]] std::string formatPixels(double pixels);

@@ -211,5 +211,119 @@ TEST(ReportPage, RefusesAReportWithoutWhatItReadsNamingTheField) {
   EXPECT_THROW((void)reportPage(json::array(), "bad.json"), InputError);
 }
 
+// A report with `versions` schedule versions switching mid-episode, one after the other in
+// consecutive episodes (v2 in episode 1 at t = 1.5 s, v3 in episode 2 ...), as live re-plans make
+// them; sensor j's rate in version v is v + j in every interval.
+json reportWithVersions(int versions, int episodes) {
+  json report = sampleReport();
+  json list = json::array();
+  for (int v = 1; v <= versions; ++v) {
+    json rates = json::array();
+    for (int k = 0; k < 3; ++k) rates.push_back({v + 0.0, v + 1.0});
+    list.push_back({{"version", v},
+                    {"effective_episode", v == 1 ? 0 : v - 1},
+                    {"effective_time_s", v == 1 ? 0.0 : 1.5},
+                    {"surrogate", "cov"},
+                    {"bracket", {{"info", 1.0}, {"cov", 2.0}}},
+                    {"horizon_s", 3.0},
+                    {"rates", rates}});
+  }
+  report["schedule_versions"] = list;
+  json per_episode = json::array();
+  for (int e = 0; e < episodes; ++e) {
+    json entry = report.at("per_episode").at(0);
+    entry["episode"] = e;
+    per_episode.push_back(entry);
+  }
+  report["per_episode"] = per_episode;
+  return report;
+}
+
+// The <svg> element of `id` in a page.
+std::string svgOf(const std::string& page, const std::string& id) {
+  const std::size_t at = page.find("id=\"" + id + "\"");
+  if (at == std::string::npos) return {};
+  const std::size_t from = page.rfind("<svg", at);
+  return page.substr(from, page.find("</svg>", at) - from);
+}
+
+std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST(ReportPage, DrawsOneScheduleMapWithEverySwitchMarked) {
+  const std::string page = reportPage(reportWithVersions(10, 12), "r.json");
+  EXPECT_EQ(occurrences(page, "id=\"plot-schedule"), 1u) << "one map, not one per version";
+  const std::string map = svgOf(page, "plot-schedule");
+  for (int v = 2; v <= 10; ++v) {
+    EXPECT_NE(map.find(">v" + std::to_string(v) + "</text>"), std::string::npos) << v;
+  }
+  // Episode 1 switches at t = 1.5 s, the middle of interval 1 (of 3): sensor 0 runs 1 Hz before
+  // and 2 Hz after; the cells say so.
+  EXPECT_NE(map.find("sensor 0, episode 1, t in [1, 1.5) s: 1 Hz (v1)"), std::string::npos);
+  EXPECT_NE(map.find("sensor 0, episode 1, t in [1.5, 2) s: 2 Hz (v2)"), std::string::npos);
+  EXPECT_NE(map.find("sensor 1, episode 11, t in [2, 3) s: 11 Hz (v10)"), std::string::npos);
+}
+
+TEST(ReportPage, AScheduleMapOfManyEpisodesShowsEachBlocksMeanRate) {
+  // 2000 episodes x 3 intervals: too many cells, so a column is a block of episodes. Version 2
+  // takes effect in episode 1 at 1.5 s: episode 0 runs v1 (1 Hz for sensor 0), episode 1 half
+  // and half (1.5 Hz), every later one v2 (2 Hz).
+  const std::string page = reportPage(reportWithVersions(2, 2000), "r.json");
+  const std::string map = svgOf(page, "plot-schedule");
+  EXPECT_NE(page.find("mean rate over a block of episodes"), std::string::npos);
+  const std::size_t rects = occurrences(map, "<rect");
+  EXPECT_LE(rects, 2u * 600u + 10u);
+  // The first block holds episodes 0-3 (2000 episodes in at most 600 columns: 4 a column):
+  // sensor 0's mean is (1 + 1.5 + 2 + 2) / 4 = 1.625 Hz.
+  EXPECT_NE(map.find("sensor 0, episodes 0-3: mean 1.625 Hz"), std::string::npos) << map.substr(0, 3000);
+}
+
+TEST(ReportPage, AnAbortedEpisodesCostDoesNotFlattenTheCostAxis) {
+  json report = reportWithVersions(1, 6);
+  for (json& e : report["per_episode"]) {
+    e["complete"] = true;
+    e["realized_cost"] = 20.0 + e.at("episode").get<double>();
+  }
+  report["per_episode"][5]["complete"] = false;
+  report["per_episode"][5]["realized_cost"] = 931.5;
+  const std::string cost = svgOf(reportPage(report, "r.json"), "plot-cost");
+  // The axis ends near the complete episodes' 25 (the bracket [1, 2] is below), not near 931.5.
+  double top_tick = 0.0;
+  for (std::size_t at = cost.find("text-anchor=\"end\">"); at != std::string::npos;
+       at = cost.find("text-anchor=\"end\">", at + 1)) {
+    top_tick = std::max(top_tick, std::stod(cost.substr(at + 18)));
+  }
+  EXPECT_GE(top_tick, 25.0);
+  EXPECT_LT(top_tick, 100.0);
+  EXPECT_NE(cost.find("episode 5: 931.5 (incomplete), off the scale"), std::string::npos);
+}
+
+TEST(ReportPage, PrintsNoIntervalWithOneCompleteEpisodeAndNoMeanWithNone) {
+  json report = sampleReport();
+  report["summary"]["episodes_complete"] = 1;
+  report["summary"]["mean"] = 19.59;
+  report["summary"]["ci95_low"] = 19.59;
+  report["summary"]["ci95_high"] = 19.59;
+  std::string page = reportPage(report, "r.json");
+  EXPECT_NE(page.find("19.59, no 95% interval (one complete episode)"), std::string::npos);
+  EXPECT_EQ(page.find("[19.59, 19.59]"), std::string::npos);
+  report["summary"]["episodes_complete"] = 0;
+  report["summary"]["mean"] = 0.0;
+  page = reportPage(report, "r.json");
+  EXPECT_NE(page.find("<th>mean realized cost</th><td>not measured (no complete episode)"),
+            std::string::npos);
+}
+
+TEST(ReportPage, WritesFaultNumbersToSixDigitsNotAsRawFloats) {
+  json report = sampleReport();
+  report["faults"][0]["emulated_time_s"] = 0.8732357025146484;
+  const std::string page = reportPage(report, "r.json");
+  EXPECT_EQ(page.find("0.8732357025146484"), std::string::npos);
+  EXPECT_NE(page.find("<td>0.873236</td>"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace sensornet::emulator

@@ -134,6 +134,41 @@ TEST(SvgPlot, KeepsMarksInOneClippedGroupAndDrawsTheLegend) {
   EXPECT_NE(svg.find(">rule</text>"), std::string::npos);
 }
 
+TEST(SvgPlot, RuleLabelsNeverOverlapAndStayInsideTheFrame) {
+  // Ten rules, some 4 px apart (v2/v4 and v9/v10 collided before), one at the right edge.
+  const std::vector<double> at = {100, 104, 108, 300, 304, 500, 640, 700, 744, 755};
+  std::vector<std::string> labels;
+  for (std::size_t i = 0; i < at.size(); ++i) labels.push_back("v" + std::to_string(i + 2));
+  labels.back() = "switch: episode 12, t = 2.5 s";  // long, at the right edge
+  const double left = 2.0, right = 758.0;
+  const auto placed = layOutRuleLabels(at, labels, left, right, 34.0);
+  ASSERT_EQ(placed.size(), at.size());
+  struct Span { double lo, hi, y; };
+  std::vector<Span> spans;
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const double width = kRuleLabelCharPx * static_cast<double>(labels[i].size());
+    const double lo = placed[i].anchor_end ? placed[i].x - width : placed[i].x;
+    spans.push_back({lo, lo + width, placed[i].y});
+    EXPECT_GE(lo, left) << labels[i];
+    EXPECT_LE(lo + width, right) << labels[i];
+    // Beside its own rule, on one side or the other.
+    EXPECT_LE(std::abs(placed[i].x - at[i]), 3.0 + 1e-9) << labels[i];
+  }
+  for (std::size_t i = 0; i < spans.size(); ++i) {
+    for (std::size_t k = i + 1; k < spans.size(); ++k) {
+      if (spans[i].y != spans[k].y) continue;
+      EXPECT_TRUE(spans[i].hi <= spans[k].lo || spans[k].hi <= spans[i].lo)
+          << labels[i] << " overlaps " << labels[k];
+    }
+  }
+  EXPECT_TRUE(placed.back().anchor_end) << "the right-edge label goes left of its rule";
+}
+
+TEST(SvgPlot, ALogAxisWithinADecadeGetsOneTwoFiveTicks) {
+  EXPECT_EQ(logTicks({1.5, 40.0}), (std::vector<double>{2.0, 5.0, 10.0, 20.0}));
+  EXPECT_EQ(logTicks({1e-6, 1.0}).size(), 7u);  // the decades alone
+}
+
 TEST(SvgPlot, FormatsTicksWithoutTrailingZeros) {
   EXPECT_EQ(formatTick(0.2), "0.2");
   EXPECT_EQ(formatTick(1500.0), "1500");
