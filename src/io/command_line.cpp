@@ -3,6 +3,7 @@
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -39,7 +40,65 @@ int runProgram(const std::string& program, const std::function<int()>& body) {
   }
 }
 
+namespace {
+
+// Edit distance (insertions, deletions, substitutions, adjacent swaps) between two words.
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t change = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + change});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+// The long option names of `app` and of the subcommands the user chose.
+std::vector<std::string> optionNames(const CLI::App& app) {
+  std::vector<std::string> names;
+  for (const CLI::Option* option : app.get_options()) {
+    for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+  }
+  for (const CLI::App* sub : app.get_subcommands()) {
+    const std::vector<std::string> more = optionNames(*sub);
+    names.insert(names.end(), more.begin(), more.end());
+  }
+  return names;
+}
+
+}  // namespace
+
+std::optional<std::string> nearestOption(const CLI::App& app, const std::string& typed) {
+  const std::string word = typed.substr(0, typed.find('='));
+  if (word.rfind("--", 0) != 0) return std::nullopt;
+  std::optional<std::string> best;
+  std::size_t best_distance = std::max<std::size_t>(1, (word.size() - 2) / 4) + 1;
+  for (const std::string& name : optionNames(app)) {
+    const std::size_t distance = editDistance(word, name);
+    if (distance < best_distance) {
+      best = name;
+      best_distance = distance;
+    }
+  }
+  return best;
+}
+
+const char* sensornetVersion() { return SENSORNET_VERSION; }
+
+std::string versionText(const std::string& program) {
+  return program + " (sensornet " + sensornetVersion() + ")";
+}
+
 std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv) {
+  if (app.get_option_no_throw("--version") == nullptr) {
+    app.set_version_flag("--version", versionText(app.get_name()), "print the version and exit");
+  }
   // CLI11 reports an unknown first word as a missing subcommand; name it instead.
   const std::vector<CLI::App*> subcommands = app.get_subcommands([](CLI::App*) { return true; });
   if (!subcommands.empty() && argc > 1 && argv[1][0] != '-') {
@@ -61,6 +120,20 @@ std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ExtrasError& e) {
+    // A mistyped option: name the nearest one the program knows.
+    std::string hint;
+    for (const std::string& extra : app.remaining(true)) {
+      if (const auto nearest = nearestOption(app, extra)) {
+        hint = " (did you mean " + *nearest + " instead of " + extra.substr(0, extra.find('=')) + "?)";
+        break;
+      }
+    }
+    std::fprintf(stderr, "%s: error: %s%s (see --help)\n", app.get_name().c_str(), e.what(),
+                 hint.c_str());
+    return kExitBadInput;
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(), e.what());
     return kExitBadInput;

@@ -51,8 +51,19 @@ void keepLargeBlocksMapped();
 // "program: error: <message>" with kExitFailure.
 int runProgram(const std::string& program, const std::function<int()>& body);
 
-// Parses the command line. Returns an exit code when the program must stop now (--help printed,
-// or a usage error reported as one line), std::nullopt when it should go on.
+// The project's version (CMakeLists.txt's project version), and what `--version` prints:
+// "coordinator (sensornet 0.1.0)".
+[[nodiscard]] const char* sensornetVersion();
+[[nodiscard]] std::string versionText(const std::string& program);
+
+// The option of `app` (or of a subcommand the user chose) nearest to a mistyped `--word` (or
+// `--word=value`), if one is within a small edit distance: "--episdoes" -> "--episodes".
+[[nodiscard]] std::optional<std::string> nearestOption(const CLI::App& app,
+                                                       const std::string& typed);
+
+// Parses the command line. Returns an exit code when the program must stop now (--help or
+// --version printed, or a usage error reported as one line, naming the nearest option for a
+// mistyped one), std::nullopt when it should go on. Every program gets --version here.
 [[nodiscard]] std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv);
 
 // A subcommand of a program (`coordinator timetable`, `fusion_center evaluate`, ...): its CLI11
