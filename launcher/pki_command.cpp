@@ -1,6 +1,7 @@
 #include "pki_command.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -29,6 +31,7 @@ using dds::SecurityRole;
 
 struct PkiOptions {
   std::string dir;
+  std::string ca_dir;  // where the CA's key is kept (default DIR/ca)
   bool force = false;
   int days = 365;
   std::string key = "ec";
@@ -175,50 +178,200 @@ void openssl(const std::vector<std::string>& args, const fs::path& log) {
   }
 }
 
+// Writes a new file (never through a symbolic link, never over an existing file).
 void writeText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::trunc);
-  out << text;
-  if (!out) throw InputError(path.string(), "", "a file that can be written");
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    throw InputError(path.string(), "", "a new file (" + std::string(std::strerror(errno)) + ")");
+  }
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      ::close(fd);
+      throw InputError(path.string(), "", "a file that can be written");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+}
+
+// What `pki init` makes, by folder: only these names are replaced by --force.
+const std::set<std::string>& madeInRoot() {
+  static const std::set<std::string> names = [] {
+    std::set<std::string> n = {"ca.pem", "governance.p7s", "ca"};
+    for (const SecurityRole role : dds::kSecurityRoles) n.emplace(dds::securityRoleName(role));
+    return n;
+  }();
+  return names;
+}
+const std::set<std::string> kMadeInRole = {"identity.pem", "key.pem", "permissions.p7s",
+                                           "ca.pem", "governance.p7s"};
+const std::set<std::string> kMadeInCa = {"ca.key", "ca.pem"};
+
+// A folder the caller may keep private keys in: a real folder (not a symbolic link), owned by
+// the caller, writable by nobody else. Made (0700) when missing.
+void checkOwnedFolder(const fs::path& dir) {
+  struct stat st {};
+  if (::lstat(dir.c_str(), &st) != 0) {
+    if (errno != ENOENT) throw InputError(dir.string(), "", "a folder: " + std::string(std::strerror(errno)));
+    std::error_code error;
+    fs::create_directories(dir.parent_path(), error);
+    if (::mkdir(dir.c_str(), 0700) != 0) {
+      throw InputError(dir.string(), "", "a folder that can be made: " + std::string(std::strerror(errno)));
+    }
+    return;
+  }
+  if (S_ISLNK(st.st_mode)) throw InputError(dir.string(), "", "a folder, not a symbolic link");
+  if (!S_ISDIR(st.st_mode)) throw InputError(dir.string(), "", "a folder (it is a file)");
+  if (st.st_uid != ::geteuid()) {
+    throw InputError(dir.string(), "", "a folder of yours (it belongs to uid " +
+                                           std::to_string(st.st_uid) + ": another user could "
+                                           "replace the files in it)");
+  }
+  if ((st.st_mode & (S_IWGRP | S_IWOTH)) != 0) {
+    throw InputError(dir.string(), "", "a folder only you can write (it is group- or "
+                                       "world-writable: chmod go-w it)");
+  }
+}
+
+// What an earlier `pki init` made in `dir`, for --force to remove: files first, then their
+// folders. Refuses a symbolic link or a folder of another owner where it writes. In DIR
+// (`folders`) other files are left alone; in a role's or the CA's folder, which a process
+// receives whole, anything else is refused. Nothing is removed before everything is checked.
+void collectEarlierFiles(const fs::path& dir, const std::set<std::string>& names, bool folders,
+                         std::vector<fs::path>& files, std::vector<fs::path>& dirs) {
+  std::error_code error;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, error)) {
+    const fs::path& path = entry.path();
+    const std::string name = path.filename().string();
+    struct stat st {};
+    if (folders && name.rfind(".pki-", 0) == 0 && ::lstat(path.c_str(), &st) == 0 &&
+        S_ISDIR(st.st_mode) && st.st_uid == ::geteuid()) {
+      dirs.push_back(path);  // the staging folder of an init that failed
+      continue;
+    }
+    if (folders && names.count(name) == 0) continue;  // not ours: left as it is
+    if (names.count(name) == 0 || ::lstat(path.c_str(), &st) != 0 || S_ISLNK(st.st_mode)) {
+      throw InputError(path.string(), "",
+                       "only files `pki init` made in " + dir.string() +
+                           " (this one it did not make, or it is a symbolic link: --force "
+                           "replaces only its own files; remove it yourself)");
+    }
+    if (S_ISDIR(st.st_mode)) {
+      if (!folders) throw InputError(path.string(), "", "a file `pki init` made, not a folder");
+      checkOwnedFolder(path);
+      collectEarlierFiles(path, name == "ca" ? kMadeInCa : kMadeInRole, false, files, dirs);
+      dirs.push_back(path);
+    } else if (S_ISREG(st.st_mode)) {
+      files.push_back(path);
+    } else {
+      throw InputError(path.string(), "", "a regular file `pki init` made");
+    }
+  }
+}
+
+void removeEarlierFiles(const fs::path& dir) {
+  std::vector<fs::path> files, dirs;
+  collectEarlierFiles(dir, madeInRoot(), true, files, dirs);
+  for (const fs::path& f : files) ::unlink(f.c_str());
+  std::error_code error;
+  for (const fs::path& d : dirs) fs::remove_all(d, error);  // emptied above, or our staging
+}
+
+bool isEmptyFolder(const fs::path& dir) {
+  std::error_code error;
+  return fs::is_empty(dir, error) && !error;
 }
 
 class PkiMaker {
  public:
   explicit PkiMaker(PkiOptions options)
-      : options_(std::move(options)), dir_(fs::absolute(options_.dir).lexically_normal()),
-        log_(dir_ / ".openssl.log") {}
+      : options_(std::move(options)),
+        dir_(fs::absolute(options_.dir).lexically_normal()),
+        ca_dir_(options_.ca_dir.empty() ? dir_ / "ca"
+                                        : fs::absolute(options_.ca_dir).lexically_normal()) {}
 
   int make() {
-    prepareFolder();
-    newKey(dir_ / "ca.key");
-    openssl({"req", "-x509", "-new", "-key", path("ca.key"), "-days", days(), "-subj",
-             "/O=sensornet/CN=sensornet CA", "-out", path("ca.pem")},
-            log_);
-    writeText(dir_ / "governance.xml", governanceXml());
-    sign(dir_ / "governance.xml", dir_ / "governance.p7s");
-    for (const SecurityRole role : dds::kSecurityRoles) makeRole(role);
-    fs::remove(log_);
-    fs::remove(dir_ / "ca.srl");
-    std::printf("security files in %s: ca.pem, governance.p7s and, per role (%s), identity.pem, "
-                "key.pem, permissions.p7s; valid %d days. Use: sensornet launch SCENARIO "
-                "--security %s\n",
-                dir_.c_str(), roleNames().c_str(), options_.days, dir_.c_str());
+    prepare();
+    try {
+      makeAll();
+    } catch (...) {
+      std::error_code error;
+      fs::remove_all(staging_, error);
+      throw;
+    }
+    printSummary();
     return kExitOk;
   }
 
  private:
-  void prepareFolder() {
-    std::error_code error;
-    if (fs::exists(dir_, error) && !fs::is_directory(dir_, error)) {
-      throw InputError(dir_.string(), "", "a folder (it is a file)");
+  void makeAll() {
+    makeCa();
+    writeText(stage("governance.xml"), governanceXml());
+    sign(stage("governance.xml"), stage("governance.p7s"));
+    for (const SecurityRole role : dds::kSecurityRoles) makeRole(role);
+    place();
+  }
+
+  void printSummary() const {
+    std::printf(
+        "security files in %s: per role (%s) a folder with identity.pem, key.pem, "
+        "permissions.p7s, ca.pem and governance.p7s: what one process of that role receives, "
+        "and nothing else; valid %d days. The CA's private key is in %s: it never goes to a "
+        "run's processes (keep it offline with --ca-dir). Use: sensornet launch SCENARIO "
+        "--security %s\n",
+        dir_.c_str(), roleNames().c_str(), options_.days, (ca_dir_ / "ca.key").c_str(),
+        dir_.c_str());
+  }
+
+  // The folders are the caller's and hold only what an earlier `pki init` made; the files are
+  // made in a private staging folder (openssl writes there) and moved into place at the end.
+  void prepare() {
+    checkOwnedFolder(dir_);
+    const bool reuse_ca = !options_.ca_dir.empty() && fs::exists(ca_dir_ / "ca.key");
+    if (!isEmptyFolder(dir_)) {
+      if (!options_.force) {
+        throw InputError(dir_.string(), "",
+                         "a new or empty folder (it holds files; --force replaces the files an "
+                         "earlier `pki init` made there, and nothing else)");
+      }
+      removeEarlierFiles(dir_);
     }
-    if (fs::is_directory(dir_, error) && !fs::is_empty(dir_, error) && !options_.force) {
-      throw InputError(dir_.string(), "",
-                       "a new or empty folder (it holds files; --force overwrites the security "
-                       "files in it)");
+    if (!options_.ca_dir.empty()) {
+      checkOwnedFolder(ca_dir_);
+      if (!reuse_ca && !isEmptyFolder(ca_dir_)) {
+        throw InputError(ca_dir_.string(), "", "a new or empty folder, or one that holds a CA "
+                                               "(ca.key and ca.pem) to sign with");
+      }
     }
-    fs::create_directories(dir_, error);
-    if (error) throw InputError(dir_.string(), "", "a folder that can be made: " + error.message());
-    fs::permissions(dir_, fs::perms::owner_all, error);  // private keys inside
+    std::string templ = (dir_ / ".pki-XXXXXX").string();
+    if (::mkdtemp(templ.data()) == nullptr) {
+      throw InputError(dir_.string(), "", "a folder where files can be made");
+    }
+    staging_ = templ;
+    log_ = staging_ / "openssl.log";
+  }
+
+  void makeCa() {
+    if (!options_.ca_dir.empty() && fs::exists(ca_dir_ / "ca.key")) {
+      for (const char* name : {"ca.key", "ca.pem"}) {
+        struct stat st {};
+        if (::lstat((ca_dir_ / name).c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+          throw InputError((ca_dir_ / name).string(), "", "a regular file (the CA to sign with)");
+        }
+      }
+      ca_key_ = ca_dir_ / "ca.key";
+      ca_pem_ = ca_dir_ / "ca.pem";
+      return;
+    }
+    newKey(stage("ca.key"));
+    openssl({"req", "-x509", "-new", "-key", stage("ca.key").string(), "-days", days(), "-subj",
+             "/O=sensornet/CN=sensornet CA", "-out", stage("ca.pem").string()},
+            log_);
+    ca_key_ = stage("ca.key");
+    ca_pem_ = stage("ca.pem");
   }
 
   void newKey(const fs::path& key) const {
@@ -236,28 +389,58 @@ class PkiMaker {
 
   void sign(const fs::path& document, const fs::path& signed_document) const {
     openssl({"smime", "-sign", "-text", "-in", document.string(), "-out",
-             signed_document.string(), "-signer", path("ca.pem"), "-inkey", path("ca.key")},
+             signed_document.string(), "-signer", ca_pem_.string(), "-inkey", ca_key_.string()},
             log_);
   }
 
   void makeRole(SecurityRole role) const {
-    const fs::path own = dir_ / dds::securityRoleName(role);
-    fs::create_directories(own);
-    newKey(own / "key.pem");
     const std::string name(dds::securityRoleName(role));
+    const fs::path own = stage(name);
+    fs::create_directory(own);
+    fs::permissions(own, fs::perms::owner_all);
+    newKey(own / "key.pem");
     openssl({"req", "-new", "-key", (own / "key.pem").string(), "-subj",
              "/O=sensornet/CN=" + name, "-out", (own / "identity.csr").string()},
             log_);
-    openssl({"x509", "-req", "-in", (own / "identity.csr").string(), "-CA", path("ca.pem"),
-             "-CAkey", path("ca.key"), "-CAcreateserial", "-CAserial", path("ca.srl"), "-days",
-             days(), "-out", (own / "identity.pem").string()},
+    openssl({"x509", "-req", "-in", (own / "identity.csr").string(), "-CA", ca_pem_.string(),
+             "-CAkey", ca_key_.string(), "-CAcreateserial", "-CAserial",
+             stage("ca.srl").string(), "-days", days(), "-out", (own / "identity.pem").string()},
             log_);
     fs::remove(own / "identity.csr");
     writeText(own / "permissions.xml", permissionsXml(role, options_.days));
     sign(own / "permissions.xml", own / "permissions.p7s");
+    fs::remove(own / "permissions.xml");
+    fs::copy_file(ca_pem_, own / "ca.pem");
+    fs::copy_file(stage("governance.p7s"), own / "governance.p7s");
   }
 
-  [[nodiscard]] std::string path(const char* name) const { return (dir_ / name).string(); }
+  // Moves what was made from the staging folder into DIR (and the new CA into its folder).
+  void place() {
+    if (ca_key_ == stage("ca.key")) {
+      if (options_.ca_dir.empty()) checkOwnedFolder(ca_dir_);
+      moveInto(stage("ca.key"), ca_dir_ / "ca.key");
+      fs::copy_file(stage("ca.pem"), ca_dir_ / "ca.pem");
+      moveInto(stage("ca.pem"), dir_ / "ca.pem");
+    } else {
+      fs::copy_file(ca_pem_, dir_ / "ca.pem");
+    }
+    moveInto(stage("governance.p7s"), dir_ / "governance.p7s");
+    for (const SecurityRole role : dds::kSecurityRoles) {
+      const std::string name(dds::securityRoleName(role));
+      moveInto(stage(name), dir_ / name);
+    }
+    std::error_code error;
+    fs::remove_all(staging_, error);
+  }
+
+  static void moveInto(const fs::path& from, const fs::path& to) {
+    if (::rename(from.c_str(), to.c_str()) != 0) {
+      throw InputError(to.string(), "", "a place to move " + from.string() + " to: " +
+                                            std::strerror(errno));
+    }
+  }
+
+  [[nodiscard]] fs::path stage(const std::string& name) const { return staging_ / name; }
   [[nodiscard]] std::string days() const { return std::to_string(options_.days); }
   static std::string roleNames() {
     std::string names;
@@ -269,7 +452,11 @@ class PkiMaker {
 
   PkiOptions options_;
   fs::path dir_;
+  fs::path ca_dir_;
+  fs::path staging_;
   fs::path log_;
+  fs::path ca_key_;
+  fs::path ca_pem_;
 };
 
 }  // namespace
@@ -283,14 +470,23 @@ Subcommand addPkiCommand(CLI::App& app) {
       "init",
       "Make, with openssl, a certificate authority, an identity and signed permissions per role "
       "(coordinator, fusion_center, sensor, operator for replan/status/watch, launcher) and a "
-      "signed governance document for DIR; then run with --security DIR. Only the coordinator "
+      "signed governance document for DIR; then run with --security DIR. Each role gets a "
+      "folder DIR/<role> with its identity.pem, key.pem, permissions.p7s and copies of ca.pem "
+      "and governance.p7s: all one process of that role needs, and nothing of another role. "
+      "The CA's private key stays in DIR/ca (or --ca-dir) and never goes to a process. DIR "
+      "must be yours and writable only by you; nothing is written through a symbolic link. "
+      "Only the coordinator "
       "may write Scenario, Schedule and EpisodeControl, only sensors Measurement, EpisodeTally "
       "and SensorStatus, only the fusion center Report and FusionState, only the operator and "
       "the launcher Command. Example:\n  sensornet pki init run-pki && sensornet launch "
       "scenarios/default.yaml --security run-pki");
   init->add_option("DIR", options->dir, "folder for the files (made if missing)")->required();
   init->add_flag("--force", options->force,
-                 "overwrite the security files of a folder that is not empty");
+                 "replace the files an earlier `pki init` made in DIR (nothing else: a file it "
+                 "did not make, or a symbolic link, is refused)");
+  init->add_option("--ca-dir", options->ca_dir,
+                   "keep the CA (ca.key, ca.pem) in this folder instead of DIR/ca, for example "
+                   "on a medium you keep offline; if it already holds a CA, sign with that one");
   init->add_option("--days", options->days, "validity of certificates and permissions (days)")
       ->capture_default_str()
       ->check(CLI::Range(1, 36500));

@@ -5,10 +5,17 @@
 #include <openssl/bio.h>
 #include <openssl/evp.h>
 #include <openssl/pem.h>
+#include <openssl/pkcs7.h>
 #include <openssl/x509.h>
+#include <openssl/x509_vfy.h>
 #include <openssl/x509v3.h>
 
+#include <algorithm>
+#include <fstream>
 #include <memory>
+#include <set>
+#include <sstream>
+#include <vector>
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/xml_text.hpp"
@@ -29,9 +36,17 @@ struct X509Free {
 struct KeyFree {
   void operator()(EVP_PKEY* k) const noexcept { EVP_PKEY_free(k); }
 };
+struct Pkcs7Free {
+  void operator()(PKCS7* p) const noexcept { PKCS7_free(p); }
+};
+struct StoreFree {
+  void operator()(X509_STORE* s) const noexcept { X509_STORE_free(s); }
+};
 using Bio = std::unique_ptr<BIO, BioFree>;
 using Certificate = std::unique_ptr<X509, X509Free>;
 using PrivateKey = std::unique_ptr<EVP_PKEY, KeyFree>;
+using Pkcs7 = std::unique_ptr<PKCS7, Pkcs7Free>;
+using Store = std::unique_ptr<X509_STORE, StoreFree>;
 
 void requireFile(const fs::path& path) {
   std::error_code error;
@@ -97,6 +112,69 @@ void checkKeyMatches(X509* cert, const SecurityFiles& files) {
   }
 }
 
+// The content of an S/MIME document if its signature verifies against the CA (the signer's
+// certificate chains to it and the content is unchanged); InputError naming the file otherwise.
+std::string verifiedContent(const fs::path& document, X509* ca) {
+  const Bio in = openFile(document);
+  BIO* detached = nullptr;
+  const Pkcs7 p7(SMIME_read_PKCS7(in.get(), &detached));
+  const Bio content(detached);
+  if (!p7) throw InputError(document.string(), "", "an S/MIME document signed by the CA");
+  const Store store(X509_STORE_new());
+  if (!store || X509_STORE_add_cert(store.get(), ca) != 1) {
+    throw std::runtime_error("cannot set up a certificate store to check " + document.string());
+  }
+  X509_STORE_set_purpose(store.get(), X509_PURPOSE_ANY);
+  const Bio out(BIO_new(BIO_s_mem()));
+  if (PKCS7_verify(p7.get(), nullptr, store.get(), content.get(), out.get(), PKCS7_TEXT) != 1) {
+    throw InputError(document.string(), "signature",
+                     "a document signed by the CA (its S/MIME signature does not verify: changed "
+                     "after signing, or signed by another CA; " +
+                         std::string(kRemake) + ")");
+  }
+  char* data = nullptr;
+  const long size = BIO_get_mem_data(out.get(), &data);
+  return std::string(data, static_cast<std::size_t>(std::max(size, 0L)));
+}
+
+// The attributes of a distinguished name as "key=value" strings, in any order: "CN=sensor,
+// O=sensornet" and the certificate's "/O=sensornet/CN=sensor" give the same set.
+std::set<std::string> nameParts(const std::string& text, char separator) {
+  std::set<std::string> parts;
+  std::stringstream in(text);
+  std::string part;
+  while (std::getline(in, part, separator)) {
+    part.erase(0, part.find_first_not_of(' '));
+    if (!part.empty()) parts.insert(part);
+  }
+  return parts;
+}
+
+std::string subjectLine(X509* cert) {
+  char text[512];
+  X509_NAME_oneline(X509_get_subject_name(cert), text, sizeof text);
+  return text;
+}
+
+// The permissions grant the subject of the certificate (Cyclone refuses the participant
+// otherwise, with a message that does not name the file).
+void checkPermissionsSubject(const std::string& permissions, X509* cert,
+                             const SecurityFiles& files) {
+  const std::string open = "<subject_name>", close = "</subject_name>";
+  const std::size_t from = permissions.find(open);
+  const std::size_t to = permissions.find(close, from);
+  if (from == std::string::npos || to == std::string::npos) {
+    throw InputError(files.permissions.string(), "subject_name", "a permissions document");
+  }
+  const std::string granted = permissions.substr(from + open.size(), to - from - open.size());
+  const std::string subject = subjectLine(cert);
+  if (nameParts(granted, ',') != nameParts(subject, '/')) {
+    throw InputError(files.permissions.string(), "subject_name",
+                     "permissions for " + files.certificate.string() + " (subject " + subject +
+                         "), not for '" + granted + "'");
+  }
+}
+
 // "file:/abs/path"; a comma would split Cyclone's list of configuration fragments.
 std::string fileUri(const fs::path& path) {
   const std::string text = path.string();
@@ -116,9 +194,7 @@ std::string library(const std::string& name, const char* init, const char* final
 std::string subjectOf(const fs::path& certificate) {
   try {
     const Certificate cert = loadCertificate(certificate);
-    char text[512];
-    X509_NAME_oneline(X509_get_subject_name(cert.get()), text, sizeof text);
-    return text;
+    return subjectLine(cert.get());
   } catch (const InputError&) {
     return "?";
   }
@@ -137,11 +213,22 @@ std::string_view securityRoleName(SecurityRole role) noexcept {
   return "?";
 }
 
-SecurityFiles securityFilesOf(const fs::path& dir, SecurityRole role) {
+fs::path roleFolderOf(const fs::path& dir, SecurityRole role) {
   std::error_code error;
   const fs::path base = fs::absolute(dir, error).lexically_normal();
   const fs::path own = base / securityRoleName(role);
-  return {base / "ca.pem", base / "governance.p7s", own / "identity.pem", own / "key.pem",
+  return fs::is_directory(own, error) ? own : base;
+}
+
+SecurityFiles securityFilesOf(const fs::path& dir, SecurityRole role) {
+  std::error_code error;
+  const fs::path base = fs::absolute(dir, error).lexically_normal();
+  const fs::path own = roleFolderOf(base, role);
+  // A folder from before the CA's files were copied into each role's folder keeps them in DIR.
+  const auto shared = [&](const char* name) {
+    return fs::exists(own / name, error) || own == base ? own / name : base / name;
+  };
+  return {shared("ca.pem"), shared("governance.p7s"), own / "identity.pem", own / "key.pem",
           own / "permissions.p7s"};
 }
 
@@ -156,10 +243,38 @@ void checkSecurityFiles(const SecurityFiles& files) {
   checkSignedBy(cert.get(), ca.get(), files);
   checkValidNow(cert.get(), files.certificate);
   checkKeyMatches(cert.get(), files);
+  (void)verifiedContent(files.governance, ca.get());
+  checkPermissionsSubject(verifiedContent(files.permissions, ca.get()), cert.get(), files);
 }
 
 void checkSecurityFolder(const fs::path& dir) {
-  for (const SecurityRole role : kSecurityRoles) checkSecurityFiles(securityFilesOf(dir, role));
+  for (const SecurityRole role : kSecurityRoles) {
+    checkSecurityFiles(securityFilesOf(dir, role));
+    const fs::path own = roleFolderOf(dir, role);
+    std::error_code error;
+    if (own != fs::absolute(dir, error).lexically_normal()) checkNoForeignSecrets(own);
+  }
+}
+
+void checkNoForeignSecrets(const fs::path& role_folder) {
+  std::error_code error;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(role_folder, error)) {
+    const fs::path& path = entry.path();
+    if (entry.is_directory(error)) {
+      throw InputError(path.string(), "",
+                       "no folder inside a role's folder (a process receives its own files only)");
+    }
+    if (path.filename() == "key.pem" && path.parent_path() == role_folder) continue;
+    std::ifstream in(path);
+    std::string line;
+    bool key = path.filename() == "ca.key";
+    while (!key && std::getline(in, line)) key = line.find("PRIVATE KEY-----") != std::string::npos;
+    if (key) {
+      throw InputError(path.string(), "",
+                       "no private key but the role's own key.pem in the folder a process "
+                       "receives (the CA's key stays with `pki init`, see --ca-dir)");
+    }
+  }
 }
 
 std::string securityConfigXml(const SecurityFiles& files) {

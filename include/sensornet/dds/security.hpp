@@ -4,11 +4,17 @@
 // access-control and crypto plugins with them. The files are those `sensornet pki init DIR`
 // makes (launcher/pki_command.hpp):
 //
-//   DIR/ca.pem                    identity CA, also the permissions CA
+//   DIR/ca/ca.key, DIR/ca/ca.pem  the CA: its private key never goes to a run's processes
+//                                 (or elsewhere, with `pki init --ca-dir`)
+//   DIR/ca.pem                    identity CA, also the permissions CA (its certificate)
 //   DIR/governance.p7s            governance, signed by the CA (S/MIME)
-//   DIR/<role>/identity.pem       the role's certificate, signed by the CA
-//   DIR/<role>/key.pem            its private key
-//   DIR/<role>/permissions.p7s    what the role may publish and subscribe, signed by the CA
+//   DIR/<role>/                   what one process of that role receives, and nothing else:
+//     identity.pem                the role's certificate, signed by the CA
+//     key.pem                     its private key
+//     permissions.p7s             what the role may publish and subscribe, signed by the CA
+//     ca.pem, governance.p7s      copies of the CA certificate and the governance
+//
+// `--security` takes DIR (a process then presents DIR/<role>) or a role's folder itself.
 //
 //   const SecurityFiles files = securityFilesOf("run-pki", SecurityRole::Sensor);
 //   checkSecurityFiles(files);  // InputError naming the file: missing, expired, another CA's
@@ -42,15 +48,27 @@ struct SecurityFiles {
   std::filesystem::path permissions;
 };
 
-// The files of `role` in `dir` (absolute paths; nothing is read).
+// The folder that holds what a process of `role` presents: DIR/<role> when `dir` is the folder
+// `pki init` made, else `dir` itself (a role's folder handed over alone).
+[[nodiscard]] std::filesystem::path roleFolderOf(const std::filesystem::path& dir,
+                                                 SecurityRole role);
+// The files of `role` in `dir` (absolute paths; only the folders' layout is looked at): all in
+// its role folder, the CA certificate and governance from DIR when the role folder lacks them.
 [[nodiscard]] SecurityFiles securityFilesOf(const std::filesystem::path& dir, SecurityRole role);
 
 // Throws InputError naming the first file that is missing or unreadable, a certificate (CA or
-// identity) that is expired or not yet valid, an identity not signed by the CA, or a private key
-// that does not belong to the certificate.
+// identity) that is expired or not yet valid, an identity not signed by the CA, a private key
+// that does not belong to the certificate, a governance or permissions document whose S/MIME
+// signature the CA did not make (one byte changed is enough), or permissions for another subject
+// than the certificate's.
 void checkSecurityFiles(const SecurityFiles& files);
-// checkSecurityFiles for every role in `dir`: what the launcher does before it starts anything.
+// checkSecurityFiles for every role in `dir`, and checkNoForeignSecrets for each role folder:
+// what the launcher does before it starts anything.
 void checkSecurityFolder(const std::filesystem::path& dir);
+// Throws InputError naming a file in the folder a process of `role` receives that it must not
+// have: a CA private key (ca.key, or any PEM private key but its own key.pem) or another role's
+// folder.
+void checkNoForeignSecrets(const std::filesystem::path& role_folder);
 
 // <CycloneDDS><Domain id="any"><Security>...</Security></Domain></CycloneDDS>, to be appended to
 // the domain's configuration (Cyclone merges comma-separated fragments).

@@ -165,7 +165,7 @@ void expireSensorCertificate(const fs::path& dir) {
             0);
   const testing::ProcessResult r = runProcess(
       {"/usr/bin/openssl", "ca", "-batch", "-config", (work / "ca.cnf").string(), "-cert",
-       (dir / "ca.pem").string(), "-keyfile", (dir / "ca.key").string(), "-in",
+       (dir / "ca" / "ca.pem").string(), "-keyfile", (dir / "ca" / "ca.key").string(), "-in",
        (work / "sensor.csr").string(), "-out", (sensor / "identity.pem").string(), "-notext",
        "-startdate", "20200101000000Z", "-enddate", "20210101000000Z"},
       30s);
@@ -316,6 +316,35 @@ TEST_F(SecuredRun, CertificateOfAnotherAuthorityIsRefusedAtStart) {
   fs::copy_file(other / "sensor" / "key.pem", pki_ / "sensor" / "key.pem",
                 fs::copy_options::overwrite_existing);
   expectRefusedAtStart(pki_, pki_ / "sensor" / "identity.pem", "not signed by that CA");
+}
+
+// One byte changed in a signed document: its S/MIME signature no longer verifies, and the launch
+// is refused before anything starts, naming that file (it started every process before).
+void changeOneByte(const fs::path& file, const std::string& from, const std::string& to) {
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << file;
+  ASSERT_EQ(from.size(), to.size());
+  text.replace(at, from.size(), to);
+  std::ofstream(file, std::ios::trunc) << text;
+}
+
+TEST_F(SecuredRun, TamperedPermissionsAreRefusedAtStartNamingTheFile) {
+  const fs::path file = pki_ / "coordinator" / "permissions.p7s";
+  changeOneByte(file, "<topic>sensornet/Schedule</topic>", "<topic>sensornet/Schedulf</topic>");
+  expectRefusedAtStart(pki_, file, "signature does not verify");
+}
+
+TEST_F(SecuredRun, TamperedGovernanceIsRefusedAtStartNamingTheFile) {
+  const fs::path file = pki_ / "sensor" / "governance.p7s";
+  changeOneByte(file, "<data_protection_kind>ENCRYPT", "<data_protection_kind>ENCRYPU");
+  expectRefusedAtStart(pki_, file, "signature does not verify");
+}
+
+TEST_F(SecuredRun, ACaKeyInARolesFolderIsRefusedAtStart) {
+  fs::copy_file(pki_ / "ca" / "ca.key", pki_ / "sensor" / "ca.key");
+  expectRefusedAtStart(pki_, pki_ / "sensor" / "ca.key", "no private key but the role's own");
 }
 
 TEST_F(SecuredRun, MissingFileIsNamedAtStart) {
