@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <set>
 #include <cstdio>
 #include <utility>
 
@@ -20,20 +21,50 @@ bool stalledAtAStationaryPoint(const PlanResult& plan) {
   return plan.status == "stalled" && plan.kkt_residual <= Replanner::kStationaryResidual;
 }
 
-// Throws unless the planner reports the plan as one to publish (see the header).
-void requireOptimal(const PlanResult& plan, const std::string& which, const std::string& surrogate,
-                    std::uint64_t command_id) {
-  if (plan.status == "optimal" || plan.status == "acceptable" || plan.status == "not_optimized" ||
-      plan.status == "improved" || plan.status == "kept_start" ||  // mc: both are published
-      stalledAtAStationaryPoint(plan)) {
-    return;
+// The planner reports the plan as one to publish as it is (see the header).
+bool certified(const PlanResult& plan) {
+  return plan.status == "optimal" || plan.status == "acceptable" ||
+         plan.status == "not_optimized" || plan.status == "improved" ||
+         plan.status == "kept_start" ||  // mc: both are published
+         stalledAtAStationaryPoint(plan);
+}
+
+std::string endedText(const PlanResult& plan) {
+  return "ended '" + plan.status + "' (kkt residual " + formatNumber(plan.kkt_residual) +
+         " after " + std::to_string(plan.iterations) + " iterations)";
+}
+
+// `schedule` with the sensors in `out` at rate zero in every interval.
+RateSchedule withoutSensors(const RateSchedule& schedule, const std::set<int>& out) {
+  Eigen::MatrixXd rates = schedule.rates();
+  for (const int j : out) {
+    if (j >= 0 && j < rates.cols()) rates.col(j).setZero();
   }
-  throw InputError(sourceOf(command_id), "plan",
-                   "a plan the planner reports as optimal, but the " + which + " " + surrogate +
-                       " plan ended '" + plan.status + "' (kkt residual " +
-                       formatNumber(plan.kkt_residual) + " after " +
-                       std::to_string(plan.iterations) +
-                       " iterations); nothing was published, the settings are unchanged");
+  return RateSchedule(schedule.horizon(), std::move(rates));
+}
+
+// `planned` with the rows of the intervals that end by `start_time` (those the planner does not
+// plan, PlanRequest::start_time) taken from `before`.
+RateSchedule withRowsBefore(const RateSchedule& planned, const RateSchedule& before,
+                            double start_time) {
+  Eigen::MatrixXd rates = planned.rates();
+  const double slack = 1e-12 * planned.horizon();
+  for (int k = 0; k < planned.intervals() &&
+                  planned.intervalStart(k) + planned.intervalLength() <= start_time + slack;
+       ++k) {
+    rates.row(k) = before.rates().row(k);
+  }
+  return RateSchedule(planned.horizon(), std::move(rates));
+}
+
+// The surrogate's cost of `schedule` over [start time, T] from the request's start covariance.
+double surrogateCost(const Scenario& scenario, const RateSchedule& schedule,
+                     const PlanRequest& request) {
+  RolloutOptions options;
+  options.start_time = request.start_time;
+  options.start_covariance = request.start_covariance;
+  const SurrogateRollout r = rollout(formOf(request.surrogate), scenario, schedule, options);
+  return r.running_cost + r.terminal_cost;
 }
 
 std::string describePlan(const PlanResult& plan) {
@@ -93,6 +124,7 @@ std::string Replan::versionsInBrief() const {
     if (v.effective_time_s > 0.0) text += shortSeconds(v.effective_time_s) + " s of ";
     text += "episode " + std::to_string(v.effective_episode);
   }
+  if (!caveat.empty()) text += " (" + caveat + ")";
   return text;
 }
 
@@ -183,7 +215,7 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
     return "not in episode " + std::to_string(now.episode) + ": " + why + "; ";
   };
   std::string summary;
-  std::optional<PlanResult> tail_plan;
+  std::optional<Chosen> tail_plan;
   double at = 0.0;
   if (now.running && !(now.fused && now.fused->episode == now.episode)) {
     summary = notInThisEpisode("no fused covariance of it yet");
@@ -195,12 +227,14 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
       PlanRequest request = planRequest(settings, book);
       request.start_time = at;
       request.start_covariance = covarianceExpectedAt(settings, book, now, at);
-      tail_plan = planSchedule(planned_for, request);
-      requireOptimal(*tail_plan, "mid-episode", surrogate, command_id);
+      const ScheduleVersion* in_force = book.inForce(now.episode, at);
+      tail_plan = choosePlan(planned_for, request,
+                             in_force != nullptr ? in_force->schedule : book.latest().schedule,
+                             settings, "mid-episode", command_id);
     }
   }
-  const PlanResult full_plan = planSchedule(planned_for, planRequest(settings, book));
-  requireOptimal(full_plan, "full-horizon", surrogate, command_id);
+  const Chosen full_plan = choosePlan(planned_for, planRequest(settings, book),
+                                      book.latest().schedule, settings, "full-horizon", command_id);
 
   Replan r;
   std::uint32_t number = book.latest().version;
@@ -214,7 +248,7 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
                                        now.episode, effective));
       r.versions.back().version = ++number;
       summary = "version " + std::to_string(number) + " from " + std::to_string(effective) +
-                " s of episode " + std::to_string(now.episode) + " (" + describePlan(*tail_plan) +
+                " s of episode " + std::to_string(now.episode) + " (" + tail_plan->description +
                 ", planned from the fused covariance at " + std::to_string(now.fused->time_s) +
                 " s carried to " + std::to_string(at) + " s); ";
     } else {
@@ -226,9 +260,68 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
   r.versions.back().version = ++number;
   r.summary = summary + "version " + std::to_string(number) + " from episode " +
               std::to_string(now.nextEpisode()) + " (" + surrogate + ", " +
-              describePlan(full_plan) + ")";
+              full_plan.description + ")";
+  for (const std::string& caveat : {tail_plan ? tail_plan->caveat : std::string(), full_plan.caveat}) {
+    if (!caveat.empty()) r.caveat += (r.caveat.empty() ? "" : "; ") + caveat;
+  }
   r.settings = std::move(settings);
   return r;
+}
+
+// What to publish for one plan (see the header of plan): the planner's plan when it certifies it
+// (from the schedule in force, else from its own start); else the best plan found, when the
+// surrogate says it beats the schedule in force as that can still be delivered (out-of-service
+// sensors at zero); else, when sensors are out of service that the schedule in force still asks
+// for, that schedule with them at zero (a dead sensor is never left scheduled). Otherwise the
+// change is refused (InputError), and nothing is published.
+Replanner::Chosen Replanner::choosePlan(const Scenario& planned_for, const PlanRequest& request,
+                                        const RateSchedule& in_force,
+                                        const ReplanSettings& settings, const std::string& which,
+                                        std::uint64_t command_id) const {
+  const std::string surrogate(describe(settings.surrogate));
+  const PlanResult warm = planSchedule(planned_for, request);
+  if (certified(warm)) return {warm.schedule, describePlan(warm), ""};
+  PlanResult best = warm;
+  std::string tried = "from the schedule in force it " + endedText(warm);
+  if (request.warm_start) {
+    // The planner's own start (its uniform rates among the sensors in service); before the
+    // switch the version keeps the warm start's rates, as a warm-started plan does.
+    PlanRequest cold = request;
+    cold.warm_start.reset();
+    PlanResult own = planSchedule(planned_for, cold);
+    own.schedule = withRowsBefore(own.schedule, *request.warm_start, request.start_time);
+    if (certified(own)) {
+      return {own.schedule, describePlan(own) + " from the planner's own start (" + tried + ")", ""};
+    }
+    tried += ", from its own start " + endedText(own);
+    if (surrogateCost(planned_for, own.schedule, request) <
+        surrogateCost(planned_for, warm.schedule, request)) {
+      best = own;
+    }
+  }
+  const std::set<int> out = settings.outOfService();
+  const RateSchedule deliverable = withoutSensors(in_force, out);
+  const bool kept_feasible = checkFeasibility(deliverable, planned_for, 1e-9).feasible;
+  const double best_cost = surrogateCost(planned_for, best.schedule, request);
+  const double kept_cost = surrogateCost(planned_for, deliverable, request);
+  const std::string costs = surrogate + " cost " + formatNumber(best_cost) +
+                            " against the schedule in force's " + formatNumber(kept_cost) +
+                            (out.empty() ? "" : " without the out-of-service sensors");
+  if (best_cost < kept_cost || !kept_feasible) {
+    const std::string caveat = "the " + which + " plan is not certified optimal (" + tried +
+                               "); published because it is better by the surrogate: " + costs;
+    return {best.schedule, "not certified optimal, better than the schedule in force", caveat};
+  }
+  if ((deliverable.rates() - in_force.rates()).cwiseAbs().maxCoeff() > 0.0) {
+    const std::string caveat = "the " + which + " plan is not certified optimal (" + tried +
+                               ") and no better than the schedule in force (" + costs +
+                               "): that schedule is kept with the out-of-service sensors at zero";
+    return {deliverable, "the schedule in force without the out-of-service sensors", caveat};
+  }
+  throw InputError(sourceOf(command_id), "plan",
+                   "a plan the planner reports as optimal, or one better than the schedule in "
+                   "force, but the " + which + " " + surrogate + " plan " + tried + " (" + costs +
+                   "); nothing was published, the settings are unchanged");
 }
 
 PlanRequest Replanner::planRequest(const ReplanSettings& settings, const ScheduleBook& book) const {

@@ -94,12 +94,15 @@ struct Replan {
   std::vector<ScheduleVersion> versions;  // to publish in this order (numbers follow the book)
   std::string summary;                    // one line for the reply
   ReplanSettings settings;                // in force once the versions are published
+  // What the reply and a failure's fault must say beside the versions, when a plan was
+  // published that the planner could not certify as optimal (see Replanner::plan).
+  std::string caveat;
 
   // What the reply names: the first new version (0 when none).
   [[nodiscard]] std::uint32_t replyVersion() const {
     return versions.empty() ? 0 : versions.front().version;
   }
-  // "version 3 from 1.25 s of episode 2; version 4 from episode 3"
+  // "version 3 from 1.25 s of episode 2; version 4 from episode 3", and the caveat if any.
   [[nodiscard]] std::string versionsInBrief() const;
 };
 
@@ -141,6 +144,14 @@ class Replanner {
                             std::uint64_t command_id) const;
   [[nodiscard]] PlanRequest planRequest(const ReplanSettings& settings,
                                         const ScheduleBook& book) const;
+  struct Chosen {
+    RateSchedule schedule;
+    std::string description;  // for the summary: "optimal", "not certified optimal (...)" ...
+    std::string caveat;       // empty when the planner certified the plan
+  };
+  [[nodiscard]] Chosen choosePlan(const Scenario& planned_for, const PlanRequest& request,
+                                  const RateSchedule& in_force, const ReplanSettings& settings,
+                                  const std::string& which, std::uint64_t command_id) const;
   [[nodiscard]] Eigen::MatrixXd covarianceExpectedAt(const ReplanSettings& settings,
                                                      const ScheduleBook& book, const RunMoment& now,
                                                      double at) const;

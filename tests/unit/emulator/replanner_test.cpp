@@ -14,6 +14,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
+#include "sensornet/io/scenario_file.hpp"
 
 #include "emulator_test_support.hpp"
 
@@ -87,21 +88,48 @@ TEST_F(Replanning, RefusalsLeaveTheSettingsUnchanged) {
   EXPECT_EQ(r.settings(), before);
 }
 
-TEST_F(Replanning, APlanThatIsNotOptimalIsRefusedAndChangesNothing) {
+// The surrogate's cost of `schedule` from P0 over [0, T], computed here.
+double costOf(const Scenario& s, const RateSchedule& schedule, SurrogateForm form) {
+  const SurrogateRollout r = rollout(form, s, schedule, RolloutOptions{});
+  return r.running_cost + r.terminal_cost;
+}
+
+TEST_F(Replanning, AnUncertifiedPlanNoBetterThanTheScheduleInForceIsRefusedAndChangesNothing) {
   ReplannerOptions options;
-  options.max_plan_seconds = 1e-9;  // the solve stops at once: "time_limit"
+  options.max_plan_seconds = 1e-9;  // every solve stops at once: "time_limit"
   Replanner r = replanner(options);
   const ReplanSettings before = r.settings();
   try {
-    const std::vector<std::uint32_t> sensor1 = {1};  // version 1 is no longer optimal
-    (void)r.exclude(sensor1, book_, running(1.0), 11);
+    // Version 1 is the information-form optimum: no time-limited plan can beat it.
+    (void)r.changeSurrogate("info", book_, running(1.0), 11);
     FAIL() << "a time-limited plan was accepted";
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "plan");
-    EXPECT_NE(std::string(e.what()).find("plan ended 'time_limit'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ended 'time_limit'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("nothing was published"), std::string::npos) << e.what();
   }
   EXPECT_EQ(r.settings(), before);
+}
+
+TEST_F(Replanning, AnUncertifiedExclusionStillTakesTheSensorOutAndSaysSo) {
+  ReplannerOptions options;
+  options.max_plan_seconds = 1e-9;
+  Replanner r = replanner(options);
+  const std::vector<std::uint32_t> sensor1 = {1};
+  const Replan plan = r.exclude(sensor1, book_, running(1.0), 11);
+  ASSERT_FALSE(plan.versions.empty());
+  EXPECT_NE(plan.caveat.find("not certified optimal"), std::string::npos) << plan.caveat;
+  EXPECT_NE(plan.versionsInBrief().find(plan.caveat), std::string::npos);
+  for (const ScheduleVersion& v : plan.versions) {
+    const int k0 = v.schedule.intervalAt(v.effective_time_s);
+    for (int k = k0; k < scenario_.intervals; ++k) EXPECT_EQ(v.schedule.rate(k, 1), 0.0) << k;
+  }
+  // Never worse by the surrogate than version 1 with sensor 1 silent.
+  Eigen::MatrixXd silent = book_.latest().schedule.rates();
+  silent.col(1).setZero();
+  const RateSchedule kept(scenario_.horizon_s, silent);
+  EXPECT_LE(costOf(scenario_, plan.versions.back().schedule, SurrogateForm::Information),
+            costOf(scenario_, kept, SurrogateForm::Information) * (1 + 1e-12));
 }
 
 TEST_F(Replanning, AnExclusionGivesZeroRatesFromTheSwitchOnAndTheFullVersionFromTheNextEpisode) {
@@ -303,6 +331,40 @@ TEST_F(Replanning, FailedSensorsAreRecordedAndPlannedWithout) {
   const std::vector<std::uint32_t> also_dead = {1, 3};
   r.noteFailed(also_dead, 4);
   EXPECT_THROW((void)r.replanAsIs(book_, running(1.0), 4), InputError);
+}
+
+// The failure policy on the default scenario (issue 24): sensor 1 dies, and the full-horizon cov
+// plan from the schedule in force stopped at 500 iterations (kkt 1.3e-3) while the same plan from
+// the planner's own start is optimal. The re-plan must publish a certified plan without sensor 1.
+TEST(ReplanningDefaultScenario, ASensorDeathIsReplannedToACertifiedPlanWithoutIt) {
+  const Scenario scenario = loadScenarioFile(std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml");
+  const EmulatedPlant plant(scenario, 1);
+  PlanRequest request;
+  request.surrogate = PlanSurrogate::Covariance;
+  ScheduleBook book;
+  ScheduleVersion v1;
+  v1.version = 1;
+  v1.schedule = planSchedule(scenario, request).schedule;
+  v1.surrogate = "cov";
+  v1.bracket = computeBracket(scenario, v1.schedule);
+  book.add(v1);
+  ASSERT_GT(v1.schedule.rates().col(1).maxCoeff(), 0.0) << "the plan must use sensor 1";
+  Replanner r(scenario, plant, initialSettings(scenario, PlanSurrogate::Covariance), {});
+  const std::vector<std::uint32_t> dead = {1};
+  r.noteFailed(dead, 7);
+  RunMoment between;  // between episodes: one full-horizon version from episode 3
+  between.episode = 3;
+  const Replan plan = r.replanAsIs(book, between, 7);
+  ASSERT_EQ(plan.versions.size(), 1u);
+  EXPECT_TRUE(plan.caveat.empty()) << plan.caveat;
+  const RateSchedule& replanned = plan.versions.front().schedule;
+  EXPECT_EQ(replanned.rates().col(1).norm(), 0.0);
+  EXPECT_TRUE(checkFeasibility(replanned, scenario, 1e-9).feasible);
+  // Better by the cov surrogate than keeping version 1 with sensor 1 silent (computed here).
+  Eigen::MatrixXd silent = v1.schedule.rates();
+  silent.col(1).setZero();
+  EXPECT_LT(costOf(scenario, replanned, SurrogateForm::Covariance),
+            costOf(scenario, RateSchedule(scenario.horizon_s, silent), SurrogateForm::Covariance));
 }
 
 }  // namespace
