@@ -122,7 +122,8 @@ RunningMean runningMean(const json& per_episode) {
   return r;
 }
 
-// The cost axis: what the complete episodes, the brackets and the interval span. An incomplete
+// The cost axis: what the complete episodes, the brackets and the interval span (the interval
+// from the third complete episode on: with two, Student's t stretches it tenfold). An incomplete
 // episode's cost (cut short, aborted) joins only if it does not stretch the axis past half as
 // much again: one aborted episode must not flatten the rest (it is drawn at the top edge).
 Interval costRange(const json& per_episode, const RunningMean& running) {
@@ -134,8 +135,10 @@ Interval costRange(const json& per_episode, const RunningMean& running) {
       y.add(number(e.at("bracket"), "cov"));
     }
   }
-  y.add(running.low);
-  y.add(running.high);
+  for (std::size_t i = 2; i < running.low.size(); ++i) {
+    y.add(running.low[i]);
+    y.add(running.high[i]);
+  }
   for (const json& e : per_episode) {
     const double cost = number(e, "realized_cost");
     if (y.empty() || (!e.value("complete", false) && cost <= 1.5 * y.hi)) y.add(cost);

@@ -255,7 +255,8 @@ std::size_t occurrences(const std::string& text, const std::string& what) {
 
 TEST(ReportPage, DrawsOneScheduleMapWithEverySwitchMarked) {
   const std::string page = reportPage(reportWithVersions(10, 12), "r.json");
-  EXPECT_EQ(occurrences(page, "id=\"plot-schedule"), 1u) << "one map, not one per version";
+  EXPECT_EQ(occurrences(page, "<svg xmlns"), 5u) << "cost, one schedule map, sensors, latency, faults";
+  EXPECT_EQ(occurrences(page, "id=\"plot-schedule\""), 1u) << "one map, not one per version";
   const std::string map = svgOf(page, "plot-schedule");
   for (int v = 2; v <= 10; ++v) {
     EXPECT_NE(map.find(">v" + std::to_string(v) + "</text>"), std::string::npos) << v;
