@@ -68,6 +68,24 @@ enum class RejectionReason {
   MalformedEpisodeControl,  // an EpisodeControl sample that does not parse
 };
 
+// What the coordinator does when the launcher reports that sensors died
+// (`coordinator serve --on-sensor-failure`, `sensornet launch --on-sensor-failure`).
+enum class FailurePolicy {
+  Replan,    // re-plan the rest of the horizon among the survivors
+  Continue,  // keep the schedule in force
+  Stop,      // end the run as failed
+};
+
+// A sensor's state as its SensorStatus says it ("starting", ..., what status and watch show).
+enum class SensorState {
+  Starting,  // waiting for scenario and schedule
+  Ready,     // has both, waiting for an episode
+  Running,   // publishing measurements of the current episode
+  Excluded,  // rate zero by the schedule in force
+  Stopped,   // left the run on request
+  Failed,    // gave up; the reason is in the status's detail
+};
+
 }  // namespace sensornet::emulator
 
 namespace sensornet {
@@ -123,6 +141,28 @@ struct Words<emulator::RejectionReason> {
        {R::StaleSchedule, "stale_schedule"},
        {R::MalformedSchedule, "malformed_schedule"},
        {R::MalformedEpisodeControl, "malformed_episode_control"}}};
+};
+
+}  // namespace sensornet
+
+namespace sensornet {
+
+template <>
+struct Words<emulator::FailurePolicy> {
+  using P = emulator::FailurePolicy;
+  static constexpr std::array<WordOf<P>, 3> kTable{
+      {{P::Replan, "replan"}, {P::Continue, "continue"}, {P::Stop, "stop"}}};
+};
+
+template <>
+struct Words<emulator::SensorState> {
+  using S = emulator::SensorState;
+  static constexpr std::array<WordOf<S>, 6> kTable{{{S::Starting, "starting"},
+                                                    {S::Ready, "ready"},
+                                                    {S::Running, "running"},
+                                                    {S::Excluded, "excluded"},
+                                                    {S::Stopped, "stopped"},
+                                                    {S::Failed, "failed"}}};
 };
 
 }  // namespace sensornet
