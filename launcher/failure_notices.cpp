@@ -54,7 +54,8 @@ void FailureNotices::write(Notice& notice) {
   }
 }
 
-void FailureNotices::poll() {
+std::vector<std::pair<std::string, FailureReply>> FailureNotices::poll() {
+  std::vector<std::pair<std::string, FailureReply>> replies;
   for (const auto& received : replies_.take().samples) {
     const sensornet_CommandReply& r = *received.sample;
     if (dds::viewString(r.run_id) != run_id_) continue;
@@ -63,19 +64,14 @@ void FailureNotices::poll() {
       notice.reply = FailureReply{r.accepted, r.schedule_version,
                                   std::string(dds::viewString(r.reason))};
       spdlog::info("coordinator on the failure of {}: {}", notice.process, notice.reply->reason);
+      replies.emplace_back(notice.process, *notice.reply);
     }
   }
   const std::int64_t now = emulator::wallNowNs();
   for (Notice& notice : notices_) {
     if (!notice.reply && now - notice.sent_wall_ns > kResendAfterNs) write(notice);
   }
-}
-
-const FailureReply* FailureNotices::replyTo(const std::string& process) const {
-  for (const Notice& notice : notices_) {
-    if (notice.process == process && notice.reply) return &*notice.reply;
-  }
-  return nullptr;
+  return replies;
 }
 
 }  // namespace sensornet::launcher

@@ -8,8 +8,8 @@
 //
 //   FailureNotices notices(progress.participant(), run_id);
 //   notices.send("sensor_agent-3", {3}, "killed by signal 9 (Killed)");   // at once, no wait
-//   notices.poll();                                // every watch step: replies, resends
-//   if (const auto* r = notices.replyTo("sensor_agent-3")) ...;   // r->reason, r->schedule_version
+//   for (const auto& [process, reply] : notices.poll()) ...;   // every watch step: new replies,
+//                                                              // resends
 
 #include <cstdint>
 #include <map>
@@ -21,14 +21,9 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/launcher/supervisor.hpp"  // FailureReply
 
 namespace sensornet::launcher {
-
-struct FailureReply {
-  bool accepted = false;
-  std::uint32_t schedule_version = 0;  // the first version the policy published, 0 if none
-  std::string reason;                  // "policy replan: version 3 from 1.25 s of episode 2; ..."
-};
 
 class FailureNotices {
  public:
@@ -36,9 +31,9 @@ class FailureNotices {
 
   void send(const std::string& process, const std::vector<int>& sensors,
             const std::string& detail);
-  // Reads the coordinator's replies and resends what is still unanswered after kResendAfter.
-  void poll();
-  [[nodiscard]] const FailureReply* replyTo(const std::string& process) const;
+  // Reads the coordinator's replies and resends what is still unanswered after kResendAfter;
+  // returns the replies that came meanwhile, with the process each notice was about.
+  [[nodiscard]] std::vector<std::pair<std::string, FailureReply>> poll();
 
  private:
   struct Notice {
