@@ -6,6 +6,7 @@
 #include <map>
 
 #include "output_file.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/command_line.hpp"
 
@@ -234,7 +235,7 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   std::printf("run %s: %s (%zu fault%s)\n", report.value("run_id", std::string()).c_str(),
               std::string(wordOf(outcome.status)).c_str(), causes, causes == 1 ? "" : "s");
   for (const json& fault : faults) {
-    if (fault.is_object() && fault.contains(emulator::kCausedByField)) continue;
+    if (emulator::isConsequence(fault)) continue;
     std::printf("  fault: %s%s\n", faultLine(fault).c_str(), consequencesOf(fault, faults).c_str());
   }
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/emulator/svg_plot.hpp"
 #include "sensornet/io/command_line.hpp"

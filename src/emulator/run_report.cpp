@@ -539,13 +539,6 @@ json faultEntry(FaultKind kind, const std::string& process, std::optional<int> s
           {"detail", detail}};
 }
 
-std::size_t causeCount(const json& faults) {
-  if (!faults.is_array()) return 0;
-  return static_cast<std::size_t>(std::count_if(faults.begin(), faults.end(), [](const json& f) {
-    return !(f.is_object() && f.contains(kCausedByField));
-  }));
-}
-
 std::filesystem::path episodeLogPath(const std::filesystem::path& report_path) {
   std::filesystem::path log = report_path;
   if (log.extension() == ".json") return log.replace_extension(".jsonl");

@@ -7,7 +7,7 @@
 #include <system_error>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 
 namespace sensornet::emulator {
 namespace {

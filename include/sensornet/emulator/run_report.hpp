@@ -202,11 +202,6 @@ inline constexpr double kLatencyQuantileRelativeError = 5.76e-4;  // 10^(1/4000)
                                         std::optional<double> emulated_time_s,
                                         const std::string& detail);
 
-// The entries of a report's `faults` that are causes: not another's consequence (an entry with
-// `caused_by` is one, see kCausedByField). `--require no-faults`, the page and the launcher's
-// summary lines count these.
-[[nodiscard]] std::size_t causeCount(const nlohmann::json& faults);
-
 // The episode log beside a report: report.json -> report.jsonl (any other name gets ".jsonl"
 // appended).
 [[nodiscard]] std::filesystem::path episodeLogPath(const std::filesystem::path& report_path);

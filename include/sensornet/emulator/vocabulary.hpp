@@ -126,30 +126,3 @@ struct Words<emulator::RejectionReason> {
 };
 
 }  // namespace sensornet
-
-namespace sensornet::emulator {
-
-// What a run does when a sensor agent dies (`--on-sensor-failure`): the coordinator applies it,
-// the launcher needs it to know whether the death ends the run.
-enum class SensorFailurePolicy {
-  Replan,    // re-plan the rest of the horizon among the survivors: degraded
-  Continue,  // keep the schedule, the bracket shows the damage: degraded
-  Stop,      // end the run: failed
-};
-
-// A fault entry that followed from another (its cause) carries `caused_by: {kind, process}`:
-// counted as that cause's consequence, never as a fault of its own (README, "Faults").
-inline constexpr const char* kCausedByField = "caused_by";
-
-}  // namespace sensornet::emulator
-
-namespace sensornet {
-
-template <>
-struct Words<emulator::SensorFailurePolicy> {
-  using P = emulator::SensorFailurePolicy;
-  static constexpr std::array<WordOf<P>, 3> kTable{
-      {{P::Replan, "replan"}, {P::Continue, "continue"}, {P::Stop, "stop"}}};
-};
-
-}  // namespace sensornet

@@ -24,6 +24,7 @@
 #include <variant>
 #include <vector>
 
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/launcher/fault.hpp"
 

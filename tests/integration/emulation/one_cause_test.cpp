@@ -65,74 +65,70 @@ void expectNoCoordinatorFailure(const json& faults) {
 
 class OneCause : public LaunchTest {
  protected:
-  // The run in the background, once `episodes_before` episodes are in its log.
-  void startAndWait(RunningProgram*& launcher, std::vector<std::string> extra,
-                    std::size_t episodes_before) {
+  // Starts a run of 20 episodes with `extra` flags, waits until one episode is in its log and
+  // `delay` more, sends `signal` to the process whose command line starts with `program` and
+  // contains `token`, and returns the launcher's result.
+  ProcessResult faultMidRun(std::vector<std::string> extra, std::chrono::milliseconds delay,
+                            const std::string& program, const std::string& token, int signal) {
     std::vector<std::string> argv = launchArgs(20, "3");
     argv.insert(argv.end(), {"--seed", "5"});
     argv.insert(argv.end(), extra.begin(), extra.end());
-    launcher_.emplace(argv, 180s);
-    launcher = &*launcher_;
-    ASSERT_TRUE(waitUntil(
-        [&] { return readJsonLines(dir_ / "report.jsonl").size() >= episodes_before; }, 60s))
-        << "the run never finished " << episodes_before << " episodes";
+    RunningProgram launcher(argv, 180s);
+    EXPECT_TRUE(waitUntil([&] { return !readJsonLines(dir_ / "report.jsonl").empty(); }, 60s))
+        << "the run never finished an episode";
+    std::this_thread::sleep_for(delay);
+    const std::optional<pid_t> target = processOf(run_id_, program, token);
+    EXPECT_TRUE(target.has_value()) << program << " " << token;
+    if (target) EXPECT_EQ(::kill(*target, signal), 0);
+    return launcher.result();
   }
 
-  std::optional<RunningProgram> launcher_;
+  // The run's report, with the expectations every one-cause run shares: exit 1 and `status`,
+  // exactly one cause (returned), every consequence naming it, no coordinator failure, and the
+  // summary line counting the one cause.
+  json expectOneCause(const ProcessResult& r, const std::string& status) {
+    EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
+    const json report = readJson(dir_ / "report.json");
+    if (!report.is_object()) {
+      ADD_FAILURE() << "no report: " << r.err;
+      return nullptr;
+    }
+    EXPECT_EQ(report["status"], status);
+    const json& faults = report["faults"];
+    const std::vector<json> causes = causesIn(faults);
+    if (causes.size() != 1) {
+      ADD_FAILURE() << "expected one cause: " << faults.dump(2);
+      return nullptr;
+    }
+    expectConsequencesOf(faults, causes[0]);
+    expectNoCoordinatorFailure(faults);
+    EXPECT_NE(r.out.find(status + " (1 fault)"), std::string::npos) << r.out;
+    return causes[0];
+  }
 };
 
 TEST_F(OneCause, SensorKilledUnderStopPolicyIsTheOnlyFault) {
   const LeftoverGuard guard(run_id_);
-  RunningProgram* launcher = nullptr;
-  startAndWait(launcher, {"--sensors-per-process", "3", "--on-sensor-failure", "stop"}, 1);
-  if (HasFatalFailure()) return;
-  std::this_thread::sleep_for(200ms);
-  const std::optional<pid_t> victim = processOf(run_id_, SENSORNET_SENSOR_AGENT, "--sensors 0-2");
-  ASSERT_TRUE(victim.has_value());
-  ASSERT_EQ(::kill(*victim, SIGKILL), 0);
-  const ProcessResult& r = launcher->result();
-
-  EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
-  const json report = readJson(dir_ / "report.json");
-  ASSERT_TRUE(report.is_object()) << r.err;
-  EXPECT_EQ(report["status"], "failed");
-  const json& faults = report["faults"];
-  const std::vector<json> causes = causesIn(faults);
-  ASSERT_EQ(causes.size(), 1u) << faults.dump(2);
-  EXPECT_EQ(causes[0]["process"], "sensor_agent-0-2");
-  EXPECT_EQ(causes[0]["kind"], "process_killed");
-  EXPECT_EQ(causes[0]["sensors"], (json{0, 1, 2}));
-  EXPECT_FALSE(causes[0]["survived"].get<bool>()) << "the stop policy ends the run";
-  expectConsequencesOf(faults, causes[0]);
-  expectNoCoordinatorFailure(faults);
-  EXPECT_NE(r.out.find("failed (1 fault)"), std::string::npos) << r.out;
+  const ProcessResult r =
+      faultMidRun({"--sensors-per-process", "3", "--on-sensor-failure", "stop"}, 200ms,
+                  SENSORNET_SENSOR_AGENT, "--sensors 0-2", SIGKILL);
+  const json cause = expectOneCause(r, "failed");
+  ASSERT_TRUE(cause.is_object());
+  EXPECT_EQ(cause["process"], "sensor_agent-0-2");
+  EXPECT_EQ(cause["kind"], "process_killed");
+  EXPECT_EQ(cause["sensors"], (json{0, 1, 2}));
+  EXPECT_FALSE(cause["survived"].get<bool>()) << "the stop policy ends the run";
   EXPECT_TRUE(processesMentioning(run_id_).empty());
 }
 
 TEST_F(OneCause, SigintMidRunIsTheOnlyFault) {
   const LeftoverGuard guard(run_id_);
-  RunningProgram* launcher = nullptr;
-  startAndWait(launcher, {}, 1);
-  if (HasFatalFailure()) return;
-  std::this_thread::sleep_for(300ms);
-  const std::optional<pid_t> self = processOf(run_id_, kLauncher, "launch");
-  ASSERT_TRUE(self.has_value());
-  ASSERT_EQ(::kill(*self, SIGINT), 0);
-  const ProcessResult& r = launcher->result();
-
-  EXPECT_EQ(r.exit_code, kExitFailed) << r.out << r.err;
-  const json report = readJson(dir_ / "report.json");
-  ASSERT_TRUE(report.is_object()) << r.err;
-  EXPECT_EQ(report["status"], "interrupted");
-  const json& faults = report["faults"];
-  const std::vector<json> causes = causesIn(faults);
-  ASSERT_EQ(causes.size(), 1u) << faults.dump(2);
-  EXPECT_EQ(causes[0]["kind"], "interrupted");
-  EXPECT_EQ(causes[0]["process"], "sensornet");
-  EXPECT_EQ(causes[0]["detail"], "interrupted by SIGINT");
-  expectConsequencesOf(faults, causes[0]);
-  expectNoCoordinatorFailure(faults);
-  EXPECT_NE(r.out.find("interrupted (1 fault)"), std::string::npos) << r.out;
+  const ProcessResult r = faultMidRun({}, 300ms, kLauncher, "launch", SIGINT);
+  const json cause = expectOneCause(r, "interrupted");
+  ASSERT_TRUE(cause.is_object());
+  EXPECT_EQ(cause["kind"], "interrupted");
+  EXPECT_EQ(cause["process"], "sensornet");
+  EXPECT_EQ(cause["detail"], "interrupted by SIGINT");
   EXPECT_TRUE(processesMentioning(run_id_).empty());
 }
 

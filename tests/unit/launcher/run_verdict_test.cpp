@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/run_requirements.hpp"
 #include "sensornet/launcher/supervisor.hpp"
