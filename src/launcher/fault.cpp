@@ -13,8 +13,8 @@ using nlohmann::json;
 // cause's may still have been owed counts when the cause struck.
 bool atOrAfter(const json& entry, const RunPosition& cause) {
   const json episode = entry.is_object() && entry.contains("episode") ? entry["episode"] : json();
-  if (!episode.is_number_unsigned() || !cause.episode) return true;
-  return episode.get<std::uint64_t>() + 1 >= *cause.episode;
+  if (!episode.is_number_integer() || !cause.episode) return true;
+  return episode.get<std::int64_t>() + 1 >= static_cast<std::int64_t>(*cause.episode);
 }
 
 bool isConsequenceOf(const json& entry, const Fault& cause) {

@@ -211,7 +211,8 @@ void expectSurvivedDeath(SensorFailurePolicy policy) {
   (void)s.onChildExit(exited("sensor_agent-0-2", 0), {}, kStart);
   EXPECT_TRUE(s.done()) << "the dead agent is not waited for";
   ASSERT_EQ(s.faults().size(), 1u);
-  const Fault& f = s.faults()[0];
+  const std::vector<Fault> faults = s.faults();
+  const Fault& f = faults[0];
   EXPECT_TRUE(f.survived);
   EXPECT_EQ(f.kind, FaultKind::ProcessKilled);
   EXPECT_EQ(f.sensors, (std::vector<int>{3, 4, 5}));
@@ -239,7 +240,8 @@ TEST(Supervisor, SensorDeathUnderStopIsTheOneCauseOfTheFailedRun) {
   (void)s.onChildExit(exited("sensor_agent-3-5", 0), {}, kStart + seconds(2));
   EXPECT_TRUE(s.done());
   ASSERT_EQ(s.faults().size(), 1u) << "one cause, one fault";
-  const Fault& f = s.faults()[0];
+  const std::vector<Fault> faults = s.faults();
+  const Fault& f = faults[0];
   EXPECT_EQ(f.process, "sensor_agent-0-2");
   EXPECT_FALSE(f.survived);
   EXPECT_NE(f.detail.find("policy stop"), std::string::npos) << f.detail;
