@@ -22,7 +22,10 @@ RunStatus statusFrom(std::vector<Fault>& faults, bool interrupted, const ReportS
   if (anyNotSurvived(faults)) return RunStatus::Failed;
   if (!faults.empty() && reported == RunStatus::Completed) return RunStatus::Degraded;
   if (!reported) {
-    faults.push_back({FaultKind::ReportInvalid, kFusionCenter, {}, {},
+    faults.push_back({FaultKind::ReportInvalid,
+                      kFusionCenter,
+                      {},
+                      {},
                       "the report's status is '" + report.status + "'"});
     return RunStatus::Failed;
   }
@@ -56,7 +59,10 @@ Verdict decideVerdict(std::vector<Fault> faults, bool interrupted, const ReportS
   verdict.status = statusFrom(faults, interrupted, report);
   if (verdict.status == RunStatus::Completed &&
       report.finished_episodes < static_cast<std::uint64_t>(episodes_planned)) {
-    faults.push_back({FaultKind::MissingEpisodes, kFusionCenter, {}, {},
+    faults.push_back({FaultKind::MissingEpisodes,
+                      kFusionCenter,
+                      {},
+                      {},
                       "reports " + std::to_string(report.finished_episodes) + " of " +
                           std::to_string(episodes_planned) + " episodes as finished"});
     verdict.status = RunStatus::Failed;

@@ -95,9 +95,10 @@ std::vector<Action> Supervisor::onSensorAgentDeath(const ChildExit& exit, const 
   ended_.insert(exit.name);
   Entry entry{exitFault(exit, at), true, false};
   // The coordinator ends the run under policy stop, and under any policy when no sensor is left.
-  const bool stops = config_.on_sensor_failure == emulator::SensorFailurePolicy::Stop ||
-                     std::all_of(config_.sensor_agents.begin(), config_.sensor_agents.end(),
-                                 [this](const auto& agent) { return ended_.contains(agent.first); });
+  const bool stops =
+      config_.on_sensor_failure == emulator::SensorFailurePolicy::Stop ||
+      std::all_of(config_.sensor_agents.begin(), config_.sensor_agents.end(),
+                  [this](const auto& agent) { return ended_.contains(agent.first); });
   entry.fault.survived = !stops;
   entries_.push_back(std::move(entry));
   std::vector<Action> actions = {
@@ -135,17 +136,16 @@ std::vector<Action> Supervisor::onRestarted(const std::string& name, pid_t pid,
     if (it->fault.process != name || !it->awaiting_restart) continue;
     it->awaiting_restart = false;
     const int attempt = name == kCoordinator ? restarts_coordinator_ : restarts_fusion_center_;
-    const std::string how = "restarted with --resume (restart " + std::to_string(attempt) +
-                            " of " + std::to_string(config_.max_restarts) + ", pid " +
-                            std::to_string(pid) + ", log " + log_name + ")";
+    const std::string how = "restarted with --resume (restart " + std::to_string(attempt) + " of " +
+                            std::to_string(config_.max_restarts) + ", pid " + std::to_string(pid) +
+                            ", log " + log_name + ")";
     it->fault.detail += "; " + how;
     return {LogLine{false, name + " " + it->fault.detail}};
   }
   return {};
 }
 
-std::vector<Action> Supervisor::onRestartFailed(const std::string& name,
-                                                const std::string& what) {
+std::vector<Action> Supervisor::onRestartFailed(const std::string& name, const std::string& what) {
   for (auto it = entries_.rbegin(); it != entries_.rend(); ++it) {
     if (it->fault.process != name || !it->awaiting_restart) continue;
     it->awaiting_restart = false;
@@ -181,8 +181,8 @@ std::vector<Action> Supervisor::onSignal(int signal, const RunPosition& at) {
 std::vector<Action> Supervisor::onTick(SteadyTime now, const RunPosition& at) {
   if (phase_ == Phase::Stopping || phase_ == Phase::Done) return {};
   if (deadline_ && now >= *deadline_) {
-    const std::string limit = "the run did not end within --timeout " + seconds(*config_.timeout) +
-                              " s";
+    const std::string limit =
+        "the run did not end within --timeout " + seconds(*config_.timeout) + " s";
     return fail({RunFailureKind::TimedOut, "", "the run did not end within --timeout", 0, at},
                 Fault{FaultKind::Timeout, kLauncherProcess, {}, at, limit});
   }
@@ -230,11 +230,8 @@ void Supervisor::ended(const std::string& name, SteadyTime now) {
 
 Fault Supervisor::exitFault(const ChildExit& exit, const RunPosition& at) const {
   const std::vector<int>* sensors = sensorsOf(exit.name);
-  Fault fault{exit.signal != 0 ? FaultKind::ProcessKilled : FaultKind::ProcessFailed,
-              exit.name,
-              sensors != nullptr ? *sensors : std::vector<int>{},
-              at,
-              exit.describe()};
+  Fault fault{exit.signal != 0 ? FaultKind::ProcessKilled : FaultKind::ProcessFailed, exit.name,
+              sensors != nullptr ? *sensors : std::vector<int>{}, at, exit.describe()};
   if (scripted(exit)) {
     fault.kind = FaultKind::Crash;
     fault.detail = "scripted crash (the scenario's faults:), " + fault.detail;
@@ -252,16 +249,17 @@ const std::vector<int>* Supervisor::sensorsOf(const std::string& name) const {
 bool Supervisor::scripted(const ChildExit& exit) const {
   const std::vector<int>* sensors = sensorsOf(exit.name);
   if (exit.signal != SIGKILL || sensors == nullptr) return false;
-  return std::any_of(config_.scripted_crash_sensors.begin(), config_.scripted_crash_sensors.end(),
-                     [&](int j) { return std::find(sensors->begin(), sensors->end(), j) !=
-                                         sensors->end(); });
+  return std::any_of(
+      config_.scripted_crash_sensors.begin(), config_.scripted_crash_sensors.end(),
+      [&](int j) { return std::find(sensors->begin(), sensors->end(), j) != sensors->end(); });
 }
 
 std::vector<Fault> Supervisor::faults() const {
   std::vector<Fault> out;
   for (const Entry& entry : entries_) {
     out.push_back(entry.fault);
-    if (entry.awaiting_reply) out.back().detail += "; the coordinator did not answer the failure notice";
+    if (entry.awaiting_reply)
+      out.back().detail += "; the coordinator did not answer the failure notice";
   }
   return out;
 }

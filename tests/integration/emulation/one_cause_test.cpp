@@ -109,9 +109,8 @@ class OneCause : public LaunchTest {
 
 TEST_F(OneCause, SensorKilledUnderStopPolicyIsTheOnlyFault) {
   const LeftoverGuard guard(run_id_);
-  const ProcessResult r =
-      faultMidRun({"--sensors-per-process", "3", "--on-sensor-failure", "stop"}, 200ms,
-                  SENSORNET_SENSOR_AGENT, "--sensors 0-2", SIGKILL);
+  const ProcessResult r = faultMidRun({"--sensors-per-process", "3", "--on-sensor-failure", "stop"},
+                                      200ms, SENSORNET_SENSOR_AGENT, "--sensors 0-2", SIGKILL);
   const json cause = expectOneCause(r, "failed");
   ASSERT_TRUE(cause.is_object());
   EXPECT_EQ(cause["process"], "sensor_agent-0-2");

@@ -74,8 +74,8 @@ TEST(RunVerdict, FailedReportStaysFailed) {
 }
 
 TEST(RunVerdict, MissingReportFailsTheRunAndSaysSo) {
-  const Verdict v = decideVerdict({}, false, {false, "wrote no report at r.json", "failed", 0},
-                                  kPlanned);
+  const Verdict v =
+      decideVerdict({}, false, {false, "wrote no report at r.json", "failed", 0}, kPlanned);
   EXPECT_EQ(v.status, RunStatus::Failed);
   ASSERT_EQ(v.faults.size(), 1u);
   EXPECT_EQ(v.faults[0].kind, FaultKind::ReportMissing);
@@ -105,8 +105,9 @@ TEST(RunVerdict, CompletedWithEpisodesMissingFails) {
 // Exit 4: a --require criterion failed on a run that completed or was degraded; a failed run
 // stays 1.
 TEST(RunVerdict, FailedRequirementExitsFourUnlessTheRunFailed) {
-  const auto checks = emulator::checkRequirements(emulator::parseRequirements("no-faults"),
-                                                  json{{"faults", json::array({{{"kind", "lost"}}})}});
+  const auto checks =
+      emulator::checkRequirements(emulator::parseRequirements("no-faults"),
+                                  json{{"faults", json::array({{{"kind", "lost"}}})}});
   ASSERT_EQ(checks.size(), 1u);
   EXPECT_FALSE(checks[0].pass);
   EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Completed), checks), 4);
@@ -116,8 +117,8 @@ TEST(RunVerdict, FailedRequirementExitsFourUnlessTheRunFailed) {
 }
 
 json entry(const std::string& kind, json episode, json sensor = nullptr) {
-  return {{"kind", kind}, {"process", "fusion_center"}, {"sensor", sensor}, {"episode", episode},
-          {"emulated_time_s", nullptr}, {"detail", "..."}};
+  return {{"kind", kind},       {"process", "fusion_center"}, {"sensor", sensor},
+          {"episode", episode}, {"emulated_time_s", nullptr}, {"detail", "..."}};
 }
 
 // Under --on-sensor-failure stop the fusion center records a stall for every healthy sensor of
@@ -126,17 +127,17 @@ TEST(FaultList, EntriesAfterTheRunEndingCauseAreItsConsequences) {
   Fault death{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, {2, 0.3}, "killed"};
   // Episode 0 was closed before the death in episode 2: its stall is a cause of its own; episode
   // 1 may still have been owed counts (two episodes outstanding at most).
-  const json seen =
-      json::array({entry("stall", 0, 4), entry("stall", 1, 3), entry("stall", 2, 4),
-                   entry("stall", 3, 5), entry("run_aborted", nullptr), entry("rejected", nullptr)});
+  const json seen = json::array({entry("stall", 0, 4), entry("stall", 1, 3), entry("stall", 2, 4),
+                                 entry("stall", 3, 5), entry("run_aborted", nullptr),
+                                 entry("rejected", nullptr)});
   const json faults = faultList({death}, seen);
   ASSERT_EQ(faults.size(), 7u);
   EXPECT_EQ(faults[0]["process"], "sensor_agent-0-2") << "the launcher's cause comes first";
   EXPECT_FALSE(faults[1].contains("caused_by"));
   for (const std::size_t i : {2u, 3u, 4u, 5u}) {
     ASSERT_TRUE(faults[i].contains("caused_by")) << faults[i].dump();
-    EXPECT_EQ(faults[i]["caused_by"], (json{{"kind", "process_killed"},
-                                            {"process", "sensor_agent-0-2"}}));
+    EXPECT_EQ(faults[i]["caused_by"],
+              (json{{"kind", "process_killed"}, {"process", "sensor_agent-0-2"}}));
   }
   EXPECT_FALSE(faults[6].contains("caused_by")) << "rejected samples have causes of their own";
   EXPECT_EQ(emulator::causeCount(faults), 3u);
@@ -159,8 +160,7 @@ TEST(FaultList, NoFaultsCriterionCountsCauses) {
   const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
   const json report = {{"faults", faultList({signal}, json::array({entry("stall", 1, 0)}))}};
   EXPECT_EQ(emulator::causeCount(report["faults"]), 1u);
-  const auto checks =
-      emulator::checkRequirements(emulator::parseRequirements("no-faults"), report);
+  const auto checks = emulator::checkRequirements(emulator::parseRequirements("no-faults"), report);
   EXPECT_FALSE(checks.at(0).pass);
 }
 

@@ -100,8 +100,10 @@ TEST(Supervisor, FusionCenterKilledTwiceRecordsBothRestarts) {
   }
   EXPECT_EQ(faults[0].at.episode, 2u);
   EXPECT_EQ(faults[1].at.episode, 4u);
-  EXPECT_NE(faults[0].detail.find("restart 1 of 3, pid 301"), std::string::npos) << faults[0].detail;
-  EXPECT_NE(faults[1].detail.find("restart 2 of 3, pid 302"), std::string::npos) << faults[1].detail;
+  EXPECT_NE(faults[0].detail.find("restart 1 of 3, pid 301"), std::string::npos)
+      << faults[0].detail;
+  EXPECT_NE(faults[1].detail.find("restart 2 of 3, pid 302"), std::string::npos)
+      << faults[1].detail;
   endNormally(s, kStart);
   const Verdict v = verdictOf(s);
   EXPECT_EQ(v.status, RunStatus::Degraded);
@@ -223,7 +225,9 @@ void expectSurvivedDeath(SensorFailurePolicy policy) {
   EXPECT_EQ(exitCodeOf(v.status), 3);
 }
 
-TEST(Supervisor, SensorDeathUnderReplanIsSurvived) { expectSurvivedDeath(SensorFailurePolicy::Replan); }
+TEST(Supervisor, SensorDeathUnderReplanIsSurvived) {
+  expectSurvivedDeath(SensorFailurePolicy::Replan);
+}
 TEST(Supervisor, SensorDeathUnderContinueIsSurvived) {
   expectSurvivedDeath(SensorFailurePolicy::Continue);
 }
@@ -246,7 +250,8 @@ TEST(Supervisor, SensorDeathUnderStopIsTheOneCauseOfTheFailedRun) {
   EXPECT_FALSE(f.survived);
   EXPECT_NE(f.detail.find("policy stop"), std::string::npos) << f.detail;
   EXPECT_NE(f.detail.find("the coordinator then ended the run (exited with status 1)"),
-            std::string::npos) << f.detail;
+            std::string::npos)
+      << f.detail;
   const Verdict v = verdictOf(s, "failed");
   EXPECT_EQ(v.status, RunStatus::Failed);
   EXPECT_EQ(exitCodeOf(v.status), 1);
