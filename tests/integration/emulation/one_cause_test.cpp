@@ -79,7 +79,9 @@ class OneCause : public LaunchTest {
     std::this_thread::sleep_for(delay);
     const std::optional<pid_t> target = processOf(run_id_, program, token);
     EXPECT_TRUE(target.has_value()) << program << " " << token;
-    if (target) EXPECT_EQ(::kill(*target, signal), 0);
+    if (target) {
+      EXPECT_EQ(::kill(*target, signal), 0);
+    }
     return launcher.result();
   }
 
