@@ -42,23 +42,11 @@ namespace fs = std::filesystem;
 using std::chrono::milliseconds;
 using std::chrono::seconds;
 
-constexpr const char* kCoordinator = "coordinator";
-constexpr const char* kFusionCenter = "fusion_center";
-constexpr const char* kLauncher = "sensornet";
 constexpr seconds kStopGrace{3};
-// Stopped last and given longer: on SIGTERM the fusion center closes its open episodes and
-// writes the report.
-constexpr seconds kFusionCenterStopGrace{10};
-// After the coordinator ends the run, the fusion center writes its report and exits; the
-// sensor agents leave on the same RUN_SHUTDOWN.
-constexpr seconds kFusionCenterExitLimit{15};
-constexpr seconds kSensorAgentExitLimit{5};
 // How long a new launch listens for a live run of its id before starting anything: discovery
 // on loopback takes a few milliseconds; this is the price of every launch, so it stays short.
 constexpr milliseconds kLiveRunProbe{500};
 constexpr std::size_t kLogLinesShown = 15;
-// A coordinator or fusion center killed more often than this in one run is not restarted again.
-constexpr int kMaxRestarts = 3;
 constexpr int kMaxSensorsPerProcess = 1'000'000;
 // --sensors-per-process auto: one sensor per process up to this many sensor processes, else
 // the fewest equal blocks that stay within it. Start-up and the idle load grow with the number
@@ -319,177 +307,33 @@ class CurrentRunRecord {
   std::string run_id_;
 };
 
-// Watches the run to its end: the coordinator, then the fusion center (which writes the
-// report), then the sensor agents. Sensor agents still running after their limit are stopped
-// by the caller; that alone does not fail a run whose report is written.
-void superviseRun(RunSupervisor& supervisor, const LaunchPlan& plan) {
-  if (!supervisor.awaitExit(kCoordinator, RunSupervisor::kNoLimit)) return;
-  if (!supervisor.awaitExit(kFusionCenter, kFusionCenterExitLimit)) {
-    supervisor.fail({RunFailureKind::ChildFailed,
-                     kFusionCenter,
-                     "did not exit within " + std::to_string(kFusionCenterExitLimit.count()) +
-                         " s after the coordinator ended the run",
-                     0,
-                     {}});
-    return;
-  }
-  const auto until = RunSupervisor::Clock::now() + kSensorAgentExitLimit;
+// What the supervisor core needs to know of this launch: the sensor agents and their sensors,
+// the failure policy, the scenario's scripted crashes, the time limit.
+SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& options,
+                                  const Scenario& scenario) {
+  SupervisorConfig config;
   for (const std::string& name : plan.sensor_agents) {
-    const auto left =
-        std::max(milliseconds(0),
-                 std::chrono::duration_cast<milliseconds>(until - RunSupervisor::Clock::now()));
-    if (!supervisor.awaitExit(name, left) && supervisor.failure()) return;
+    config.sensor_agents.emplace_back(name, plan.sensors_of.at(name));
   }
-}
-
-// Stops what still runs: the fusion center last, so that it can write its report.
-void stopRun(ProcessGroup& group) {
-  std::vector<std::string> others = group.runningNames();
-  std::erase(others, std::string(kFusionCenter));
-  (void)group.stop(others, kStopGrace);
-  (void)group.stop({kFusionCenter}, kFusionCenterStopGrace);
-}
-
-std::vector<int> sensorsOf(const LaunchPlan& plan, const std::string& process) {
-  const auto it = plan.sensors_of.find(process);
-  return it == plan.sensors_of.end() ? std::vector<int>{} : it->second;
-}
-
-// How the run answers a child that ended badly while it runs (issue 11, "process deaths are
-// survived"): the sensors of a sensor agent that died once the run was under way (an episode
-// announced) are reported to the coordinator, which applies the --on-sensor-failure policy; a killed fusion center or coordinator is started again with
-// --resume (at most kMaxRestarts times each). Anything else fails the run.
-class FaultResponse {
- public:
-  FaultResponse(ProcessGroup& group, const LaunchPlan& plan, const Scenario& scenario,
-                FailureNotices& notices)
-      : group_(group), plan_(plan), scenario_(scenario), notices_(notices) {}
-
-  bool operator()(const ChildExit& exit, const RunPosition& at) {  // true: the run goes on
-    if (exit.name == kCoordinator) return restart(exit, at);
-    if (!group_.isRunning(kCoordinator)) return false;  // the run is over or ending
-    if (exit.name == kFusionCenter) return restart(exit, at);
-    const std::vector<int> sensors = sensorsOf(plan_, exit.name);
-    // Before the first episode a sensor agent that ends is a launch that failed (a bad program,
-    // a bad option): its log is shown and the run stops.
-    if (sensors.empty() || !at.episode) return false;
-    std::fprintf(stderr, "sensornet: %s (sensor%s %s) %s; the coordinator applies the failure "
-                 "policy\n", exit.name.c_str(), sensors.size() == 1 ? "" : "s",
-                 listed(sensors).c_str(), exit.describe().c_str());
-    notices_.send(exit.name, sensors, exit.describe());
-    return true;
+  config.on_sensor_failure = *lookUpWord<emulator::SensorFailurePolicy>(options.on_sensor_failure);
+  for (const CrashFault& crash : scenario.faults) config.scripted_crash_sensors.push_back(crash.sensor);
+  if (options.timeout_s > 0.0) {
+    config.timeout = std::chrono::duration_cast<milliseconds>(
+        std::chrono::duration<double>(options.timeout_s));
   }
-
-  [[nodiscard]] bool scripted(const ChildExit& exit) const {
-    const std::vector<int> sensors = sensorsOf(plan_, exit.name);
-    return exit.signal == SIGKILL &&
-           std::any_of(scenario_.faults.begin(), scenario_.faults.end(), [&](const CrashFault& f) {
-             return std::find(sensors.begin(), sensors.end(), f.sensor) != sensors.end();
-           });
-  }
-  [[nodiscard]] std::string restartOf(pid_t dead) const {
-    const auto it = restarted_.find(dead);
-    return it == restarted_.end() ? std::string() : it->second;
-  }
-
- private:
-  static std::string listed(const std::vector<int>& sensors) {
-    std::string text;
-    for (const int j : sensors) text += (text.empty() ? "" : ", ") + std::to_string(j);
-    return text;
-  }
-
-  // Only a killed process is restarted: one that exited on its own decided to end the run.
-  bool restart(const ChildExit& exit, const RunPosition&) {
-    if (exit.signal == 0 || restarts_[exit.name] >= kMaxRestarts) return false;
-    const int attempt = ++restarts_[exit.name];
-    const auto spec = std::find_if(plan_.children.begin(), plan_.children.end(),
-                                   [&](const ChildSpec& c) { return c.name == exit.name; });
-    ChildSpec again = *spec;
-    again.argv.emplace_back("--resume");
-    again.log_path = plan_.log_dir / (exit.name + ".restart-" + std::to_string(attempt) + ".log");
-    try {
-      const pid_t pid = group_.start(again);
-      restarted_[exit.pid] = "restarted with --resume (pid " + std::to_string(pid) + ", log " +
-                             again.log_path.filename().string() + ")";
-      std::fprintf(stderr, "sensornet: %s %s; %s\n", exit.name.c_str(), exit.describe().c_str(),
-                   restarted_[exit.pid].c_str());
-      return true;
-    } catch (const std::exception& e) {
-      spdlog::error("cannot restart {}: {}", exit.name, e.what());
-      return false;
-    }
-  }
-
-  ProcessGroup& group_;
-  const LaunchPlan& plan_;
-  const Scenario& scenario_;
-  FailureNotices& notices_;
-  std::map<std::string, int> restarts_;
-  std::map<pid_t, std::string> restarted_;  // dead pid -> how it was restarted
-};
-
-// The faults the launcher saw: every child that ended badly on its own (and what the run did
-// about it), and why it stopped the run if nothing of that sort did.
-std::vector<Fault> launcherFaults(const RunSupervisor& supervisor, const LaunchPlan& plan,
-                                  double timeout_s, const FaultResponse& response,
-                                  const FailureNotices& notices) {
-  std::vector<Fault> faults;
-  for (const ChildFault& f : supervisor.childFaults()) {
-    Fault fault{f.exit.signal != 0 ? "process_killed" : "process_failed", f.exit.name,
-                sensorsOf(plan, f.exit.name), f.at, f.exit.describe()};
-    fault.survived = f.survived;
-    if (response.scripted(f.exit)) {
-      fault.kind = "crash";
-      fault.detail = "scripted crash (the scenario's faults:), " + fault.detail;
-    }
-    if (const std::string how = response.restartOf(f.exit.pid); !how.empty()) {
-      fault.detail += "; " + how;
-    } else if (f.survived) {
-      if (const FailureReply* reply = notices.replyTo(f.exit.name)) {
-        fault.detail += "; " + reply->reason;
-        if (reply->schedule_version != 0) fault.schedule_version = reply->schedule_version;
-      } else {
-        fault.detail += "; the coordinator did not answer the failure notice";
-      }
-    }
-    faults.push_back(std::move(fault));
-  }
-  if (const auto& failure = supervisor.failure()) {
-    switch (failure->kind) {
-      case RunFailureKind::Interrupted:
-        faults.push_back({"interrupted", kLauncher, {}, failure->at, failure->reason});
-        break;
-      case RunFailureKind::TimedOut:
-        faults.push_back(
-            {"timeout",
-             kLauncher,
-             {},
-             failure->at,
-             "the run did not end within --timeout " + formatNumber(timeout_s) + " s"});
-        break;
-      case RunFailureKind::ChildFailed:
-        if (std::none_of(supervisor.childFaults().begin(), supervisor.childFaults().end(),
-                         [](const ChildFault& f) { return !f.survived; })) {
-          faults.push_back({"process_hung", failure->child, sensorsOf(plan, failure->child),
-                            failure->at, failure->reason});
-        }
-        break;
-    }
-  }
-  return faults;
+  return config;
 }
 
 // What went wrong, on standard error: the cause, what was stopped, the failing child's log.
 void explainFailure(const RunFailure& failure, const LaunchPlan& plan, const ProcessGroup& group,
-                    const std::vector<std::string>& still_running) {
+                    const std::vector<std::string>& stopped) {
   std::string what = failure.reason;
   if (!failure.child.empty()) what = failure.child + " " + what;
   const char* verb = failure.kind == RunFailureKind::Interrupted ? "stopped" : "failed";
   std::fprintf(stderr, "sensornet: run %s %s: %s\n", plan.run_id.c_str(), verb, what.c_str());
-  if (!still_running.empty()) {
+  if (!stopped.empty()) {
     std::string names;
-    for (const std::string& name : still_running) names += (names.empty() ? "" : ", ") + name;
+    for (const std::string& name : stopped) names += (names.empty() ? "" : ", ") + name;
     std::fprintf(stderr, "sensornet: stopped %s\n", names.c_str());
   }
   if (failure.kind == RunFailureKind::ChildFailed) {
@@ -540,22 +384,11 @@ int runLaunch(LaunchOptions options) {
     const pid_t pid = group.start(child);
     spdlog::info("started {} (pid {}), log {}", child.name, pid, child.log_path.string());
   }
-  std::optional<RunSupervisor::Clock::time_point> deadline;
-  if (options.timeout_s > 0.0) {
-    deadline =
-        RunSupervisor::Clock::now() + std::chrono::duration_cast<RunSupervisor::Clock::duration>(
-                                          std::chrono::duration<double>(options.timeout_s));
-  }
-  RunSupervisor supervisor(group, progress, deadline);
   FailureNotices notices(progress.participant(), plan.run_id);
-  FaultResponse response(group, plan, scenario, notices);
-  supervisor.respondWith(std::ref(response));
-  supervisor.onEveryStep([&notices] { notices.poll(); });
-  superviseRun(supervisor, plan);
-  if (const auto& failure = supervisor.failure()) {
-    const std::vector<std::string> still_running = group.runningNames();
-    stopRun(group);
-    explainFailure(*failure, plan, group, still_running);
+  Supervisor core(supervisorConfig(plan, options, scenario), std::chrono::steady_clock::now());
+  superviseRun(core, {group, progress, notices, plan.children, plan.log_dir});
+  if (const auto& failure = core.failure()) {
+    explainFailure(*failure, plan, group, core.stoppedChildren());
   }
   for (const ChildExit& lingering : group.stopAll(kStopGrace)) {
     spdlog::warn("{} had not left after the run ended; stopped it ({})", lingering.name,
@@ -566,8 +399,8 @@ int runLaunch(LaunchOptions options) {
       plan.report_path,
       scenario.sensorCount(),
       options.episodes,
-      launcherFaults(supervisor, plan, options.timeout_s, response, notices),
-      supervisor.failure() && supervisor.failure()->kind == RunFailureKind::Interrupted,
+      core.faults(),
+      core.interrupted(),
       options.require.empty() ? std::vector<emulator::Requirement>{}
                               : emulator::parseRequirements(options.require)};
   const RunOutcome outcome = settleRun(end);
@@ -678,7 +511,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "of the horizon among the survivors (the dead sensors get rate zero from the "
                   "switch on) and the run ends degraded; continue = keep the schedule, so the "
                   "bracket shows the damage (degraded); stop = end the run as failed")
-      ->check(CLI::IsMember({"replan", "continue", "stop"}))
+      ->check(CLI::IsMember(wordTexts<emulator::SensorFailurePolicy>()))
       ->capture_default_str();
   cmd->add_option("--network-aware", options->network_aware,
                   "plan for the rates the scenario's emulated network delivers (loss thins them, "

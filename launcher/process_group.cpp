@@ -76,13 +76,6 @@ void signalChild(pid_t pid, int signal) {
 
 }  // namespace
 
-std::string ChildExit::describe() const {
-  if (signal != 0) {
-    return "killed by signal " + std::to_string(signal) + " (" + ::strsignal(signal) + ")";
-  }
-  return "exited with status " + std::to_string(exit_code);
-}
-
 ProcessGroup::~ProcessGroup() { (void)stopAll(std::chrono::seconds(3)); }
 
 pid_t ProcessGroup::start(const ChildSpec& spec) {

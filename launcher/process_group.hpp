@@ -23,23 +23,14 @@
 #include <string>
 #include <vector>
 
+#include "sensornet/launcher/supervisor.hpp"  // ChildExit
+
 namespace sensornet::launcher {
 
 struct ChildSpec {
   std::string name;                // e.g. "coordinator", "sensor_agent-0-2"
   std::vector<std::string> argv;   // argv[0] is the program's path
   std::filesystem::path log_path;  // standard output and error, truncated at start
-};
-
-// How a child ended.
-struct ChildExit {
-  std::string name;
-  pid_t pid = 0;
-  int exit_code = 0;  // when it exited
-  int signal = 0;     // when a signal killed it (then exit_code is 128 + signal)
-  [[nodiscard]] bool succeeded() const noexcept { return signal == 0 && exit_code == 0; }
-  // "exited with status 3", "killed by signal 9 (Killed)".
-  [[nodiscard]] std::string describe() const;
 };
 
 class ProcessGroup {

@@ -28,19 +28,12 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
+#include "sensornet/launcher/fault.hpp"  // RunPosition
 
 namespace sensornet::launcher {
 
 // The progress line of one episode's report.
 [[nodiscard]] std::string formatProgress(const sensornet_Report& report, int episodes_planned);
-
-// Where a run was at some wall time: the episode announced last (nullopt before the first or
-// after shutdown) and the emulated time in it (nullopt outside [0, T]: announced but not begun,
-// or past its end).
-struct RunPosition {
-  std::optional<std::uint32_t> episode;
-  std::optional<double> emulated_time_s;
-};
 
 class ProgressWatcher {
  public:

@@ -10,12 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "command_client.hpp"
 #include "run_files.hpp"
 #include "sensornet/core/planner.hpp"
-#include "sensornet/dds/topics.hpp"
-#include "sensornet/dds/waitset.hpp"
-#include "sensornet/dds/wire.hpp"
-#include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/io/scenario_file.hpp"
@@ -24,8 +21,6 @@ namespace sensornet::launcher {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr dds_attach_t kReplies = 1;
-constexpr std::chrono::milliseconds kWaitStep{100};
 
 struct ReplanOptions {
   emulator::RunOptions run;
@@ -37,45 +32,8 @@ struct ReplanOptions {
   bool json = false;
 };
 
-// The request as it goes on the wire, with the memory its sample borrows.
-struct Request {
-  std::string run_id;
-  std::uint64_t command_id = 0;
-  sensornet_CommandKind kind = sensornet_COMMAND_REPLAN;
-  std::string surrogate;
-  std::vector<std::uint32_t> sensor_ids;
-  std::vector<double> budget;
-  std::string schedule_json;
-  std::string issuer;
-  std::int64_t issued_wall_time_ns = 0;
-
-  [[nodiscard]] sensornet_Command sample() const {
-    sensornet_Command command{};
-    command.run_id = dds::borrowString(run_id);
-    command.command_id = command_id;
-    command.kind = kind;
-    command.surrogate = dds::borrowString(surrogate);
-    dds::borrowSequence(command.sensor_ids, sensor_ids);
-    dds::borrowSequence(command.budget, budget);
-    command.schedule_json = dds::borrowString(schedule_json);
-    command.issuer = dds::borrowString(issuer);
-    command.issued_wall_time_ns = issued_wall_time_ns;
-    return command;
-  }
-};
-
-struct Reply {
-  bool accepted = false;
-  std::uint32_t schedule_version = 0;
-  std::string reason;
-};
-
-Request buildRequest(const ReplanOptions& options, const std::string& run_id) {
-  Request request;
-  request.run_id = run_id;
-  request.issued_wall_time_ns = emulator::wallNowNs();
-  request.command_id = static_cast<std::uint64_t>(request.issued_wall_time_ns);
-  request.issuer = "sensornet replan " + std::to_string(::getpid());
+CommandRequest buildRequest(const ReplanOptions& options) {
+  CommandRequest request;
   if (!options.surrogate.empty()) {
     request.kind = sensornet_COMMAND_REPLAN;
     request.surrogate = options.surrogate;
@@ -94,71 +52,52 @@ Request buildRequest(const ReplanOptions& options, const std::string& run_id) {
   return request;
 }
 
-// Sends the command once the coordinator's reader is there, then waits for its answer; nullopt
-// when no answer came before `deadline` (`why` says what was missing).
-std::optional<Reply> exchange(const dds::DomainConfig& config, const Request& request,
-                              Clock::time_point deadline, std::string& why) {
+// Sends the command once the coordinator's reader is there (again until it answers: a
+// coordinator restarted meanwhile answers the repeat), then waits for its answer; nullopt when
+// no answer came before `deadline` (`why` says what was missing).
+std::optional<CommandReply> exchange(const dds::DomainConfig& config, const std::string& run_id,
+                                     CommandRequest request, Clock::time_point deadline,
+                                     std::uint64_t& command_id, std::string& why) {
   dds::Domain domain(config);
   dds::Participant participant(domain);
-  dds::Topic<sensornet_Command> command_topic(participant);
-  dds::Topic<sensornet_CommandReply> reply_topic(participant);
-  dds::Reader<sensornet_CommandReply> replies(participant, reply_topic);
-  dds::Writer<sensornet_Command> commands(participant, command_topic);
-
-  if (!commands.waitForReaders(1, deadline - Clock::now())) {
-    why = "no coordinator of run " + request.run_id + " is listening";
+  CommandClient client(participant, run_id, "sensornet replan " + std::to_string(::getpid()));
+  if (!client.waitForCoordinator(deadline - Clock::now())) {
+    why = "no coordinator of run " + run_id + " is listening";
     return std::nullopt;
   }
-  const sensornet_Command sample = request.sample();
-  while (commands.write(sample) == dds::WriteResult::TimedOut) {
-    if (Clock::now() >= deadline) {
-      why = "the command could not be sent (the coordinator does not acknowledge)";
-      return std::nullopt;
-    }
-  }
-  dds::ReadCondition has_reply(replies);
-  dds::WaitSet waitset(participant);
-  waitset.attach(has_reply, kReplies);
-  while (Clock::now() < deadline) {
-    (void)waitset.wait(kWaitStep);
-    for (const auto& received : replies.take().samples) {
-      const sensornet_CommandReply& reply = *received.sample;
-      if (reply.command_id != request.command_id ||
-          dds::viewString(reply.run_id) != request.run_id) {
-        continue;
-      }
-      return Reply{reply.accepted, reply.schedule_version,
-                   std::string(dds::viewString(reply.reason))};
-    }
-  }
-  why = "the coordinator of run " + request.run_id + " did not answer";
-  return std::nullopt;
+  command_id = client.send(std::move(request));
+  std::optional<CommandReply> reply = client.await(command_id, deadline);
+  if (!reply) why = "the coordinator of run " + run_id + " did not answer";
+  return reply;
 }
 
 int runReplan(ReplanOptions options) {
   options.run.run_id = chooseRunId(options.run.run_id, options.run.domain_id);
   const dds::DomainConfig config = options.run.domainConfig();
-  const Request request = buildRequest(options, options.run.run_id);
+  const std::string& run_id = options.run.run_id;
+  CommandRequest request = buildRequest(options);
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(options.timeout_s));
   std::string why;
-  const std::optional<Reply> reply = exchange(config, request, deadline, why);
+  std::uint64_t command_id = 0;
+  const std::optional<CommandReply> reply =
+      exchange(config, run_id, std::move(request), deadline, command_id, why);
   if (!reply) {
     std::fprintf(stderr,
                  "sensornet replan: no answer within %g s: %s (is the run still going? see "
                  "`sensornet status --run-id %s`)\n",
-                 options.timeout_s, why.c_str(), request.run_id.c_str());
+                 options.timeout_s, why.c_str(), run_id.c_str());
     if (options.json) {
-      printJson({{"run_id", request.run_id},
-                 {"command_id", request.command_id},
+      printJson({{"run_id", run_id},
+                 {"command_id", command_id},
                  {"answered", false},
                  {"reason", why}});
     }
     return kExitFailure;
   }
   if (options.json) {
-    printJson({{"run_id", request.run_id},
-               {"command_id", request.command_id},
+    printJson({{"run_id", run_id},
+               {"command_id", command_id},
                {"answered", true},
                {"accepted", reply->accepted},
                {"schedule_version", reply->schedule_version},

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <map>
 
 #include "output_file.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/command_line.hpp"
 
@@ -13,13 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-constexpr const char* kFusionCenter = "fusion_center";
-
-bool isKnownStatus(const std::string& status) {
-  return status == "completed" || status == "degraded" || status == "failed" ||
-         status == "interrupted";
-}
 
 // The fusion center's report of this run, or nullopt with what is wrong ("wrote no report at
 // ...", completing "fusion_center ..."). With an episode log (`logged`) the report is read
@@ -132,6 +127,28 @@ std::string faultLine(const json& fault) {
   return line;
 }
 
+// " (and 12 consequences: 11 stall, 1 run_aborted)" after the line of a cause, else "".
+std::string consequencesOf(const json& cause, const json& faults) {
+  std::map<std::string, int> kinds;
+  int total = 0;
+  for (const json& f : faults) {
+    const json by = field(f, emulator::kCausedByField);
+    if (by.is_object() && by.value("kind", json()) == field(cause, "kind") &&
+        by.value("process", json()) == field(cause, "process")) {
+      ++kinds[f.value("kind", std::string("fault"))];
+      ++total;
+    }
+  }
+  if (total == 0) return "";
+  std::string text = " (and " + std::to_string(total) + " consequence" + (total == 1 ? "" : "s");
+  std::string sep = ": ";
+  for (const auto& [kind, n] : kinds) {
+    text += sep + std::to_string(n) + " " + kind;
+    sep = ", ";
+  }
+  return text + ")";
+}
+
 std::uint64_t incompleteEpisodes(const json& report, const json& summary) {
   if (const json n = field(summary, "episodes_incomplete"); n.is_number_unsigned()) {
     return n.get<std::uint64_t>();
@@ -162,79 +179,29 @@ std::string arrivalsLine(const json& arrivals) {
 
 }  // namespace
 
-int exitCodeOf(const std::string& status) {
-  if (status == "completed") return kExitOk;
-  if (status == "degraded") return kExitDegraded;
-  return kExitFailure;
-}
-
-json Fault::toJson() const {
-  json entry = {{"kind", kind},
-                {"process", process},
-                {"sensor", sensors.size() == 1 ? json(sensors.front()) : json()},
-                {"episode", at.episode ? json(*at.episode) : json()},
-                {"emulated_time_s", at.emulated_time_s ? json(*at.emulated_time_s) : json()},
-                {"detail", detail}};
-  if (!sensors.empty()) entry["sensors"] = sensors;
-  entry["survived"] = survived;
-  if (schedule_version) entry["schedule_version"] = *schedule_version;
-  return entry;
-}
-
 RunOutcome settleRun(const RunEnd& end) {
   RunOutcome outcome;
-  std::vector<Fault> faults = end.faults;
-  std::string problem;
+  ReportSeen seen;
   const fs::path log = emulator::episodeLogPath(end.report_path);
   std::error_code missing;
   const bool logged = fs::is_regular_file(log, missing);
-  std::optional<json> report = readReport(end.report_path, end.run_id, logged, problem);
+  std::optional<json> report = readReport(end.report_path, end.run_id, logged, seen.problem);
+  seen.readable = report.has_value();
   if (!report) {
-    const bool fusion_center_named = std::any_of(
-        faults.begin(), faults.end(), [](const Fault& f) { return f.process == kFusionCenter; });
-    if (!fusion_center_named) {
-      faults.push_back({"report_missing", kFusionCenter, {}, {}, problem});
-    }
     report = rebuildReport(end, logged);
     outcome.rebuilt = true;
   }
-  const std::string reported = report->value("status", std::string());
-  if (end.interrupted) {
-    outcome.status = "interrupted";
-  } else if (std::any_of(faults.begin(), faults.end(),
-                         [](const Fault& f) { return !f.survived; })) {
-    outcome.status = "failed";
-  } else if (!faults.empty() && reported == "completed") {
-    outcome.status = "degraded";  // the run survived what the launcher saw
-  } else if (!isKnownStatus(reported)) {
-    faults.push_back(
-        {"report_invalid", kFusionCenter, {}, {}, "the report's status is '" + reported + "'"});
-    outcome.status = "failed";
-  } else {
-    outcome.status = reported;
-  }
-  if (outcome.status == "completed" &&
-      finishedEpisodes(*report) < static_cast<std::uint64_t>(end.episodes_planned)) {
-    faults.push_back({std::string(wordOf(emulator::FaultKind::MissingEpisodes)),
-                      kFusionCenter,
-                      {},
-                      {},
-                      "reports " + std::to_string(finishedEpisodes(*report)) + " of " +
-                          std::to_string(end.episodes_planned) + " episodes as finished"});
-    outcome.status = "failed";
-  }
-  outcome.exit_code = exitCodeOf(outcome.status);
-
-  outcome.amended = outcome.rebuilt || outcome.status != reported || !faults.empty();
+  seen.status = report->value("status", std::string());
+  seen.finished_episodes = finishedEpisodes(*report);
+  const Verdict verdict = decideVerdict(end.faults, end.interrupted, seen, end.episodes_planned);
+  outcome.status = verdict.status;
+  outcome.exit_code = exitCodeOf(verdict.status);
+  const std::string status(wordOf(verdict.status));
+  outcome.amended = outcome.rebuilt || status != seen.status || !verdict.faults.empty();
   if (outcome.amended) {
-    (*report)["status"] = outcome.status;
-    // The launcher's causes first: what the fusion center saw of them follows.
-    json listed = json::array();
-    for (const Fault& fault : faults) listed.push_back(fault.toJson());
-    if (const json seen = field(*report, "faults"); seen.is_array()) {
-      listed.insert(listed.end(), seen.begin(), seen.end());
-    }
-    (*report)["faults"] = std::move(listed);
+    (*report)["status"] = status;
+    // The launcher's causes first: what the other processes saw of them follows, marked.
+    (*report)["faults"] = faultList(verdict.faults, field(*report, "faults"));
   }
   if (!end.requirements.empty()) {  // against the settled report: its status and faults
     outcome.checks = emulator::checkRequirements(end.requirements, *report);
@@ -264,9 +231,13 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   const json& report = outcome.report;
   const json summary = field(report, "summary");
   const json faults = field(report, "faults").is_array() ? report["faults"] : json::array();
+  const std::size_t causes = emulator::causeCount(faults);
   std::printf("run %s: %s (%zu fault%s)\n", report.value("run_id", std::string()).c_str(),
-              outcome.status.c_str(), faults.size(), faults.size() == 1 ? "" : "s");
-  for (const json& fault : faults) std::printf("  fault: %s\n", faultLine(fault).c_str());
+              std::string(wordOf(outcome.status)).c_str(), causes, causes == 1 ? "" : "s");
+  for (const json& fault : faults) {
+    if (emulator::isConsequence(fault)) continue;
+    std::printf("  fault: %s%s\n", faultLine(fault).c_str(), consequencesOf(fault, faults).c_str());
+  }
 
   json complete = field(summary, "episodes_complete");
   if (!complete.is_number()) complete = field(summary, "episodes");
@@ -314,7 +285,7 @@ void printOutcomeJson(const RunOutcome& outcome, const fs::path& report_path) {
   json line = field(outcome.report, "summary");
   if (!line.is_object()) line = json::object();
   line["run_id"] = field(outcome.report, "run_id");
-  line["status"] = outcome.status;
+  line["status"] = std::string(wordOf(outcome.status));
   line["faults"] =
       field(outcome.report, "faults").is_array() ? outcome.report["faults"] : json::array();
   line["episodes"] = field(outcome.report, "episodes");

@@ -1,6 +1,10 @@
 #include "run_supervisor.hpp"
 
-#include <csignal>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
 
 #include "interrupts.hpp"
 #include "sensornet/emulator/messages.hpp"
@@ -8,64 +12,86 @@
 namespace sensornet::launcher {
 namespace {
 
+using Clock = std::chrono::steady_clock;
 constexpr std::chrono::milliseconds kWatchStep{50};
+constexpr std::chrono::seconds kStopGrace{3};
+// Stopped last and given longer: on SIGTERM the fusion center closes its open episodes and
+// writes the report.
+constexpr std::chrono::seconds kFusionCenterStopGrace{10};
 
-std::string signalName(int signal) {
-  switch (signal) {
-    case SIGINT:
-      return "SIGINT";
-    case SIGTERM:
-      return "SIGTERM";
-    case SIGHUP:
-      return "SIGHUP";
-    default:
-      return "signal " + std::to_string(signal);
+class Wiring {
+ public:
+  Wiring(Supervisor& core, RunHandles run) : core_(core), run_(std::move(run)) {}
+
+  void step() {
+    run_.progress.poll(kWatchStep);
+    for (const auto& [process, reply] : run_.notices.poll()) core_.onReply(process, reply);
+    const RunPosition at = run_.progress.positionAt(emulator::wallNowNs());
+    for (const ChildExit& exit : run_.group.reap()) {
+      carryOut(core_.onChildExit(exit, at, Clock::now()), at);
+    }
+    if (const int signal = pendingInterrupt()) carryOut(core_.onSignal(signal, at), at);
+    carryOut(core_.onTick(Clock::now(), at), at);
   }
-}
+
+ private:
+  void carryOut(const std::vector<Action>& actions, const RunPosition& at) {
+    for (const Action& action : actions) {
+      if (const auto* restart = std::get_if<RestartChild>(&action)) {
+        carryOut(this->restart(*restart), at);
+      } else if (const auto* notice = std::get_if<NotifySensorsFailed>(&action)) {
+        run_.notices.send(notice->process, notice->sensors, notice->detail);
+      } else if (std::holds_alternative<StopRun>(action)) {
+        stop(at);
+      } else if (const auto* line = std::get_if<LogLine>(&action)) {
+        if (line->error) {
+          spdlog::error("{}", line->text);
+        } else {
+          std::fprintf(stderr, "sensornet: %s\n", line->text.c_str());
+        }
+      }
+    }
+  }
+
+  std::vector<Action> restart(const RestartChild& restart) {
+    const auto spec = std::find_if(run_.children.begin(), run_.children.end(),
+                                   [&](const ChildSpec& c) { return c.name == restart.name; });
+    if (spec == run_.children.end()) return core_.onRestartFailed(restart.name, "not in the plan");
+    ChildSpec again = *spec;
+    again.argv.emplace_back("--resume");
+    again.log_path =
+        run_.log_dir / (restart.name + ".restart-" + std::to_string(restart.attempt) + ".log");
+    try {
+      const pid_t pid = run_.group.start(again);
+      return core_.onRestarted(restart.name, pid, again.log_path.filename().string());
+    } catch (const std::exception& e) {
+      return core_.onRestartFailed(restart.name, e.what());
+    }
+  }
+
+  // The fusion center last, so that it can write its report; how each child ended goes back to
+  // the core, which counts none of it as a fault.
+  void stop(const RunPosition& at) {
+    std::vector<std::string> others = run_.group.runningNames();
+    std::erase(others, std::string(kFusionCenter));
+    std::vector<ChildExit> ended = run_.group.stop(others, kStopGrace);
+    for (ChildExit& e : run_.group.stop({kFusionCenter}, kFusionCenterStopGrace)) {
+      ended.push_back(std::move(e));
+    }
+    for (ChildExit& e : run_.group.reap()) ended.push_back(std::move(e));
+    for (const ChildExit& e : ended) carryOut(core_.onChildExit(e, at, Clock::now()), at);
+    core_.onStopped();
+  }
+
+  Supervisor& core_;
+  RunHandles run_;
+};
 
 }  // namespace
 
-RunSupervisor::RunSupervisor(ProcessGroup& group, ProgressWatcher& progress,
-                             std::optional<Clock::time_point> deadline)
-    : group_(group), progress_(progress), deadline_(deadline) {}
-
-bool RunSupervisor::awaitExit(const std::string& name, std::chrono::milliseconds limit) {
-  const auto until = Clock::now() + limit;
-  for (;;) {
-    if (failure_) return false;
-    if (ended_.contains(name)) return true;
-    if (Clock::now() >= until) return false;
-    step();
-  }
-}
-
-void RunSupervisor::fail(RunFailure failure) {
-  if (failure_) return;
-  failure.at = progress_.positionAt(emulator::wallNowNs());
-  failure_ = std::move(failure);
-}
-
-void RunSupervisor::step() {
-  progress_.poll(kWatchStep);
-  if (every_step_) every_step_();
-  for (const ChildExit& exit : group_.reap()) {
-    if (exit.succeeded()) {
-      ended_.insert(exit.name);
-      continue;
-    }
-    const RunPosition at = progress_.positionAt(emulator::wallNowNs());
-    const bool survived = !failure_ && response_ && response_(exit, at);
-    child_faults_.push_back({exit, at, survived});
-    // A restarted child runs again under its name: the run still waits for it to end.
-    if (!group_.isRunning(exit.name)) ended_.insert(exit.name);
-    if (!survived) fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0, {}});
-  }
-  if (const int signal = pendingInterrupt()) {
-    fail({RunFailureKind::Interrupted, "", "interrupted by " + signalName(signal), signal, {}});
-  }
-  if (deadline_ && Clock::now() >= *deadline_) {
-    fail({RunFailureKind::TimedOut, "", "the run did not end within --timeout", 0, {}});
-  }
+void superviseRun(Supervisor& core, RunHandles run) {
+  Wiring wiring(core, std::move(run));
+  while (!core.done()) wiring.step();
 }
 
 }  // namespace sensornet::launcher

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/emulator/svg_plot.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -593,6 +594,14 @@ std::string tracePlot(const json& report) {
 
 // ---- 6. faults --------------------------------------------------------------------------------
 
+// "consequence of interrupted in sensornet: " for an entry that followed from another.
+std::string consequenceNote(const json& fault) {
+  const json cause = fault.value(kCausedByField, json());
+  if (!cause.is_object()) return "";
+  return escapeXml("consequence of " + cause.value("kind", std::string("?")) + " in " +
+                   cause.value("process", std::string("?")) + ": ");
+}
+
 std::string faultPlot(const json& report) {
   const json faults = report.value("faults", json::array());
   if (!faults.is_array() || faults.empty()) return "";
@@ -637,7 +646,7 @@ std::string faultPlot(const json& report) {
              "</td><td>" + cell(f.value("sensor", json())) + "</td><td>" +
              cell(f.value("episode", json())) + "</td><td>" +
              cell(f.value("emulated_time_s", json())) + "</td><td>" +
-             cell(f.value("detail", json())) + "</td></tr>\n";
+             consequenceNote(f) + cell(f.value("detail", json())) + "</td></tr>\n";
   }
   plot.legend({{"fault (a fault of no episode sits at the run's end)", Style::outlined(kAccent, kInk)}});
   return figure("faults", "Faults", plot.svg("plot-faults", "Faults") + table + "</table>\n",
@@ -682,7 +691,14 @@ std::string summaryTable(const json& report) {
   t += row("sent / received / lost", formatTick(number(s, "sent")) + " / " +
                                          formatTick(number(s, "received")) + " / " +
                                          formatTick(number(s, "lost")));
-  t += row("faults", std::to_string(report.value("faults", json::array()).size()));
+  // Causes: an entry that followed from another (caused_by) is counted with it.
+  const json faults = report.value("faults", json::array());
+  const std::size_t causes = causeCount(faults);
+  const std::size_t listed = faults.is_array() ? faults.size() : 0;
+  t += row("faults", std::to_string(causes) +
+                         (listed > causes ? " (and " + std::to_string(listed - causes) +
+                                                " consequences)"
+                                          : std::string()));
   return t + "</table>\n";
 }
 

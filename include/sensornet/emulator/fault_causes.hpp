@@ -1,0 +1,54 @@
+#pragma once
+// Causes and consequences in a report's `faults`: an entry that followed from another (the run's
+// one cause: a stop, a death under --on-sensor-failure stop) carries `caused_by: {kind,
+// process}` of that cause and is counted with it, never as a fault of its own (README, "One
+// cause, one fault"). The launcher marks them (sensornet/launcher/fault.hpp: faultList); every
+// count of faults (`--require no-faults`, the report page, the launcher's summary) counts causes:
+//
+//   causeCount(report["faults"]);              // 1 for an interrupt and its 13 consequences
+//   isConsequence(fault);                      // fault.contains("caused_by")
+//
+// And the word of `--on-sensor-failure`, which decides whether a death ends the run.
+
+#include <array>
+#include <cstddef>
+#include <nlohmann/json.hpp>
+
+#include "sensornet/core/words.hpp"
+
+namespace sensornet::emulator {
+
+inline constexpr const char* kCausedByField = "caused_by";
+
+[[nodiscard]] inline bool isConsequence(const nlohmann::json& fault) {
+  return fault.is_object() && fault.contains(kCausedByField);
+}
+
+// The entries of `faults` that are not another's consequence.
+[[nodiscard]] inline std::size_t causeCount(const nlohmann::json& faults) {
+  std::size_t causes = 0;
+  if (!faults.is_array()) return causes;
+  for (const nlohmann::json& fault : faults) causes += isConsequence(fault) ? 0 : 1;
+  return causes;
+}
+
+// What a run does when a sensor agent dies (`--on-sensor-failure`): the coordinator applies it;
+// the launcher needs it to know whether the death ends the run.
+enum class SensorFailurePolicy {
+  Replan,    // re-plan the rest of the horizon among the survivors: degraded
+  Continue,  // keep the schedule, the bracket shows the damage: degraded
+  Stop,      // end the run: failed
+};
+
+}  // namespace sensornet::emulator
+
+namespace sensornet {
+
+template <>
+struct Words<emulator::SensorFailurePolicy> {
+  using P = emulator::SensorFailurePolicy;
+  static constexpr std::array<WordOf<P>, 3> kTable{
+      {{P::Replan, "replan"}, {P::Continue, "continue"}, {P::Stop, "stop"}}};
+};
+
+}  // namespace sensornet

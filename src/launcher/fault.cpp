@@ -1,0 +1,78 @@
+#include "sensornet/launcher/fault.hpp"
+
+#include <algorithm>
+
+namespace sensornet::launcher {
+namespace {
+
+using emulator::FaultKind;
+using nlohmann::json;
+
+// The reported entry is of an episode still open at the cause, or later, or of no episode (the
+// run's end). The coordinator keeps at most two episodes outstanding, so the one before the
+// cause's may still have been owed counts when the cause struck.
+bool atOrAfter(const json& entry, const RunPosition& cause) {
+  const json episode = entry.is_object() && entry.contains("episode") ? entry["episode"] : json();
+  if (!episode.is_number_integer() || !cause.episode) return true;
+  return episode.get<std::int64_t>() + 1 >= static_cast<std::int64_t>(*cause.episode);
+}
+
+bool isConsequenceOf(const json& entry, const Fault& cause) {
+  if (!entry.is_object() || entry.contains(emulator::kCausedByField)) return false;
+  const json kind = entry.value("kind", json());
+  if (!kind.is_string()) return false;
+  const std::optional<FaultKind> known = lookUpWord<FaultKind>(kind.get<std::string>());
+  return known && followsFromStop(*known) && atOrAfter(entry, cause.at);
+}
+
+}  // namespace
+
+json Fault::toJson() const {
+  json entry = {{"kind", std::string(wordOf(kind))},
+                {"process", process},
+                {"sensor", sensors.size() == 1 ? json(sensors.front()) : json()},
+                {"episode", at.episode ? json(*at.episode) : json()},
+                {"emulated_time_s", at.emulated_time_s ? json(*at.emulated_time_s) : json()},
+                {"detail", detail}};
+  if (!sensors.empty()) entry["sensors"] = sensors;
+  entry["survived"] = survived;
+  if (schedule_version) entry["schedule_version"] = *schedule_version;
+  return entry;
+}
+
+const Fault* runEndingCause(const std::vector<Fault>& launcher_faults) {
+  const auto it = std::find_if(launcher_faults.begin(), launcher_faults.end(),
+                               [](const Fault& f) { return !f.survived; });
+  return it == launcher_faults.end() ? nullptr : &*it;
+}
+
+bool followsFromStop(FaultKind kind) {
+  switch (kind) {
+    case FaultKind::Stall:
+    case FaultKind::Lost:
+    case FaultKind::LateTally:
+    case FaultKind::CutShort:
+    case FaultKind::RunAborted:
+    case FaultKind::MissingEpisodes:
+      return true;
+    default:
+      return false;
+  }
+}
+
+json faultList(const std::vector<Fault>& launcher_faults, const json& reported) {
+  json listed = json::array();
+  for (const Fault& fault : launcher_faults) listed.push_back(fault.toJson());
+  const Fault* cause = runEndingCause(launcher_faults);
+  if (!reported.is_array()) return listed;
+  for (json entry : reported) {
+    if (cause != nullptr && isConsequenceOf(entry, *cause)) {
+      entry[emulator::kCausedByField] = {{"kind", std::string(wordOf(cause->kind))},
+                                         {"process", cause->process}};
+    }
+    listed.push_back(std::move(entry));
+  }
+  return listed;
+}
+
+}  // namespace sensornet::launcher

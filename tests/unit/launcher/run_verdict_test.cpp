@@ -1,0 +1,168 @@
+// The run's status and exit code against DESIGN.md's outcome table (0 completed, 1 failed or
+// interrupted, 3 degraded, 4 a --require failed), and the fault list that names a cause once:
+// what the fusion center recorded because of the run-ending cause is marked as its consequence.
+
+#include "sensornet/launcher/run_verdict.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/launcher/supervisor.hpp"
+
+namespace sensornet::launcher {
+namespace {
+
+using emulator::FaultKind;
+using emulator::RunStatus;
+using nlohmann::json;
+
+constexpr int kPlanned = 20;
+
+ReportSeen reported(const std::string& status, std::uint64_t finished = kPlanned) {
+  return {true, "", status, finished};
+}
+
+Fault survivedDeath() {
+  Fault f{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, {2, 0.5}, "killed"};
+  f.survived = true;
+  return f;
+}
+
+Fault failedChild() {
+  return {FaultKind::ProcessFailed, kCoordinator, {}, {3, 1.0}, "exited with status 1"};
+}
+
+TEST(RunVerdict, CleanReportIsCompletedExitZero) {
+  const Verdict v = decideVerdict({}, false, reported("completed"), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Completed);
+  EXPECT_EQ(exitCodeOf(v.status), 0);
+  EXPECT_TRUE(v.faults.empty());
+}
+
+TEST(RunVerdict, DegradedReportExitsThree) {
+  const Verdict v = decideVerdict({}, false, reported("degraded"), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Degraded);
+  EXPECT_EQ(exitCodeOf(v.status), 3);
+}
+
+TEST(RunVerdict, SurvivedDeathDegradesACompletedReport) {
+  const Verdict v = decideVerdict({survivedDeath()}, false, reported("completed"), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Degraded);
+  EXPECT_EQ(exitCodeOf(v.status), 3);
+}
+
+TEST(RunVerdict, FaultTheRunDidNotSurviveFailsItExitOne) {
+  const Verdict v = decideVerdict({failedChild()}, false, reported("completed"), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Failed);
+  EXPECT_EQ(exitCodeOf(v.status), 1);
+}
+
+TEST(RunVerdict, SignalMakesTheRunInterruptedExitOne) {
+  const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
+  const Verdict v = decideVerdict({signal}, true, reported("interrupted", 3), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Interrupted);
+  EXPECT_EQ(exitCodeOf(v.status), 1);
+  EXPECT_EQ(v.faults.size(), 1u) << "no missing_episodes for a run that was stopped";
+}
+
+TEST(RunVerdict, FailedReportStaysFailed) {
+  EXPECT_EQ(decideVerdict({}, false, reported("failed"), kPlanned).status, RunStatus::Failed);
+}
+
+TEST(RunVerdict, MissingReportFailsTheRunAndSaysSo) {
+  const Verdict v =
+      decideVerdict({}, false, {false, "wrote no report at r.json", "failed", 0}, kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Failed);
+  ASSERT_EQ(v.faults.size(), 1u);
+  EXPECT_EQ(v.faults[0].kind, FaultKind::ReportMissing);
+  EXPECT_EQ(v.faults[0].detail, "wrote no report at r.json");
+}
+
+TEST(RunVerdict, MissingReportOfADeadFusionCenterIsNotASecondFault) {
+  const Fault died{FaultKind::ProcessKilled, kFusionCenter, {}, {}, "killed"};
+  const Verdict v = decideVerdict({died}, false, {false, "wrote no report", "failed", 0}, kPlanned);
+  EXPECT_EQ(v.faults.size(), 1u);
+}
+
+TEST(RunVerdict, UnknownStatusIsAnInvalidReport) {
+  const Verdict v = decideVerdict({}, false, reported("splendid"), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Failed);
+  ASSERT_EQ(v.faults.size(), 1u);
+  EXPECT_EQ(v.faults[0].kind, FaultKind::ReportInvalid);
+}
+
+TEST(RunVerdict, CompletedWithEpisodesMissingFails) {
+  const Verdict v = decideVerdict({}, false, reported("completed", 19), kPlanned);
+  EXPECT_EQ(v.status, RunStatus::Failed);
+  ASSERT_EQ(v.faults.size(), 1u);
+  EXPECT_EQ(v.faults[0].kind, FaultKind::MissingEpisodes);
+}
+
+// Exit 4: a --require criterion failed on a run that completed or was degraded; a failed run
+// stays 1.
+TEST(RunVerdict, FailedRequirementExitsFourUnlessTheRunFailed) {
+  const auto checks =
+      emulator::checkRequirements(emulator::parseRequirements("no-faults"),
+                                  json{{"faults", json::array({{{"kind", "lost"}}})}});
+  ASSERT_EQ(checks.size(), 1u);
+  EXPECT_FALSE(checks[0].pass);
+  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Completed), checks), 4);
+  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Degraded), checks), 4);
+  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Failed), checks), 1);
+  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Interrupted), checks), 1);
+}
+
+json entry(const std::string& kind, json episode, json sensor = nullptr) {
+  return {{"kind", kind},       {"process", "fusion_center"}, {"sensor", sensor},
+          {"episode", episode}, {"emulated_time_s", nullptr}, {"detail", "..."}};
+}
+
+// Under --on-sensor-failure stop the fusion center records a stall for every healthy sensor of
+// the open episode and the coordinator's abort: consequences of the one death.
+TEST(FaultList, EntriesAfterTheRunEndingCauseAreItsConsequences) {
+  Fault death{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, {2, 0.3}, "killed"};
+  // Episode 0 was closed before the death in episode 2: its stall is a cause of its own; episode
+  // 1 may still have been owed counts (two episodes outstanding at most).
+  const json seen = json::array({entry("stall", 0, 4), entry("stall", 1, 3), entry("stall", 2, 4),
+                                 entry("stall", 3, 5), entry("run_aborted", nullptr),
+                                 entry("rejected", nullptr)});
+  const json faults = faultList({death}, seen);
+  ASSERT_EQ(faults.size(), 7u);
+  EXPECT_EQ(faults[0]["process"], "sensor_agent-0-2") << "the launcher's cause comes first";
+  EXPECT_FALSE(faults[1].contains("caused_by"));
+  for (const std::size_t i : {2u, 3u, 4u, 5u}) {
+    ASSERT_TRUE(faults[i].contains("caused_by")) << faults[i].dump();
+    EXPECT_EQ(faults[i]["caused_by"],
+              (json{{"kind", "process_killed"}, {"process", "sensor_agent-0-2"}}));
+  }
+  EXPECT_FALSE(faults[6].contains("caused_by")) << "rejected samples have causes of their own";
+  EXPECT_EQ(emulator::causeCount(faults), 3u);
+}
+
+TEST(FaultList, InterruptBeforeTheFirstEpisodeOwnsEveryStopEntry) {
+  const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
+  const json faults = faultList({signal}, json::array({entry("cut_short", 0, 1)}));
+  EXPECT_EQ(faults[1]["caused_by"]["kind"], "interrupted");
+  EXPECT_EQ(emulator::causeCount(faults), 1u);
+}
+
+TEST(FaultList, SurvivedFaultsLeaveTheOthersCausesOfTheirOwn) {
+  const json faults = faultList({survivedDeath()}, json::array({entry("lost", 3, 4)}));
+  EXPECT_FALSE(faults[1].contains("caused_by"));
+  EXPECT_EQ(emulator::causeCount(faults), 2u);
+}
+
+TEST(FaultList, NoFaultsCriterionCountsCauses) {
+  const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
+  const json report = {{"faults", faultList({signal}, json::array({entry("stall", 1, 0)}))}};
+  EXPECT_EQ(emulator::causeCount(report["faults"]), 1u);
+  const auto checks = emulator::checkRequirements(emulator::parseRequirements("no-faults"), report);
+  EXPECT_FALSE(checks.at(0).pass);
+}
+
+}  // namespace
+}  // namespace sensornet::launcher
