@@ -29,6 +29,7 @@
 #include "run_supervisor.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/planner.hpp"
+#include "sensornet/dds/security.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
@@ -149,9 +150,17 @@ std::vector<std::string> runFlags(const LaunchOptions& options, const dds::Domai
   if (!options.run.cyclone_config.empty()) {
     flags.insert(flags.end(), {"--cyclone-config", domain.cyclone_config});
   }
-  if (!options.run.security_dir.empty()) {  // each child presents its own role's files
+  return flags;
+}
+
+// `flags` and, in a secured run, `--security` with the folder of `role` alone: a process receives
+// its own identity, key and permissions (and the CA's certificate and the governance), nothing of
+// another role and never the CA's key (docs/ARCHITECTURE.md, README "DDS Security").
+std::vector<std::string> roleFlags(std::vector<std::string> flags, const LaunchOptions& options,
+                                   dds::SecurityRole role) {
+  if (!options.run.security_dir.empty()) {
     flags.insert(flags.end(),
-                 {"--security", fs::absolute(options.run.security_dir).lexically_normal().string()});
+                 {"--security", dds::roleFolderOf(options.run.security_dir, role).string()});
   }
   return flags;
 }
@@ -178,13 +187,15 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
 
   plan.children.push_back(childSpec(kFusionCenter,
                                     {programs.fusion_center, "serve", "--report", plan.report_path},
-                                    flags, plan.log_dir));
+                                    roleFlags(flags, options, dds::SecurityRole::FusionCenter),
+                                    plan.log_dir));
   const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
   for (const std::vector<int>& sensors : sensorBlocks(hosts, sensor_count, per_process)) {
     const std::string block = sensorListSpec(sensors);
     const std::string name = "sensor_agent-" + block;
     plan.children.push_back(
-        childSpec(name, {programs.sensor_agent, "--sensors", block}, flags, plan.log_dir));
+        childSpec(name, {programs.sensor_agent, "--sensors", block},
+                  roleFlags(flags, options, dds::SecurityRole::Sensor), plan.log_dir));
     plan.sensor_agents.push_back(name);
     plan.sensors_of[name] = sensors;
   }
@@ -213,7 +224,9 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   if (!options.arrivals.empty()) {
     coordinator.insert(coordinator.end(), {"--arrivals", options.arrivals});
   }
-  plan.children.push_back(childSpec(kCoordinator, std::move(coordinator), flags, plan.log_dir));
+  plan.children.push_back(childSpec(kCoordinator, std::move(coordinator),
+                                    roleFlags(flags, options, dds::SecurityRole::Coordinator),
+                                    plan.log_dir));
   return plan;
 }
 
@@ -315,7 +328,7 @@ SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& o
   for (const std::string& name : plan.sensor_agents) {
     config.sensor_agents.emplace_back(name, plan.sensors_of.at(name));
   }
-  config.on_sensor_failure = *lookUpWord<emulator::SensorFailurePolicy>(options.on_sensor_failure);
+  config.on_sensor_failure = *lookUpWord<emulator::FailurePolicy>(options.on_sensor_failure);
   for (const CrashFault& crash : scenario.faults) config.scripted_crash_sensors.push_back(crash.sensor);
   if (options.timeout_s > 0.0) {
     config.timeout = std::chrono::duration_cast<milliseconds>(
@@ -511,7 +524,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "of the horizon among the survivors (the dead sensors get rate zero from the "
                   "switch on) and the run ends degraded; continue = keep the schedule, so the "
                   "bracket shows the damage (degraded); stop = end the run as failed")
-      ->check(CLI::IsMember(wordTexts<emulator::SensorFailurePolicy>()))
+      ->check(CLI::IsMember(wordTexts<emulator::FailurePolicy>()))
       ->capture_default_str();
   cmd->add_option("--network-aware", options->network_aware,
                   "plan for the rates the scenario's emulated network delivers (loss thins them, "

@@ -96,7 +96,7 @@ std::vector<Action> Supervisor::onSensorAgentDeath(const ChildExit& exit, const 
   Entry entry{exitFault(exit, at), true, false};
   // The coordinator ends the run under policy stop, and under any policy when no sensor is left.
   const bool stops =
-      config_.on_sensor_failure == emulator::SensorFailurePolicy::Stop ||
+      config_.on_sensor_failure == emulator::FailurePolicy::Stop ||
       std::all_of(config_.sensor_agents.begin(), config_.sensor_agents.end(),
                   [this](const auto& agent) { return ended_.contains(agent.first); });
   entry.fault.survived = !stops;

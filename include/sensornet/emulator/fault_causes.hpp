@@ -8,13 +8,14 @@
 //   causeCount(report["faults"]);              // 1 for an interrupt and its 13 consequences
 //   isConsequence(fault);                      // fault.contains("caused_by")
 //
-// And the word of `--on-sensor-failure`, which decides whether a death ends the run.
+// The word of `--on-sensor-failure`, which decides whether a death ends the run, is
+// FailurePolicy in vocabulary.hpp.
 
 #include <array>
 #include <cstddef>
 #include <nlohmann/json.hpp>
 
-#include "sensornet/core/words.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::emulator {
 
@@ -32,23 +33,4 @@ inline constexpr const char* kCausedByField = "caused_by";
   return causes;
 }
 
-// What a run does when a sensor agent dies (`--on-sensor-failure`): the coordinator applies it;
-// the launcher needs it to know whether the death ends the run.
-enum class SensorFailurePolicy {
-  Replan,    // re-plan the rest of the horizon among the survivors: degraded
-  Continue,  // keep the schedule, the bracket shows the damage: degraded
-  Stop,      // end the run: failed
-};
-
 }  // namespace sensornet::emulator
-
-namespace sensornet {
-
-template <>
-struct Words<emulator::SensorFailurePolicy> {
-  using P = emulator::SensorFailurePolicy;
-  static constexpr std::array<WordOf<P>, 3> kTable{
-      {{P::Replan, "replan"}, {P::Continue, "continue"}, {P::Stop, "stop"}}};
-};
-
-}  // namespace sensornet

@@ -68,7 +68,7 @@ struct SupervisorConfig {
   // The sensor agents by name with the sensors each hosts; the coordinator and the fusion
   // center are kCoordinator and kFusionCenter.
   std::vector<std::pair<std::string, std::vector<int>>> sensor_agents;
-  emulator::SensorFailurePolicy on_sensor_failure = emulator::SensorFailurePolicy::Replan;
+  emulator::FailurePolicy on_sensor_failure = emulator::FailurePolicy::Replan;
   std::vector<int> scripted_crash_sensors;  // sensors of the scenario's `faults:` crashes
   std::optional<std::chrono::milliseconds> timeout;  // --timeout, if any
   int max_restarts = 3;  // a coordinator or fusion center killed more often is not restarted

@@ -19,13 +19,13 @@ namespace {
 
 using emulator::FaultKind;
 using emulator::RunStatus;
-using emulator::SensorFailurePolicy;
+using emulator::FailurePolicy;
 using std::chrono::milliseconds;
 using std::chrono::seconds;
 
 const SteadyTime kStart{};  // the fake clock's zero
 
-SupervisorConfig twoAgents(SensorFailurePolicy policy = SensorFailurePolicy::Replan) {
+SupervisorConfig twoAgents(FailurePolicy policy = FailurePolicy::Replan) {
   SupervisorConfig config;
   config.sensor_agents = {{"sensor_agent-0-2", {0, 1, 2}}, {"sensor_agent-3-5", {3, 4, 5}}};
   config.on_sensor_failure = policy;
@@ -200,7 +200,7 @@ TEST(Supervisor, ChildThatDiesWhileTheRunIsStoppedAfterAFailureIsNoSecondFault) 
 }
 
 // The death of a sensor agent mid-run under a policy the run survives.
-void expectSurvivedDeath(SensorFailurePolicy policy) {
+void expectSurvivedDeath(FailurePolicy policy) {
   Supervisor s(twoAgents(policy), kStart);
   const auto actions = s.onChildExit(killed("sensor_agent-3-5"), episode(2, 0.75), kStart);
   ASSERT_EQ(count<NotifySensorsFailed>(actions), 1);
@@ -226,14 +226,14 @@ void expectSurvivedDeath(SensorFailurePolicy policy) {
 }
 
 TEST(Supervisor, SensorDeathUnderReplanIsSurvived) {
-  expectSurvivedDeath(SensorFailurePolicy::Replan);
+  expectSurvivedDeath(FailurePolicy::Replan);
 }
 TEST(Supervisor, SensorDeathUnderContinueIsSurvived) {
-  expectSurvivedDeath(SensorFailurePolicy::Continue);
+  expectSurvivedDeath(FailurePolicy::Continue);
 }
 
 TEST(Supervisor, SensorDeathUnderStopIsTheOneCauseOfTheFailedRun) {
-  Supervisor s(twoAgents(SensorFailurePolicy::Stop), kStart);
+  Supervisor s(twoAgents(FailurePolicy::Stop), kStart);
   const auto actions = s.onChildExit(killed("sensor_agent-0-2"), episode(1, 0.2), kStart);
   ASSERT_EQ(count<NotifySensorsFailed>(actions), 1);
   EXPECT_EQ(count<StopRun>(actions), 0) << "the coordinator ends the run, the launcher waits";
@@ -260,7 +260,7 @@ TEST(Supervisor, SensorDeathUnderStopIsTheOneCauseOfTheFailedRun) {
 }
 
 TEST(Supervisor, LastSensorDeathEndsTheRunUnderAnyPolicy) {
-  Supervisor s(twoAgents(SensorFailurePolicy::Replan), kStart);
+  Supervisor s(twoAgents(FailurePolicy::Replan), kStart);
   (void)s.onChildExit(killed("sensor_agent-0-2"), episode(1), kStart);
   (void)s.onChildExit(killed("sensor_agent-3-5"), episode(2), kStart);
   EXPECT_TRUE(s.onChildExit(exited(kCoordinator, 1), {}, kStart).empty());
