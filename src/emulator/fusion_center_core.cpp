@@ -64,12 +64,12 @@ FusionCenterCore::~FusionCenterCore() = default;
 std::vector<FusionAction> FusionCenterCore::takeActions() { return std::exchange(actions_, {}); }
 
 void FusionCenterCore::log(spdlog::level::level_enum level, std::string text) {
-  emit(LogLine{level, std::move(text)});
+  emit<LogLine>(level, std::move(text));
 }
 
 void FusionCenterCore::recordFault(json fault) {
   faults_.push_back(fault);
-  emit(RecordFault{std::move(fault)});
+  emit<RecordFault>(std::move(fault));
 }
 
 void FusionCenterCore::countOutside(RejectionReason reason, std::uint64_t count) {
@@ -471,7 +471,7 @@ void FusionCenterCore::finishRestarted(std::uint32_t episode, std::int64_t now) 
                                    : result.bracket;
   }
   const json entry = episodeEntry(result);
-  emit(AppendEpisodeLog{entry});
+  emit<AppendEpisodeLog>(entry);
   report_->add(entry);
   const std::vector<int> lacking = sensorsLackingWriters();
   log(spdlog::level::warn,
@@ -523,8 +523,8 @@ void FusionCenterCore::publishState(std::uint32_t episode, const OpenEpisode& op
                                     std::int64_t now) {
   next_state_ns_ = now + toNs(config_.state_period_s);
   const ScheduleVersion* v = book_.inForce(episode, open.fusion->fusedTime());
-  emit(PublishState{episode, open.fusion->fusedTime(), open.fusion->covariance(),
-                    v != nullptr ? v->version : 0});
+  emit<PublishState>(episode, open.fusion->fusedTime(), open.fusion->covariance(),
+                     v != nullptr ? v->version : 0);
 }
 
 void FusionCenterCore::finishEpisode(std::uint32_t number, OpenEpisode& open,
@@ -545,7 +545,7 @@ void FusionCenterCore::finishEpisode(std::uint32_t number, OpenEpisode& open,
   traceCovariance(*open.fusion, result);
   report_->addLatencies(result.latencies_s);
   const json entry = episodeEntry(result);
-  emit(AppendEpisodeLog{entry});
+  emit<AppendEpisodeLog>(entry);
   report_->add(entry);
   if (resumed_) resumed_->noteFused(number);
   const RunSummary s = report_->summary();
@@ -647,7 +647,7 @@ void FusionCenterCore::noteHeldBack(std::uint32_t number, const OpenEpisode& ope
 }
 
 void FusionCenterCore::publishReport(const EpisodeResult& e) {
-  emit(PublishReport{e, report_->summary(), sensorsLackingWriters()});
+  emit<PublishReport>(e, report_->summary(), sensorsLackingWriters());
 }
 
 RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
@@ -674,7 +674,7 @@ RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
   }
   while (!restarted_.empty()) finishRestarted(restarted_.begin()->first, now);
   const RunStatus status = decideStatus(end, rejected_by_inputs);
-  emit(WriteFinalReport{status, finalReport(status, written_at)});
+  emit<WriteFinalReport>(status, finalReport(status, written_at));
   return status;
 }
 
@@ -768,7 +768,7 @@ void FusionCenterCore::noteRestart() {
                         : "not fused (incomplete, " + std::string(kRestartedReason) +
                               "): episode " + listed(lost)));
   faults_.insert(faults_.begin(), fault);
-  emit(RecordFault{std::move(fault)});
+  emit<RecordFault>(std::move(fault));
 }
 
 // The arrival mode of the run, and what the bracket [info, cov] says under it.

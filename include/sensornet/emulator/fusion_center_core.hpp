@@ -193,7 +193,11 @@ class FusionCenterCore {
   };
 
   [[nodiscard]] const Scenario& scenario() const { return announced_->scenario; }
-  void emit(FusionAction action) { actions_.push_back(std::move(action)); }
+  // Built in place: moving a fresh action into the variant trips GCC 12's -Wmaybe-uninitialized.
+  template <class Action, class... Args>
+  void emit(Args&&... args) {
+    actions_.emplace_back(std::in_place_type<Action>, std::forward<Args>(args)...);
+  }
   void log(spdlog::level::level_enum level, std::string text);
   void recordFault(nlohmann::json fault);
   void countOutside(RejectionReason reason, std::uint64_t count = 1);
