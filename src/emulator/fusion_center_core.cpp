@@ -362,7 +362,6 @@ void FusionCenterCore::onStatus(const SensorStatus& s, std::int64_t now) {
   if (refuseForeign(status_claims_, SensorTopic::Status, s.sensor, s.writer, s.episode)) return;
   status_claims_.claim(static_cast<int>(s.sensor), s.writer);
   SensorProcess& process = sensor_processes_[s.sensor];
-  if (process.status_writer != s.writer || process.id != s.process_id) process.first_heard_ns = now;
   process.id = s.process_id;
   process.state = s.state;
   process.status_writer = s.writer;
@@ -387,6 +386,7 @@ void FusionCenterCore::tick(std::int64_t now) {
     stalls_.push_back({{"process", kProcess}, {"seconds", stall->seconds()}});
   }
   if (!hasScenario()) return;
+  giveUpUnheldStarts(now);
   answerRestarted(now);
   // Measurements handled since the last tick: how many were waiting for the main loop.
   const std::uint64_t waiting = std::exchange(waiting_, 0);
@@ -428,6 +428,37 @@ void FusionCenterCore::answerRestarted(std::int64_t now) {
     const auto [episode, end_ns] = *it;
     ++it;
     if (now >= end_ns) finishRestarted(episode, now);
+  }
+}
+
+// A restarted process that does not yet hold every live sensor process's Measurement writer when
+// an episode begins cannot fuse it whole: a volatile writer delivers to a reader only what it
+// writes after it matched it, so the first measurements of the episode never come. Such an
+// episode is answered as restarted (the restart's consequence), not held open for the stall
+// limit and reported as lost. Once every writer is held, or kResumeMatchWaitS has passed, every
+// episode is fused.
+void FusionCenterCore::giveUpUnheldStarts(std::int64_t now) {
+  if (!resumed_ || holds_writers_) return;
+  if (holdsEverySensorProcess() || awakeSince(resumed_->joinedWallNs(), now) >= kResumeMatchWaitS) {
+    holds_writers_ = true;
+    return;
+  }
+  for (auto it = open_.begin(); it != open_.end();) {
+    const std::uint32_t number = it->first;
+    const EpisodeClock clock = it->second->clock;
+    if (clock.start_wall_ns > now) {
+      ++it;
+      continue;
+    }
+    for (const std::uint32_t e : resumed_->heardOfRunning(number)) {
+      restarted_.emplace(e, e == number ? clock.wallAt(scenario().horizon_s) : 0);
+    }
+    began_unheld_.insert(number);
+    log(spdlog::level::warn, "episode " + std::to_string(number) +
+                                 " began before this restarted fusion center held the measurement "
+                                 "writers of sensors " + listed(sensorsLackingWriters()) +
+                                 ": not fused");
+    it = open_.erase(it);
   }
 }
 
@@ -474,6 +505,7 @@ void FusionCenterCore::finishRestarted(std::uint32_t episode, std::int64_t now) 
   emit<AppendEpisodeLog>(entry);
   report_->add(entry);
   const std::vector<int> lacking = sensorsLackingWriters();
+  answered_without_.insert(lacking.begin(), lacking.end());
   log(spdlog::level::warn,
       "episode " + std::to_string(episode) +
           ": not fused (the fusion center restarted during it); answered " +
@@ -482,7 +514,7 @@ void FusionCenterCore::finishRestarted(std::uint32_t episode, std::int64_t now) 
           " measurement writers matched" +
           (lacking.empty() ? std::string(", every live sensor process's among them")
                            : "; lacking the writers of sensors " + listed(lacking)));
-  publishReport(result);
+  publishReport(result, lacking);
 }
 
 // An unsettled sensor silent (no measurement, tally or status) for the stall limit after the
@@ -646,8 +678,8 @@ void FusionCenterCore::noteHeldBack(std::uint32_t number, const OpenEpisode& ope
       {{"process", "network"}, {"episode", number}, {"seconds", longest}, {"sensors", sensors}});
 }
 
-void FusionCenterCore::publishReport(const EpisodeResult& e) {
-  emit<PublishReport>(e, report_->summary(), sensorsLackingWriters());
+void FusionCenterCore::publishReport(const EpisodeResult& e, std::vector<int> lacking_writers) {
+  emit<PublishReport>(e, report_->summary(), std::move(lacking_writers));
 }
 
 RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
@@ -766,7 +798,15 @@ void FusionCenterCore::noteRestart() {
           std::to_string(resumed_->entries().size()) + " logged episodes; " +
           (lost.empty() ? std::string("no episode was lost")
                         : "not fused (incomplete, " + std::string(kRestartedReason) +
-                              "): episode " + listed(lost)));
+                              "): episode " + listed(lost)) +
+          (began_unheld_.empty()
+               ? std::string()
+               : "; episode " + listed(began_unheld_) +
+                     " began before it held every live sensor process's measurement writer") +
+          (answered_without_.empty()
+               ? std::string()
+               : "; answered without the measurement writers of sensors " +
+                     listed(answered_without_) + " (their next measurements could be lost)"));
   faults_.insert(faults_.begin(), fault);
   emit<RecordFault>(std::move(fault));
 }

@@ -189,7 +189,6 @@ class FusionCenterCore {
     std::int32_t id = 0;
     SensorProcessState state = SensorProcessState::Starting;
     WriterId status_writer = 0;
-    std::int64_t first_heard_ns = 0;  // its first status after this process joined
   };
 
   [[nodiscard]] const Scenario& scenario() const { return announced_->scenario; }
@@ -216,6 +215,7 @@ class FusionCenterCore {
   void applyTally(OpenEpisode& open, const EpisodeTally& t, std::int64_t now);
   void lateTally(const EpisodeTally& t);
   [[nodiscard]] double awakeSince(std::int64_t from_ns, std::int64_t now_ns) const;
+  void giveUpUnheldStarts(std::int64_t now);
   void answerRestarted(std::int64_t now);
   [[nodiscard]] bool holdsEverySensorProcess() const;
   [[nodiscard]] std::set<std::int32_t> liveSensorProcesses() const;
@@ -231,7 +231,7 @@ class FusionCenterCore {
   [[nodiscard]] nlohmann::json covarianceTraces();
   void checkKeepingUp(std::uint32_t number, const OpenEpisode& open, EpisodeResult& result);
   void noteHeldBack(std::uint32_t number, const OpenEpisode& open);
-  void publishReport(const EpisodeResult& e);
+  void publishReport(const EpisodeResult& e, std::vector<int> lacking_writers = {});
   RunStatus decideStatus(const std::optional<RunEnd>& end,
                          const std::map<std::string, std::uint64_t>& rejected_by_inputs);
   void noteRestart();
@@ -257,6 +257,9 @@ class FusionCenterCore {
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
   std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses
+  bool holds_writers_ = false;          // restarted: held every sensor process's writers once
+  std::set<std::uint32_t> began_unheld_;  // episodes that began before that: not fused
+  std::set<int> answered_without_;  // sensors whose writers a restarted episode's answer lacked
   std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;

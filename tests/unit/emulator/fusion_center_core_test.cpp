@@ -11,7 +11,6 @@
 #include <tuple>
 #include <vector>
 
-#include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
@@ -59,13 +58,23 @@ class FusionCenterCoreTest : public ::testing::Test {
     core_ = std::make_unique<FusionCenterCore>(config, writers_, joined);
     now_ = joined;
   }
+  // A new core that has the run's scenario and schedule, and episode e started.
+  void begin(std::uint32_t e) {
+    make();
+    announce();
+    start(e);
+  }
   void announce() {
     core_->onScenario({scenario_, "digest", kSeed}, now_);
     core_->onScheduleVersions({version_}, now_);
   }
-  // Episode e starts at wall time kS * (10 + 10 e) (time scale 1; T = 3 s).
-  static std::int64_t startOf(std::uint32_t e) { return kS * (10 + 10 * static_cast<std::int64_t>(e)); }
-  static std::int64_t endOf(std::uint32_t e) { return startOf(e) + 3 * kS; }
+  // Episode e starts at wall time kS * (10 + 10 e) unless starts_ says otherwise (time scale 1;
+  // T = 3 s).
+  [[nodiscard]] std::int64_t startOf(std::uint32_t e) const {
+    const auto set = starts_.find(e);
+    return set != starts_.end() ? set->second : kS * (10 + 10 * static_cast<std::int64_t>(e));
+  }
+  [[nodiscard]] std::int64_t endOf(std::uint32_t e) const { return startOf(e) + 3 * kS; }
   void start(std::uint32_t e) {
     core_->onEpisodeStart({e, {startOf(e), 1.0}, 8, {}}, now_);
   }
@@ -108,20 +117,10 @@ class FusionCenterCoreTest : public ::testing::Test {
     t.writer = tallyWriter(j);
     return t;
   }
-  // The CD-KF over the measurements in time order, by hand.
   double inOrderCost(const std::vector<MeasurementArrival>& arrivals) const {
     std::vector<FusedMeasurement> all;
     for (const auto& a : arrivals) all.push_back(a.measurement);
-    std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
-      return std::tie(a.time_s, a.sensor) < std::tie(b.time_s, b.sensor);
-    });
-    CdKalmanFilter filter(scenario_);
-    for (const auto& m : all) {
-      filter.propagateTo(m.time_s);
-      filter.update(m.sensor, m.z);
-    }
-    filter.propagateTo(scenario_.horizon_s);
-    return filter.cost();
+    return test::inOrderCost(scenario_, std::move(all));
   }
 
   // The main loop turns every 10 ms up to `until` (it never stalls unless a test skips time).
@@ -173,6 +172,7 @@ class FusionCenterCoreTest : public ::testing::Test {
   }
 
   FakeWriters writers_;
+  std::map<std::uint32_t, std::int64_t> starts_;
   Scenario scenario_;
   ScheduleVersion version_;
   std::unique_ptr<FusionCenterCore> core_;
@@ -183,9 +183,7 @@ class FusionCenterCoreTest : public ::testing::Test {
 };
 
 TEST_F(FusionCenterCoreTest, ClosesAnEpisodeOnlyWhenEveryCountIsIn) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   const auto all = measurements(0);
   ASSERT_GT(all.size(), 8u);
   deliver(all);
@@ -206,9 +204,7 @@ TEST_F(FusionCenterCoreTest, ClosesAnEpisodeOnlyWhenEveryCountIsIn) {
 }
 
 TEST_F(FusionCenterCoreTest, TallyBeforeItsMeasurementsWaitsForThem) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   auto all = measurements(0);
   const auto sent = sentBy(all);
   runUntil(endOf(0));
@@ -241,9 +237,7 @@ TEST_F(FusionCenterCoreTest, MeasurementsAndTalliesBeforeTheStartAreHeldForIt) {
 }
 
 TEST_F(FusionCenterCoreTest, ASilentSensorIsAwaitedForTheStallLimitThenAStall) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   auto all = measurements(0);
   const auto sent = sentBy(all);
   std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 2; });
@@ -263,9 +257,7 @@ TEST_F(FusionCenterCoreTest, ASilentSensorIsAwaitedForTheStallLimitThenAStall) {
 }
 
 TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   auto all = measurements(0);
   const auto sent = sentBy(all);
   std::erase_if(all, [](const auto& m) {
@@ -295,9 +287,7 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
 // retransmitted tally comes before the last retransmitted measurements. Nothing is lost: a stall
 // of the network, listed with the sensors it held back, and the run completed.
 TEST_F(FusionCenterCoreTest, ACutLinkIsAStallNotAnOverload) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   auto all = measurements(0);
   const auto sent = sentBy(all);
   const std::int64_t cut = startOf(0) + 1 * kS, up = endOf(0) + 1 * kS;  // 3 s silent
@@ -339,9 +329,7 @@ TEST_F(FusionCenterCoreTest, ACutLinkIsAStallNotAnOverload) {
 // The fusion center itself falls behind: everything arrived on time, but its loop got the
 // measurements 2 s late (the inbox grew while it worked): that is an overload.
 TEST_F(FusionCenterCoreTest, AFusionCenterThatFallsBehindIsOverloaded) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   const auto all = measurements(0);
   runUntil(endOf(0) + 10 * kMs);
   deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
@@ -357,9 +345,7 @@ TEST_F(FusionCenterCoreTest, AFusionCenterThatFallsBehindIsOverloaded) {
 }
 
 TEST_F(FusionCenterCoreTest, ASensorFarBehindTheClockIsLagAndItsStallIsListed) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   const auto all = measurements(0);
   deliver(all);
   runUntil(endOf(0) + 10 * kMs);
@@ -377,9 +363,7 @@ TEST_F(FusionCenterCoreTest, ASensorFarBehindTheClockIsLagAndItsStallIsListed) {
 }
 
 TEST_F(FusionCenterCoreTest, ASecondWriterOfASensorIsKeptOutWhileTheFirstLives) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   const auto all = measurements(0);
   deliver(all);
   MeasurementArrival rogue = all.front();
@@ -399,9 +383,7 @@ TEST_F(FusionCenterCoreTest, ASecondWriterOfASensorIsKeptOutWhileTheFirstLives) 
 }
 
 TEST_F(FusionCenterCoreTest, ANewWriterTakesOverWhenTheFirstIsGone) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   auto all = measurements(0);
   for (auto& m : all) {
     if (m.measurement.sensor == 0 && m.measurement.time_s > 1.5) m.writer = 998;
@@ -444,9 +426,7 @@ TEST_F(FusionCenterCoreTest, StatusFollowsFromTheFaults) {
 // Defect (b): a signal with two episodes open: one fault names the cause, the episodes and the
 // sensors they waited for; a sensor that really lost measurements is `lost`; no stall per sensor.
 TEST_F(FusionCenterCoreTest, ARunStoppedWithEpisodesOpenNamesItsCauseOnce) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   start(1);
   const auto all = measurements(0);
   deliver(all);
@@ -471,9 +451,7 @@ TEST_F(FusionCenterCoreTest, ARunStoppedWithEpisodesOpenNamesItsCauseOnce) {
 
 // The coordinator's --on-sensor-failure stop: the run is aborted with an episode open.
 TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   const auto all = measurements(0);
   deliver(all);
   core_->onSensorFailure({0, 2.0, {1}, "sensor 1's process exited"}, now_);
@@ -494,8 +472,9 @@ std::vector<json> loggedEpisodes(std::uint32_t n) {
 }
 
 // Two sensor processes: sensors 0, 1 in one, 2, 3 in the other.
-void hearStatuses(FusionCenterCore& core, std::uint32_t episode, std::int64_t now) {
-  for (int j = 0; j < 4; ++j) {
+void hearStatuses(FusionCenterCore& core, std::uint32_t episode, std::int64_t now,
+                  const std::vector<int>& sensors = {0, 1, 2, 3}) {
+  for (const int j : sensors) {
     SensorStatus s;
     s.sensor = static_cast<std::uint32_t>(j);
     s.run_id = kRun;
@@ -543,22 +522,48 @@ TEST_F(FusionCenterCoreTest, AResumedCenterNamesTheSensorsWhoseWritersItLacks) {
   make(loggedEpisodes(4), joined);
   announce();
   start(4);
-  SensorStatus s;
-  s.run_id = kRun;
-  s.episode = 4;
-  s.state = SensorProcessState::Running;
-  s.process_id = 1000;
-  s.writer = statusWriter(0);
-  for (const std::uint32_t j : {0u, 1u}) {
-    s.sensor = j;
-    core_->onStatus(s, now_);
-  }
+  hearStatuses(*core_, 4, now_, {0, 1});  // the other process is stopped
   writers_.held = {statusWriter(0)};
   runUntil(joined + static_cast<std::int64_t>(1e9 * kResumeMatchWaitS) - 20 * kMs);
   EXPECT_TRUE(reports_.empty());
   runUntil(joined + static_cast<std::int64_t>(1e9 * kResumeMatchWaitS) + 20 * kMs);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_EQ(reports_[0].lacking_writers, (std::vector<int>{2, 3}));
+  EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
+  const std::string restarted = core_->faults().at(0).at("detail");
+  EXPECT_NE(restarted.find("without the measurement writers of sensors 2, 3"), std::string::npos)
+      << restarted;
+}
+
+// Issue 31, finding 1: killed 1 s into episode 4 of 1.5 s, restarted; episode 5 (announced before
+// the kill) begins before the sensors' writers have matched the new reader, so its first
+// measurements never come. It is answered as the restart's consequence, not held open 12 s as
+// lost; episode 6, which begins once every writer is held, is fused.
+TEST_F(FusionCenterCoreTest, AnEpisodeThatBeginsBeforeTheWritersAreHeldIsNotFused) {
+  starts_ = {{5, endOf(4)}, {6, endOf(4) + 4 * kS}};  // back to back, as the coordinator runs them
+  make(loggedEpisodes(4), startOf(4) + 1 * kS);
+  announce();
+  start(4);
+  start(5);  // durability replays the last starts
+  hearStatuses(*core_, 4, now_);
+  writers_.held = {statusWriter(0)};
+  runUntil(startOf(5) + 100 * kMs);
+  for (const auto& m : measurements(5)) {
+    if (m.measurement.time_s > 1.0) core_->onMeasurement(m, now_);  // the first ones lost
+  }
+  writers_.held.insert(statusWriter(2));
+  runUntil(endOf(5) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_EQ(reports_[0].result.episode, 4u);
+  EXPECT_EQ(reports_[1].result.episode, 5u);
+  EXPECT_EQ(reports_[1].result.incomplete_reason, kRestartedReason);
+  cleanEpisode(6);
+  ASSERT_EQ(reports_.size(), 3u);
+  EXPECT_TRUE(reports_[2].result.complete);
+  EXPECT_EQ(finish(RunEnd{7, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"}) << "no lost, no stall";
+  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("episode 5 began before"),
+            std::string::npos);
 }
 
 // Restarted between episodes: the first start it hears is after its join; the episode it died in
@@ -597,9 +602,7 @@ TEST_F(FusionCenterCoreTest, AResumeThatHearsOnlyAFailureNoticeAnswersForThatEpi
 // A stall of the fusion center itself is its own, not a sensor's: the silence it slept through
 // does not count towards the stall limit.
 TEST_F(FusionCenterCoreTest, ItsOwnStallDoesNotCountAgainstASilentSensor) {
-  make();
-  announce();
-  start(0);
+  begin(0);
   auto all = measurements(0);
   const auto sent = sentBy(all);
   deliver(all);
