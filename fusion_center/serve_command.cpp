@@ -512,8 +512,9 @@ Subcommand addServeCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--keep-up-limit", options->keep_up_limit_s,
-                  "wall seconds of drain after an episode's end, or of a sensor's lag behind the "
-                  "emulated clock, past which the run is reported as overloaded (degraded)")
+                  "wall seconds of drain after the last of an episode arrived (not counting "
+                  "samples the network held back: those are stalls), or of a sensor's lag behind "
+                  "the emulated clock, past which the run is reported as overloaded (degraded)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");
