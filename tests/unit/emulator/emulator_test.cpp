@@ -145,18 +145,8 @@ class EpisodeFusionTest : public ::testing::Test {
     return all;
   }
 
-  // The CD-KF over the same measurements in time order, by hand.
   double inOrderCost(std::vector<FusedMeasurement> all) const {
-    std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
-      return std::tie(a.time_s, a.sensor) < std::tie(b.time_s, b.sensor);
-    });
-    CdKalmanFilter filter(scenario_);
-    for (const auto& m : all) {
-      filter.propagateTo(m.time_s);
-      filter.update(m.sensor, m.z);
-    }
-    filter.propagateTo(scenario_.horizon_s);
-    return filter.cost();
+    return test::inOrderCost(scenario_, std::move(all));
   }
 
   EpisodeFusion::BracketOf bracketOf() const {

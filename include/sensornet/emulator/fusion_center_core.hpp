@@ -1,0 +1,279 @@
+#pragma once
+// What the fusion center decides, free of DDS, files and clocks: when an episode closes, what
+// counts as a stall, an overload or a foreign writer, how a resumed run starts, which status the
+// run gets. Typed events go in, each with the wall time `now` it happened at; typed actions come
+// out, for the executable (fusion_center serve) to carry out: publish a Report or the FusionState,
+// append a line to the episode log, log a line, write the final report.
+//
+//   FusionCenterCore core(config, writers);        // writers: what DDS knows of live writers
+//   core.onScenario({scenario, digest, seed}, now);
+//   core.onScheduleVersions(new_versions, now);
+//   core.onEpisodeStart(start, now);
+//   core.onMeasurement(arrival, now);              // a tally, a status, a failure notice alike
+//   core.tick(now);                                // fuse, close, time out, publish the state
+//   for (FusionAction& a : core.takeActions()) std::visit(carryOut, a);
+//   const RunStatus status = core.finish(end, rejected_by_inputs, written_at, now);
+//
+// Time: every `now` is wall nanoseconds on the clock the measurements' publish and receive times
+// use. A test drives the core with a scripted order of events and a fake clock.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/common.h>
+
+#include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/core/scenario.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/emulator/episode_fusion.hpp"
+#include "sensornet/emulator/run_events.hpp"
+#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/emulator/stall_watch.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
+#include "sensornet/emulator/writer_claims.hpp"
+
+namespace sensornet::emulator {
+
+struct FusionCenterConfig {
+  std::string run_id;
+  double lag_s = 0.05;           // wall seconds a measurement may take to arrive before fusion
+  double stall_limit_s = 12.0;   // wall seconds a sensor that owes measurements may stay silent
+  double keep_up_limit_s = 1.0;  // wall seconds of drain or sensor lag that count as overload
+  double state_period_s = 0.05;  // FusionState publication period (wall seconds)
+  // Restarted (--resume): the entries of the episode log it goes on from (empty: none yet).
+  std::optional<std::vector<nlohmann::json>> resumed_log;
+  bool episode_log = false;      // the report's entries are read back from an episode log
+  std::string episode_log_path;  // ... this one
+};
+
+// A restarted fusion center waits at most this long (wall seconds after it joined, not counting
+// its own stalls) for the writers of every live sensor process before it answers for the episode
+// it could not fuse (the coordinator then starts the next one, which must lose nothing).
+inline constexpr double kResumeMatchWaitS = 5.0;
+
+// The wire topics whose writers claim sensors.
+enum class SensorTopic { Measurement, Tally, Status };
+
+// What DDS knows of the writers the fusion center reads: the wiring implements it on its readers.
+class WriterFacts {
+ public:
+  virtual ~WriterFacts() = default;
+  // The writer `w` of `topic` is matched by this process's reader (alive).
+  [[nodiscard]] virtual bool live(SensorTopic topic, WriterId w) const = 0;
+  // How many Measurement writers the reader has matched.
+  [[nodiscard]] virtual std::uint32_t matchedMeasurementWriters() const = 0;
+  // The Measurement reader has matched a writer of the participant (process) whose SensorStatus
+  // writer is `status_writer`.
+  [[nodiscard]] virtual bool measurementWriterMatchedWith(WriterId status_writer) const = 0;
+};
+
+// The announced scenario, decoded.
+struct ScenarioAnnounced {
+  Scenario scenario;
+  std::string digest;
+  std::uint64_t seed = 0;
+};
+
+// A measurement as it came off the wire, stamped on arrival (receive_wall_ns).
+struct MeasurementArrival {
+  FusedMeasurement measurement;
+  std::uint32_t episode = 0;
+  std::string run_id;
+  WriterId writer = 0;  // the DDS writer that sent it (publication handle)
+};
+
+// A sensor's end-of-episode count (the EpisodeTally topic), decoded.
+struct EpisodeTally {
+  std::uint32_t sensor = 0;
+  std::string run_id;
+  std::uint32_t episode = 0;
+  EpisodeCount count;
+  double max_lag_s = 0.0;  // wall seconds it published behind the emulated clock
+  double stalled_s = 0.0;  // wall seconds the sensor's process was stopped in the episode
+  std::int64_t wall_time_ns = 0;  // its publication
+  WriterId writer = 0;
+};
+
+// What a sensor process is doing (the SensorStatus topic).
+enum class SensorProcessState { Starting, Ready, Running, Excluded, Stopped, Failed };
+
+struct SensorStatus {
+  std::uint32_t sensor = 0;
+  std::string run_id;
+  std::uint32_t episode = 0;
+  SensorProcessState state = SensorProcessState::Starting;
+  std::uint64_t sent_in_episode = 0;
+  std::int32_t process_id = 0;
+  std::int64_t wall_time_ns = 0;
+  WriterId writer = 0;
+};
+
+// Actions: what the wiring carries out.
+struct PublishReport {
+  EpisodeResult result;
+  RunSummary summary;
+  // Not every live sensor process's writers are held (a restarted fusion center that answered
+  // after kResumeMatchWaitS): these sensors' measurements of the next episode may be lost.
+  std::vector<int> lacking_writers;
+};
+struct PublishState {
+  std::uint32_t episode = 0;
+  double emulated_time_s = 0.0;
+  Eigen::MatrixXd covariance;
+  std::uint32_t schedule_version = 0;
+};
+struct AppendEpisodeLog {
+  nlohmann::json entry;
+};
+struct RecordFault {
+  nlohmann::json fault;  // faultEntry(...), also kept for the final report
+};
+struct LogLine {
+  spdlog::level::level_enum level = spdlog::level::info;
+  std::string text;
+};
+struct WriteFinalReport {
+  RunStatus status = RunStatus::Completed;
+  nlohmann::json doc;  // without per_episode: RunReport::write streams it in (report())
+};
+using FusionAction =
+    std::variant<PublishReport, PublishState, AppendEpisodeLog, RecordFault, LogLine, WriteFinalReport>;
+
+class FusionCenterCore {
+ public:
+  FusionCenterCore(FusionCenterConfig config, const WriterFacts& writers, std::int64_t joined_ns);
+  ~FusionCenterCore();
+  FusionCenterCore(const FusionCenterCore&) = delete;
+  FusionCenterCore& operator=(const FusionCenterCore&) = delete;
+
+  void onScenario(ScenarioAnnounced announced, std::int64_t now);
+  // Versions RunInputs accepted, in order (each once).
+  void onScheduleVersions(const std::vector<ScheduleVersion>& versions, std::int64_t now);
+  void onEpisodeStart(const EpisodeStart& start, std::int64_t now);
+  void onSensorFailure(const SensorFailure& failure, std::int64_t now);
+  void onMeasurement(MeasurementArrival arrival, std::int64_t now);
+  void onTally(const EpisodeTally& tally, std::int64_t now);
+  void onStatus(const SensorStatus& status, std::int64_t now);
+  // The main loop's turn: its own stalls, fusion up to the watermark, episodes closed or timed out.
+  void tick(std::int64_t now);
+  // The run ended (`end`) or was stopped by a signal (nullopt): what is open is closed, the
+  // status decided and the final report handed out. `rejected_by_inputs`: RunInputs' counts.
+  RunStatus finish(const std::optional<RunEnd>& end,
+                   const std::map<std::string, std::uint64_t>& rejected_by_inputs,
+                   const std::string& written_at, std::int64_t now);
+
+  [[nodiscard]] std::vector<FusionAction> takeActions();
+
+  [[nodiscard]] bool hasScenario() const { return announced_.has_value(); }
+  [[nodiscard]] bool hasReport() const { return report_.has_value(); }
+  [[nodiscard]] const RunReport& report() const { return *report_; }
+  [[nodiscard]] const nlohmann::json& faults() const { return faults_; }
+  [[nodiscard]] const nlohmann::json& stalls() const { return stalls_; }
+  // Live sensor processes whose Measurement writer this process does not hold (by identity).
+  [[nodiscard]] std::vector<int> sensorsLackingWriters() const;
+
+ private:
+  struct OpenEpisode;
+  struct SensorProcess {
+    std::int32_t id = 0;
+    SensorProcessState state = SensorProcessState::Starting;
+    WriterId status_writer = 0;
+  };
+
+  [[nodiscard]] const Scenario& scenario() const { return announced_->scenario; }
+  // Built in place: moving a fresh action into the variant trips GCC 12's -Wmaybe-uninitialized.
+  template <class Action, class... Args>
+  void emit(Args&&... args) {
+    actions_.emplace_back(std::in_place_type<Action>, std::forward<Args>(args)...);
+  }
+  void log(spdlog::level::level_enum level, std::string text);
+  void recordFault(nlohmann::json fault);
+  void countOutside(RejectionReason reason, std::uint64_t count = 1);
+
+  void startEpisode(const EpisodeStart& start, std::int64_t now);
+  static void applyFailure(std::uint32_t number, OpenEpisode& open, const SensorFailure& failure);
+  CostBracket bracketOf(const ScheduleVersion& v);
+  CostBracket deliveredBracketOf(const ScheduleVersion& v, std::uint32_t episode);
+  [[nodiscard]] bool duplicatesLink(int sensor) const;
+  bool networkCopyAfterClose(std::uint32_t episode, int sensor);
+  void rejectOutside(RejectionReason reason, const std::string& detail);
+  bool refuseForeign(WriterClaims& claims, SensorTopic topic, std::uint32_t sensor, WriterId writer,
+                     std::uint32_t episode);
+  void releaseClaims(const std::set<int>& sensors);
+  void route(OpenEpisode& open, FusedMeasurement m, WriterId writer, std::int64_t now);
+  void applyTally(OpenEpisode& open, const EpisodeTally& t, std::int64_t now);
+  void lateTally(const EpisodeTally& t);
+  [[nodiscard]] double awakeSince(std::int64_t from_ns, std::int64_t now_ns) const;
+  void giveUpUnheldStarts(std::int64_t now);
+  void answerRestarted(std::int64_t now);
+  [[nodiscard]] bool holdsEverySensorProcess() const;
+  [[nodiscard]] std::set<std::int32_t> liveSensorProcesses() const;
+  void finishRestarted(std::uint32_t episode, std::int64_t now);
+  [[nodiscard]] bool silentTooLong(const OpenEpisode& open, std::int64_t now) const;
+  void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why);
+  void cutShort(const std::string& why, std::optional<FaultKind> cause);
+  void publishState(std::uint32_t episode, const OpenEpisode& open, std::int64_t now);
+  // cut_short: why the run ended while it was open (its incomplete_reason says so).
+  void finishEpisode(std::uint32_t number, OpenEpisode& open,
+                     const std::string* cut_short = nullptr);
+  void traceCovariance(const EpisodeFusion& fusion, const EpisodeResult& r);
+  [[nodiscard]] nlohmann::json covarianceTraces();
+  void checkKeepingUp(std::uint32_t number, const OpenEpisode& open, EpisodeResult& result);
+  void noteHeldBack(std::uint32_t number, const OpenEpisode& open);
+  void publishReport(const EpisodeResult& e, std::vector<int> lacking_writers = {});
+  RunStatus decideStatus(const std::optional<RunEnd>& end,
+                         const std::map<std::string, std::uint64_t>& rejected_by_inputs);
+  void noteRestart();
+  [[nodiscard]] nlohmann::json finalReport(RunStatus status, const std::string& written_at);
+
+  FusionCenterConfig config_;
+  const WriterFacts& writers_;
+  std::optional<ScenarioAnnounced> announced_;
+  std::optional<EmulatedPlant> plant_;
+  ScheduleBook book_;
+  std::optional<std::uint32_t> last_started_;
+  std::set<int> failed_sensors_;  // every sensor the coordinator said is dead
+  std::vector<FusionAction> actions_;
+
+  std::optional<RunReport> report_;
+  std::map<std::uint32_t, CostBracket> brackets_;
+  // (version, the outages of an episode) -> the bracket of what the network delivers
+  std::map<std::pair<std::uint32_t, std::vector<std::size_t>>, CostBracket> delivered_brackets_;
+  std::map<std::uint32_t, std::unique_ptr<OpenEpisode>> open_;
+  std::map<std::uint32_t, std::vector<MeasurementArrival>> early_;
+  std::map<std::uint32_t, std::vector<EpisodeTally>> early_tallies_;
+  std::vector<SensorFailure> failures_;  // the coordinator's notices, in order
+  std::optional<ResumedRun> resumed_;    // with --resume
+  std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
+  std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses
+  bool holds_writers_ = false;          // restarted: held every sensor process's writers once
+  std::set<std::uint32_t> began_unheld_;  // episodes that began before that: not fused
+  std::set<int> answered_without_;  // sensors whose writers a restarted episode's answer lacked
+  std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
+  // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
+  std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
+  std::map<RejectionReason, std::uint64_t> rejected_outside_;  // refused before an episode
+  // Which writer speaks for each sensor, per topic (first live writer wins).
+  WriterClaims measurement_claims_, tally_claims_, status_claims_;
+  nlohmann::json faults_ = nlohmann::json::array();
+  nlohmann::json traced_episodes_ = nlohmann::json::array();  // the first episodes' curves
+  std::set<std::uint32_t> traced_versions_;  // ... and the versions in force at their start
+  nlohmann::json stalls_ = nlohmann::json::array();  // stalls absorbed, for the report
+  StallWatch stall_watch_;
+  std::uint32_t episodes_planned_ = 0;
+  std::uint64_t waiting_ = 0;  // measurements that arrived since the last tick
+  std::int64_t next_state_ns_ = 0;
+};
+
+}  // namespace sensornet::emulator

@@ -1,0 +1,624 @@
+// FusionCenterCore driven by scripted orders of events on a fake clock: what closes an episode,
+// what is a stall, a death, a cut link or an overload, foreign writers, a resume after a restart,
+// and the run's status. Expected values come from the scenario, the schedule and the script.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "sensornet/core/rate_schedule.hpp"
+#include "sensornet/emulator/fusion_center_core.hpp"
+#include "sensornet/emulator/sensor_timeline.hpp"
+#include "emulator_test_support.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+using nlohmann::json;
+using test::smallScenario;
+using test::versionOf;
+
+constexpr std::int64_t kMs = 1'000'000;
+constexpr std::int64_t kS = 1'000'000'000;
+constexpr std::uint64_t kSeed = 21;
+const std::string kRun = "core-test";
+
+// DDS as the test scripts it: which writers are matched, which processes' writers are held.
+class FakeWriters final : public WriterFacts {
+ public:
+  [[nodiscard]] bool live(SensorTopic, WriterId w) const override { return dead.count(w) == 0; }
+  [[nodiscard]] std::uint32_t matchedMeasurementWriters() const override { return matched; }
+  [[nodiscard]] bool measurementWriterMatchedWith(WriterId status_writer) const override {
+    return held.count(status_writer) > 0;
+  }
+  std::set<WriterId> dead;
+  std::set<WriterId> held;  // status writers whose process's Measurement writer is matched
+  std::uint32_t matched = 0;
+};
+
+// Sensor j writes measurements as writer 100 + j, tallies as 200 + j, statuses as 300 + j.
+WriterId measurementWriter(int j) { return static_cast<WriterId>(100 + j); }
+WriterId tallyWriter(int j) { return static_cast<WriterId>(200 + j); }
+WriterId statusWriter(int j) { return static_cast<WriterId>(300 + j); }
+
+class FusionCenterCoreTest : public ::testing::Test {
+ protected:
+  FusionCenterCoreTest()
+      : scenario_(smallScenario()), version_(versionOf(1, uniformSchedule(scenario_))) {}
+
+  void make(std::optional<std::vector<json>> resumed = std::nullopt, std::int64_t joined = 0) {
+    FusionCenterConfig config;
+    config.run_id = kRun;
+    config.resumed_log = std::move(resumed);
+    core_ = std::make_unique<FusionCenterCore>(config, writers_, joined);
+    now_ = joined;
+  }
+  // A new core that has the run's scenario and schedule, and episode e started.
+  void begin(std::uint32_t e) {
+    make();
+    announce();
+    start(e);
+  }
+  void announce() {
+    core_->onScenario({scenario_, "digest", kSeed}, now_);
+    core_->onScheduleVersions({version_}, now_);
+  }
+  // Episode e starts at wall time kS * (10 + 10 e) unless starts_ says otherwise (time scale 1;
+  // T = 3 s).
+  [[nodiscard]] std::int64_t startOf(std::uint32_t e) const {
+    const auto set = starts_.find(e);
+    return set != starts_.end() ? set->second : kS * (10 + 10 * static_cast<std::int64_t>(e));
+  }
+  [[nodiscard]] std::int64_t endOf(std::uint32_t e) const { return startOf(e) + 3 * kS; }
+  void start(std::uint32_t e) {
+    core_->onEpisodeStart({e, {startOf(e), 1.0}, 8, {}}, now_);
+  }
+
+  // The measurements sensor timelines give episode e, published at their emulated time.
+  std::vector<MeasurementArrival> measurements(std::uint32_t e) const {
+    ScheduleBook book;
+    (void)book.add(version_);
+    const EmulatedPlant plant(scenario_, kSeed);
+    std::vector<MeasurementArrival> all;
+    std::vector<std::uint64_t> seq(4, 0);
+    for (const auto& a : sensorTimeline(book, plant, kSeed, e, {0, 1, 2, 3}, scenario_.horizon_s)) {
+      MeasurementArrival m;
+      m.measurement.sensor = a.sensor;
+      m.measurement.seq = seq[static_cast<std::size_t>(a.sensor)]++;
+      m.measurement.time_s = a.time_s;
+      m.measurement.version = a.version;
+      m.measurement.z = plant.measure(plant.stateAt(e, a.tick), a.sensor, e, m.measurement.seq);
+      m.measurement.publish_wall_ns = startOf(e) + static_cast<std::int64_t>(1e9 * a.time_s);
+      m.measurement.receive_wall_ns = m.measurement.publish_wall_ns + kMs;
+      m.episode = e;
+      m.run_id = kRun;
+      m.writer = measurementWriter(a.sensor);
+      all.push_back(m);
+    }
+    return all;
+  }
+  static std::vector<std::uint64_t> sentBy(const std::vector<MeasurementArrival>& all) {
+    std::vector<std::uint64_t> sent(4, 0);
+    for (const auto& m : all) ++sent[static_cast<std::size_t>(m.measurement.sensor)];
+    return sent;
+  }
+  static EpisodeTally tally(int j, std::uint32_t e, std::uint64_t sent, std::int64_t published) {
+    EpisodeTally t;
+    t.sensor = static_cast<std::uint32_t>(j);
+    t.run_id = kRun;
+    t.episode = e;
+    t.count.sent = sent;
+    t.wall_time_ns = published;
+    t.writer = tallyWriter(j);
+    return t;
+  }
+  double inOrderCost(const std::vector<MeasurementArrival>& arrivals) const {
+    std::vector<FusedMeasurement> all;
+    for (const auto& a : arrivals) all.push_back(a.measurement);
+    return test::inOrderCost(scenario_, std::move(all));
+  }
+
+  // The main loop turns every 10 ms up to `until` (it never stalls unless a test skips time).
+  void runUntil(std::int64_t until) {
+    while (now_ < until) {
+      now_ = std::min(until, now_ + 10 * kMs);
+      core_->tick(now_);
+      take();
+    }
+  }
+  // Delivers `all` at their receive times, the loop turning in between.
+  void deliver(const std::vector<MeasurementArrival>& all) {
+    for (const auto& m : all) {
+      runUntil(m.measurement.receive_wall_ns);
+      core_->onMeasurement(m, now_);
+    }
+  }
+  void deliverTallies(const std::vector<std::uint64_t>& sent, std::uint32_t e,
+                      const std::vector<int>& sensors) {
+    for (const int j : sensors) {
+      core_->onTally(tally(j, e, sent[static_cast<std::size_t>(j)], now_), now_);
+    }
+  }
+  void take() {
+    for (FusionAction& a : core_->takeActions()) {
+      if (auto* r = std::get_if<PublishReport>(&a)) reports_.push_back(*r);
+      if (auto* f = std::get_if<WriteFinalReport>(&a)) final_ = f->doc;
+      if (std::holds_alternative<AppendEpisodeLog>(a)) ++logged_;
+    }
+  }
+  RunStatus finish(std::optional<RunEnd> end) {
+    const RunStatus status = core_->finish(end, {}, "now", now_);
+    take();
+    return status;
+  }
+  [[nodiscard]] std::vector<std::string> faultKinds() const {
+    std::vector<std::string> kinds;
+    for (const json& f : core_->faults()) kinds.push_back(f.at("kind"));
+    return kinds;
+  }
+  // One whole clean episode: every measurement on time, every tally at the end.
+  void cleanEpisode(std::uint32_t e) {
+    start(e);
+    const auto all = measurements(e);
+    deliver(all);
+    runUntil(endOf(e) + 5 * kMs);
+    deliverTallies(sentBy(all), e, {0, 1, 2, 3});
+    runUntil(endOf(e) + 50 * kMs);
+  }
+
+  FakeWriters writers_;
+  std::map<std::uint32_t, std::int64_t> starts_;
+  Scenario scenario_;
+  ScheduleVersion version_;
+  std::unique_ptr<FusionCenterCore> core_;
+  std::int64_t now_ = 0;
+  std::vector<PublishReport> reports_;
+  json final_;
+  int logged_ = 0;
+};
+
+TEST_F(FusionCenterCoreTest, ClosesAnEpisodeOnlyWhenEveryCountIsIn) {
+  begin(0);
+  const auto all = measurements(0);
+  ASSERT_GT(all.size(), 8u);
+  deliver(all);
+  runUntil(endOf(0) + 100 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2});
+  runUntil(endOf(0) + 2 * kS);
+  EXPECT_TRUE(reports_.empty()) << "closed without the count of sensor 3";
+  deliverTallies(sentBy(all), 0, {3});
+  runUntil(now_ + 20 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  const EpisodeResult& r = reports_[0].result;
+  EXPECT_TRUE(r.complete);
+  EXPECT_EQ(r.realized_cost, inOrderCost(all));
+  for (int j = 0; j < 4; ++j) EXPECT_EQ(r.sensors[j].received, sentBy(all)[j]);
+  EXPECT_EQ(logged_, 1);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed);
+  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+}
+
+TEST_F(FusionCenterCoreTest, TallyBeforeItsMeasurementsWaitsForThem) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  runUntil(endOf(0));
+  deliverTallies(sent, 0, {0, 1, 2, 3});  // every count in, no measurement yet
+  runUntil(endOf(0) + 100 * kMs);
+  EXPECT_TRUE(reports_.empty());
+  for (auto& m : all) m.measurement.receive_wall_ns = now_ + kMs;
+  deliver(all);
+  runUntil(now_ + 20 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+}
+
+TEST_F(FusionCenterCoreTest, MeasurementsAndTalliesBeforeTheStartAreHeldForIt) {
+  make();
+  announce();
+  const auto all = measurements(0);
+  for (const auto& m : all) core_->onMeasurement(m, now_);  // the start overtaken
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(kS);
+  EXPECT_TRUE(reports_.empty());
+  start(0);
+  runUntil(endOf(0) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed);
+  EXPECT_EQ(final_.at("summary").at("rejected"), 0);
+}
+
+TEST_F(FusionCenterCoreTest, ASilentSensorIsAwaitedForTheStallLimitThenAStall) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 2; });
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 3});
+  runUntil(endOf(0) + 11 * kS);  // silent, within the 12 s limit: still awaited
+  EXPECT_TRUE(reports_.empty());
+  runUntil(endOf(0) + 12 * kS + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_FALSE(reports_[0].result.complete);
+  ASSERT_EQ(faultKinds(), std::vector<std::string>{"stall"});
+  EXPECT_EQ(core_->faults()[0].at("sensor"), 2);
+  // Its tally after the close is named as late.
+  core_->onTally(tally(2, 0, sent[2], now_), now_);
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"stall", "late_tally"}));
+}
+
+TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::erase_if(all, [](const auto& m) {
+    return m.measurement.sensor == 1 && m.measurement.time_s > 1.0;
+  });
+  deliver(all);
+  core_->onSensorFailure({0, 1.0, {1}, "sensor 1's process exited"}, now_);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 2, 3});
+  runUntil(endOf(0) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u) << "waited for a dead sensor";
+  EXPECT_FALSE(reports_[0].result.complete);
+  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+  // The next episode starts with it dead: it is complete without it.
+  start(1);
+  auto next = measurements(1);
+  std::erase_if(next, [](const auto& m) { return m.measurement.sensor == 1; });
+  deliver(next);
+  runUntil(endOf(1) + 10 * kMs);
+  deliverTallies(sentBy(next), 1, {0, 2, 3});
+  runUntil(endOf(1) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
+}
+
+// Defect (a): a link cut for 3 s mid-episode delays two sensors' measurements and tallies; the
+// retransmitted tally comes before the last retransmitted measurements. Nothing is lost: a stall
+// of the network, listed with the sensors it held back, and the run completed.
+TEST_F(FusionCenterCoreTest, ACutLinkIsAStallNotAnOverload) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  const std::int64_t cut = startOf(0) + 1 * kS, up = endOf(0) + 1 * kS;  // 3 s silent
+  for (auto& m : all) {
+    const bool behind = m.measurement.sensor >= 2 && m.measurement.publish_wall_ns >= cut;
+    if (behind) m.measurement.receive_wall_ns = up + 500 * kMs;  // after the tallies
+  }
+  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+    return a.measurement.receive_wall_ns < b.measurement.receive_wall_ns;
+  });
+  const auto first_late = std::find_if(all.begin(), all.end(), [&](const auto& m) {
+    return m.measurement.receive_wall_ns >= up;
+  });
+  deliver({all.begin(), first_late});
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1});
+  runUntil(up);
+  // Published at the episode's end, retransmitted when the link is back.
+  for (const int j : {2, 3}) core_->onTally(tally(j, 0, sent[j], endOf(0) + 10 * kMs), now_);
+  runUntil(up + 100 * kMs);
+  EXPECT_TRUE(reports_.empty());
+  deliver({first_late, all.end()});
+  runUntil(now_ + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+  EXPECT_LT(reports_[0].result.drain_s, 0.1);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed);
+  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+  ASSERT_EQ(core_->stalls().size(), 1u) << core_->stalls().dump();
+  const json& stall = core_->stalls()[0];
+  EXPECT_EQ(stall.at("episode"), 0);
+  EXPECT_EQ(stall.at("sensors"), json::array({2, 3}));
+  // The longest in transit: a measurement published just after the cut, received 0.5 s after up.
+  EXPECT_GT(stall.at("seconds").get<double>(), 3.0);
+  EXPECT_LE(stall.at("seconds").get<double>(), 1e-9 * static_cast<double>(up + 500 * kMs - cut));
+}
+
+// The fusion center itself falls behind: everything arrived on time, but its loop got the
+// measurements 2 s late (the inbox grew while it worked): that is an overload.
+TEST_F(FusionCenterCoreTest, AFusionCenterThatFallsBehindIsOverloaded) {
+  begin(0);
+  const auto all = measurements(0);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 2 * kS);
+  for (const auto& m : all) core_->onMeasurement(m, now_);  // received long ago
+  runUntil(now_ + 20 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_GT(reports_[0].result.drain_s, 1.9);
+  EXPECT_EQ(reports_[0].result.backlog, all.size());
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"overload"});
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
+}
+
+TEST_F(FusionCenterCoreTest, ASensorFarBehindTheClockIsLagAndItsStallIsListed) {
+  begin(0);
+  const auto all = measurements(0);
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  EpisodeTally lagging = tally(1, 0, sentBy(all)[1], now_);
+  lagging.max_lag_s = 1.5;  // past the 1 s keep-up limit
+  lagging.stalled_s = 2.0;  // stopped for 2 s, which the lag does not count
+  core_->onTally(lagging, now_);
+  deliverTallies(sentBy(all), 0, {0, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"sensor_lag"});
+  ASSERT_EQ(core_->stalls().size(), 1u);
+  EXPECT_EQ(core_->stalls()[0].at("process"), "sensor 1");
+  EXPECT_EQ(core_->stalls()[0].at("seconds"), 2.0);
+}
+
+TEST_F(FusionCenterCoreTest, ASecondWriterOfASensorIsKeptOutWhileTheFirstLives) {
+  begin(0);
+  const auto all = measurements(0);
+  deliver(all);
+  MeasurementArrival rogue = all.front();
+  rogue.writer = 999;
+  rogue.measurement.seq = 1000;  // a new seq: only the writer tells it apart
+  core_->onMeasurement(rogue, now_);
+  core_->onMeasurement(rogue, now_);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"foreign_writer"}) << "named once per writer";
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(final_.at("summary").at("rejected_by_reason").at("foreign_writer"), 2);
+}
+
+TEST_F(FusionCenterCoreTest, ANewWriterTakesOverWhenTheFirstIsGone) {
+  begin(0);
+  auto all = measurements(0);
+  for (auto& m : all) {
+    if (m.measurement.sensor == 0 && m.measurement.time_s > 1.5) m.writer = 998;
+  }
+  const auto first_half = std::partition_point(all.begin(), all.end(), [](const auto& m) {
+    return m.measurement.time_s <= 1.5;
+  });
+  deliver({all.begin(), first_half});
+  writers_.dead.insert(measurementWriter(0));  // its participant's lease expired
+  deliver({first_half, all.end()});
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+}
+
+TEST_F(FusionCenterCoreTest, StatusFollowsFromTheFaults) {
+  make();
+  announce();
+  cleanEpisode(0);
+  cleanEpisode(1);
+  EXPECT_EQ(finish(RunEnd{3, false, ""}), RunStatus::Degraded) << "episode 2 ran, never fused";
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"missing_episodes"});
+
+  make();
+  announce();
+  cleanEpisode(0);
+  EXPECT_EQ(finish(RunEnd{1, true, "no feasible schedule"}), RunStatus::Failed);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"run_aborted"});
+
+  make();
+  announce();
+  cleanEpisode(0);
+  EXPECT_EQ(finish(std::nullopt), RunStatus::Interrupted);
+  EXPECT_TRUE(core_->faults().empty());
+}
+
+// Defect (b): a signal with two episodes open: one fault names the cause, the episodes and the
+// sensors they waited for; a sensor that really lost measurements is `lost`; no stall per sensor.
+TEST_F(FusionCenterCoreTest, ARunStoppedWithEpisodesOpenNamesItsCauseOnce) {
+  begin(0);
+  start(1);
+  const auto all = measurements(0);
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  auto sent = sentBy(all);
+  ++sent[3];  // sensor 3 counts one more than arrived: really lost
+  deliverTallies(sent, 0, {0, 3});
+  runUntil(endOf(0) + kS);
+  EXPECT_EQ(finish(std::nullopt), RunStatus::Interrupted);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_FALSE(reports_[0].result.complete);
+  EXPECT_NE(reports_[0].result.incomplete_reason.find("cut short"), std::string::npos)
+      << reports_[0].result.incomplete_reason;
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"lost", "cut_short"}));
+  const json& cut = core_->faults()[1];
+  EXPECT_EQ(cut.at("caused_by"), "interrupted");
+  EXPECT_EQ(cut.at("episodes"), json::array({0, 1}));
+  EXPECT_NE(cut.at("detail").get<std::string>().find("episode 0: sensors 1, 2"), std::string::npos)
+      << cut.at("detail");
+  EXPECT_EQ(core_->faults()[0].at("sensor"), 3);
+}
+
+// The coordinator's --on-sensor-failure stop: the run is aborted with an episode open.
+TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
+  begin(0);
+  const auto all = measurements(0);
+  deliver(all);
+  core_->onSensorFailure({0, 2.0, {1}, "sensor 1's process exited"}, now_);
+  runUntil(endOf(0) + kS);
+  EXPECT_EQ(finish(RunEnd{1, true, "sensor 1 failed (--on-sensor-failure stop)"}),
+            RunStatus::Failed);
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"cut_short", "run_aborted"}));
+  EXPECT_EQ(core_->faults()[0].at("caused_by"), "run_aborted");
+}
+
+// Entries of a log a killed fusion center left: episodes 0 .. n-1.
+std::vector<json> loggedEpisodes(std::uint32_t n) {
+  std::vector<json> entries;
+  for (std::uint32_t e = 0; e < n; ++e) {
+    entries.push_back(episodeEntry(restartedEpisode(e, 4)));
+  }
+  return entries;
+}
+
+// Two sensor processes: sensors 0, 1 in one, 2, 3 in the other.
+void hearStatuses(FusionCenterCore& core, std::uint32_t episode, std::int64_t now,
+                  const std::vector<int>& sensors = {0, 1, 2, 3}) {
+  for (const int j : sensors) {
+    SensorStatus s;
+    s.sensor = static_cast<std::uint32_t>(j);
+    s.run_id = kRun;
+    s.episode = episode;
+    s.state = SensorProcessState::Running;
+    s.process_id = j < 2 ? 1000 : 2000;
+    s.writer = statusWriter(j < 2 ? 0 : 2);
+    s.wall_time_ns = now;
+    core.onStatus(s, now);
+  }
+}
+
+// Defect (c): restarted 1 s into episode 4 (its start replayed by durability), the fusion center
+// answers for it only when it holds the Measurement writers of every live sensor process, by
+// identity: as many writers matched as processes is not enough.
+TEST_F(FusionCenterCoreTest, AResumedCenterAnswersOnlyWhenItHoldsEverySensorProcess) {
+  make(loggedEpisodes(4), startOf(4) + 1 * kS);
+  announce();
+  start(4);
+  hearStatuses(*core_, 4, now_);
+  writers_.matched = 2;                       // two writers matched ...
+  writers_.held = {statusWriter(0)};          // ... but both of the first process
+  runUntil(endOf(4) + 500 * kMs);
+  EXPECT_TRUE(reports_.empty()) << "answered without the second process's writers";
+  EXPECT_EQ(core_->sensorsLackingWriters(), (std::vector<int>{2, 3}));
+  writers_.held.insert(statusWriter(2));
+  runUntil(now_ + 20 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.episode, 4u);
+  EXPECT_EQ(reports_[0].result.incomplete_reason, kRestartedReason);
+  EXPECT_TRUE(reports_[0].lacking_writers.empty());
+  // The next episode, heard whole, is fused.
+  cleanEpisode(5);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_TRUE(reports_[1].result.complete);
+  EXPECT_EQ(finish(RunEnd{6, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"});
+  EXPECT_EQ(final_.at("summary").at("episodes"), 6);
+}
+
+// Two sensor processes stopped at the moment of the kill: their statuses never come. The
+// restarted center waits kResumeMatchWaitS, then answers and names the sensors it lacks.
+TEST_F(FusionCenterCoreTest, AResumedCenterNamesTheSensorsWhoseWritersItLacks) {
+  const std::int64_t joined = startOf(4) + 1 * kS;
+  make(loggedEpisodes(4), joined);
+  announce();
+  start(4);
+  hearStatuses(*core_, 4, now_, {0, 1});  // the other process is stopped
+  writers_.held = {statusWriter(0)};
+  runUntil(joined + static_cast<std::int64_t>(1e9 * kResumeMatchWaitS) - 20 * kMs);
+  EXPECT_TRUE(reports_.empty());
+  runUntil(joined + static_cast<std::int64_t>(1e9 * kResumeMatchWaitS) + 20 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].lacking_writers, (std::vector<int>{2, 3}));
+  EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
+  const std::string restarted = core_->faults().at(0).at("detail");
+  EXPECT_NE(restarted.find("without the measurement writers of sensors 2, 3"), std::string::npos)
+      << restarted;
+}
+
+// Issue 31, finding 1: killed 1 s into episode 4 of 1.5 s, restarted; episode 5 (announced before
+// the kill) begins before the sensors' writers have matched the new reader, so its first
+// measurements never come. It is answered as the restart's consequence, not held open 12 s as
+// lost; episode 6, which begins once every writer is held, is fused.
+TEST_F(FusionCenterCoreTest, AnEpisodeThatBeginsBeforeTheWritersAreHeldIsNotFused) {
+  starts_ = {{5, endOf(4)}, {6, endOf(4) + 4 * kS}};  // back to back, as the coordinator runs them
+  make(loggedEpisodes(4), startOf(4) + 1 * kS);
+  announce();
+  start(4);
+  start(5);  // durability replays the last starts
+  hearStatuses(*core_, 4, now_);
+  writers_.held = {statusWriter(0)};
+  runUntil(startOf(5) + 100 * kMs);
+  for (const auto& m : measurements(5)) {
+    if (m.measurement.time_s > 1.0) core_->onMeasurement(m, now_);  // the first ones lost
+  }
+  writers_.held.insert(statusWriter(2));
+  runUntil(endOf(5) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_EQ(reports_[0].result.episode, 4u);
+  EXPECT_EQ(reports_[1].result.episode, 5u);
+  EXPECT_EQ(reports_[1].result.incomplete_reason, kRestartedReason);
+  cleanEpisode(6);
+  ASSERT_EQ(reports_.size(), 3u);
+  EXPECT_TRUE(reports_[2].result.complete);
+  EXPECT_EQ(finish(RunEnd{7, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"}) << "no lost, no stall";
+  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("episode 5 began before"),
+            std::string::npos);
+}
+
+// Restarted between episodes: the first start it hears is after its join; the episode it died in
+// (4, not in the log) is answered as restarted, and the new one (5) is fused.
+TEST_F(FusionCenterCoreTest, AResumeBetweenEpisodesFusesTheNextOne) {
+  make(loggedEpisodes(4), endOf(4) + 500 * kMs);
+  announce();
+  hearStatuses(*core_, 4, now_);
+  writers_.held = {statusWriter(0), statusWriter(2)};
+  cleanEpisode(5);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_EQ(reports_[0].result.episode, 4u);
+  EXPECT_EQ(reports_[0].result.incomplete_reason, kRestartedReason);
+  EXPECT_EQ(reports_[1].result.episode, 5u);
+  EXPECT_TRUE(reports_[1].result.complete);
+}
+
+// Restarted late in episode 4 whose start sample this process never got (only a failure notice
+// of it): the episode is under way and cannot be fused; late samples of logged episodes are
+// ignored, not counted as rejected.
+TEST_F(FusionCenterCoreTest, AResumeThatHearsOnlyAFailureNoticeAnswersForThatEpisode) {
+  make(loggedEpisodes(4), startOf(4) + 2 * kS);
+  announce();
+  hearStatuses(*core_, 4, now_);
+  writers_.held = {statusWriter(0), statusWriter(2)};
+  core_->onSensorFailure({4, 1.0, {1}, "sensor 1's process exited"}, now_);
+  for (const auto& m : measurements(3)) core_->onMeasurement(m, now_);  // logged already
+  runUntil(now_ + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.episode, 4u);
+  EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(final_.at("summary").at("rejected"), 0);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"});
+}
+
+// A stall of the fusion center itself is its own, not a sensor's: the silence it slept through
+// does not count towards the stall limit.
+TEST_F(FusionCenterCoreTest, ItsOwnStallDoesNotCountAgainstASilentSensor) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 2});
+  runUntil(endOf(0) + 2 * kS);
+  now_ += 11 * kS;  // stopped (SIGSTOP) for 11 s: no tick
+  runUntil(now_ + 2 * kS);  // 2 + 2 s of silence awake: within the 12 s limit
+  EXPECT_TRUE(reports_.empty()) << core_->faults().dump();
+  ASSERT_FALSE(core_->stalls().empty());
+  EXPECT_EQ(core_->stalls()[0].at("process"), "fusion_center");
+  deliverTallies(sent, 0, {3});
+  runUntil(now_ + 20 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+}
+
+}  // namespace
+}  // namespace sensornet::emulator
