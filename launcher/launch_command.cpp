@@ -434,7 +434,7 @@ int runLaunch(LaunchOptions options) {
 }
 
 constexpr const char* kLaunchFooter =
-    "Exit status (DESIGN.md, \"Run outcome\"; the report's \"status\" says the same):\n"
+    "Exit status (docs/ARCHITECTURE.md, \"Run outcome\"; the report's \"status\" says the same):\n"
     "  0  completed: every episode complete, every sent measurement fused, no process failed\n"
     "  3  degraded: every episode ran, but something was lost, rejected or re-planned because "
     "of a fault, or a process died and the run survived it (a sensor agent: the "

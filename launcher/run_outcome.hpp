@@ -1,5 +1,5 @@
 #pragma once
-// How a launched run ended, decided in one place (DESIGN.md, "Run outcome"): the report's
+// How a launched run ended, decided in one place (docs/ARCHITECTURE.md, "Run outcome"): the report's
 // status and the launcher's exit code, and the report that says so.
 //
 // The decision itself is the launcher core's (run_verdict.hpp: the status from the launcher's

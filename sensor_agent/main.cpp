@@ -1,4 +1,4 @@
-// sensor_agent: emulates one sensor, or a block of sensors, of a sensornet run (DESIGN.md,
+// sensor_agent: emulates one sensor, or a block of sensors, of a sensornet run (docs/ARCHITECTURE.md,
 // "Processes"). It needs only the run id and its sensor ids; the scenario, the schedule and
 // the episodes come over DDS.
 

@@ -711,7 +711,8 @@ RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
 }
 
 // The one fault of episodes still open at the run's end: which episodes, which sensors they
-// waited for, and the cause (`caused_by`: the kind of the fault that names it, when it is one).
+// waited for, and what ended the run (`ended_by`: a fault kind, when a signal or the
+// coordinator's abort did).
 // A sensor whose tally says it sent more than arrived really lost measurements: `lost`.
 void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind> cause) {
   std::vector<std::uint32_t> episodes;
@@ -741,14 +742,16 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
                           "episodes " + listed(episodes) + " were open when " + why +
                               (awaited.empty() ? "" : " (their counts not in: " + awaited + ")"));
   fault["episodes"] = episodes;
-  if (cause) fault["caused_by"] = std::string(wordOf(*cause));
+  // What ended the run as the fusion center saw it; the launcher, which knows the run's one cause,
+  // marks this entry as that cause's consequence (caused_by, fault_causes.hpp).
+  if (cause) fault["ended_by"] = std::string(wordOf(*cause));
   log(spdlog::level::warn, fault.at("detail").get<std::string>());
   recordFault(std::move(fault));
   for (auto& [number, open] : open_) finishEpisode(number, *open, &why);
   open_.clear();
 }
 
-// DESIGN.md's run outcome, as far as the fusion center saw it (the launcher adds what it saw
+// docs/ARCHITECTURE.md's run outcome, as far as the fusion center saw it (the launcher adds what it saw
 // of the processes): failed when the coordinator gave up, interrupted on a signal, degraded
 // when an episode is missing or incomplete, something was lost or rejected, or it overloaded.
 RunStatus FusionCenterCore::decideStatus(

@@ -37,7 +37,7 @@
 // received on the episode's clock; it adds the real network's delay (a netem delay, a cut link)
 // and any stall of a process, and at high time scales the loopback latency times the scale.
 //
-// Accounting, per sensor (DESIGN.md): sent = received + lost + dropped_by_network. `sent` is the
+// Accounting, per sensor (docs/ARCHITECTURE.md): sent = received + lost + dropped_by_network. `sent` is the
 // sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
 // the highest seq received + 1), and the episode is incomplete. The emulated network (the
 // scenario's `network:`) drops some measurements before they are written and writes some twice:

@@ -36,7 +36,7 @@
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
-#include "sensornet/emulator/run_events.hpp"
+#include "sensornet/emulator/episode_controls.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/stall_watch.hpp"

@@ -28,7 +28,6 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/emulator/episode_controls.hpp"
 #include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_events.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
 namespace sensornet::emulator {

@@ -20,7 +20,7 @@
 // a torn line skipped). Without a log (tests, a fusion center without --report) the entries
 // are held.
 //
-// Statistics (DESIGN.md): the mean realized cost, its 95% interval and whether it meets the
+// Statistics (docs/ARCHITECTURE.md): the mean realized cost, its 95% interval and whether it meets the
 // mean bracket are over complete episodes only. The interval is Student's t with K - 1 degrees
 // of freedom, clipped below at zero (a cost is never negative); with fewer than 2 complete
 // episodes there is no interval and `meets_bracket` is undetermined (null in JSON). Counts

@@ -1,6 +1,6 @@
 #pragma once
 // Noticing that this process itself was not running: stopped (SIGSTOP, a debugger), paused or
-// starved of CPU. DESIGN.md separates a stall (alive but silent, and back later) from a death;
+// starved of CPU. docs/ARCHITECTURE.md separates a stall (alive but silent, and back later) from a death;
 // a process that knows when it was stalled can keep its own absence out of what it measures
 // (how late an episode drained, how far a sensor lagged behind the emulated clock) and out of
 // its deadlines.

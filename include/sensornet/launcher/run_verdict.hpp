@@ -1,6 +1,6 @@
 #pragma once
 // The run's status and the launcher's exit code, decided in one place from what the launcher
-// saw and what the fusion center's report says (DESIGN.md, "Run outcome"):
+// saw and what the fusion center's report says (docs/ARCHITECTURE.md, "Run outcome"):
 //
 //   | exit | status                 |
 //   | 0    | completed              |

@@ -12,7 +12,7 @@
 //
 // What is checked is recomputed from the report's per-episode lists (sent = received + lost +
 // dropped, no loss) and from a clean run, not taken from the report's verdict; exit codes are
-// DESIGN.md's.
+// docs/ARCHITECTURE.md's.
 
 #include <gtest/gtest.h>
 #include <signal.h>

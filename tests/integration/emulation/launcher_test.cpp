@@ -444,7 +444,7 @@ TEST_F(Launcher, StatusAndReplanReachALiveRunWithoutRunId) {
   const std::optional<pid_t> launcher_pid = launcherOf(run_id_);
   ASSERT_TRUE(launcher_pid.has_value());
   ::kill(*launcher_pid, SIGINT);
-  // DESIGN.md's run-outcome table: an interrupted run exits 1 (not the shell's 130).
+  // docs/ARCHITECTURE.md's run-outcome table: an interrupted run exits 1 (not the shell's 130).
   EXPECT_EQ(launcher.result().exit_code, 1);
   EXPECT_EQ(leftoversAfter(run_id_, 1s), std::vector<pid_t>{});
 }

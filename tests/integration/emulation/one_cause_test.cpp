@@ -7,7 +7,7 @@
 // - SIGINT to the launcher mid-run: the interrupt is the one cause; the children it stopped are
 //   not faults, and the fusion center's entries about the cut-off episode are its consequences.
 //
-// Expectations are the outcome table's (DESIGN.md: failed and interrupted exit 1) and the
+// Expectations are the outcome table's (docs/ARCHITECTURE.md: failed and interrupted exit 1) and the
 // scripted fault, recomputed from the report's entries, not taken from its verdict.
 //
 // What depends on the other sides (until their branches merge): the fusion center still writes
@@ -34,7 +34,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace std::chrono_literals;
 
-constexpr int kExitFailed = 1;  // DESIGN.md: failed / interrupted
+constexpr int kExitFailed = 1;  // docs/ARCHITECTURE.md: failed / interrupted
 
 // The entries that are causes (no caused_by), and every consequence's cause.
 std::vector<json> causesIn(const json& faults) {

@@ -442,7 +442,8 @@ TEST_F(FusionCenterCoreTest, ARunStoppedWithEpisodesOpenNamesItsCauseOnce) {
       << reports_[0].result.incomplete_reason;
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"lost", "cut_short"}));
   const json& cut = core_->faults()[1];
-  EXPECT_EQ(cut.at("caused_by"), "interrupted");
+  EXPECT_EQ(cut.at("ended_by"), "interrupted");
+  EXPECT_FALSE(cut.contains("caused_by")) << "the launcher, which knows the cause, marks it";
   EXPECT_EQ(cut.at("episodes"), json::array({0, 1}));
   EXPECT_NE(cut.at("detail").get<std::string>().find("episode 0: sensors 1, 2"), std::string::npos)
       << cut.at("detail");
@@ -459,7 +460,7 @@ TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
   EXPECT_EQ(finish(RunEnd{1, true, "sensor 1 failed (--on-sensor-failure stop)"}),
             RunStatus::Failed);
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"cut_short", "run_aborted"}));
-  EXPECT_EQ(core_->faults()[0].at("caused_by"), "run_aborted");
+  EXPECT_EQ(core_->faults()[0].at("ended_by"), "run_aborted");
 }
 
 // Entries of a log a killed fusion center left: episodes 0 .. n-1.

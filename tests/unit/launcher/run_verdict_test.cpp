@@ -1,4 +1,4 @@
-// The run's status and exit code against DESIGN.md's outcome table (0 completed, 1 failed or
+// The run's status and exit code against docs/ARCHITECTURE.md's outcome table (0 completed, 1 failed or
 // interrupted, 3 degraded, 4 a --require failed), and the fault list that names a cause once:
 // what the fusion center recorded because of the run-ending cause is marked as its consequence.
 
