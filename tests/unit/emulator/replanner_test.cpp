@@ -23,17 +23,22 @@ namespace {
 
 using test::smallScenario;
 
+// Version 1 of a run: the `surrogate` plan of the scenario, from episode 0.
+ScheduleVersion firstVersion(const Scenario& scenario, PlanSurrogate surrogate) {
+  PlanRequest request;
+  request.surrogate = surrogate;
+  ScheduleVersion v1;
+  v1.version = 1;
+  v1.schedule = planSchedule(scenario, request).schedule;
+  v1.surrogate = std::string(describe(surrogate));
+  v1.bracket = computeBracket(scenario, v1.schedule);
+  return v1;
+}
+
 class Replanning : public ::testing::Test {
  protected:
   Replanning() : scenario_(smallScenario()), plant_(scenario_, 1) {
-    PlanRequest request;
-    request.surrogate = PlanSurrogate::Information;
-    ScheduleVersion v1;
-    v1.version = 1;
-    v1.schedule = planSchedule(scenario_, request).schedule;
-    v1.surrogate = "info";
-    v1.bracket = computeBracket(scenario_, v1.schedule);
-    book_.add(v1);
+    book_.add(firstVersion(scenario_, PlanSurrogate::Information));
   }
 
   Replanner replanner(ReplannerOptions options = {}) const {
@@ -339,14 +344,8 @@ TEST_F(Replanning, FailedSensorsAreRecordedAndPlannedWithout) {
 TEST(ReplanningDefaultScenario, ASensorDeathIsReplannedToACertifiedPlanWithoutIt) {
   const Scenario scenario = loadScenarioFile(std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml");
   const EmulatedPlant plant(scenario, 1);
-  PlanRequest request;
-  request.surrogate = PlanSurrogate::Covariance;
   ScheduleBook book;
-  ScheduleVersion v1;
-  v1.version = 1;
-  v1.schedule = planSchedule(scenario, request).schedule;
-  v1.surrogate = "cov";
-  v1.bracket = computeBracket(scenario, v1.schedule);
+  const ScheduleVersion v1 = firstVersion(scenario, PlanSurrogate::Covariance);
   book.add(v1);
   ASSERT_GT(v1.schedule.rates().col(1).maxCoeff(), 0.0) << "the plan must use sensor 1";
   Replanner r(scenario, plant, initialSettings(scenario, PlanSurrogate::Covariance), {});
