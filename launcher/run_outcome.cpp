@@ -250,12 +250,16 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
     interval = "\u00b1 " + shown(ci95) + " (95%: [" + shown(field(summary, "ci95_low")) + ", " +
                shown(field(summary, "ci95_high")) + "])";
   }
-  std::printf(
-      "realized cost over complete episodes: mean %s %s against the bracket [%s, %s]: "
-      "meets_bracket %s\n",
-      shown(field(summary, "mean")).c_str(), interval.c_str(),
-      shown(field(bracket, "info")).c_str(), shown(field(bracket, "cov")).c_str(),
-      meetsText(field(summary, "meets_bracket")).c_str());
+  if (field(summary, "mean").is_number()) {
+    std::printf(
+        "realized cost over complete episodes: mean %s %s against the bracket [%s, %s]: "
+        "meets_bracket %s\n",
+        shown(field(summary, "mean")).c_str(), interval.c_str(),
+        shown(field(bracket, "info")).c_str(), shown(field(bracket, "cov")).c_str(),
+        meetsText(field(summary, "meets_bracket")).c_str());
+  } else {
+    std::printf("realized cost: not measured (no complete episode)\n");
+  }
   std::printf("%s\n", arrivalsLine(field(report, "arrivals")).c_str());
   std::printf("measurements: %s sent, %s received, %s lost, %s rejected\n",
               shown(field(summary, "sent")).c_str(), shown(field(summary, "received")).c_str(),
@@ -265,9 +269,13 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   const auto ms = [](const json& seconds) {
     return seconds.is_number() ? json(1e3 * seconds.get<double>()) : seconds;
   };
-  std::printf("latency publish-to-fusion: median %s ms, p99 %s ms\n",
-              shown(ms(field(latency, "median"))).c_str(),
-              shown(ms(field(latency, "p99"))).c_str());
+  if (field(latency, "median").is_number()) {
+    std::printf("latency publish-to-fusion: median %s ms, p99 %s ms\n",
+                shown(ms(field(latency, "median"))).c_str(),
+                shown(ms(field(latency, "p99"))).c_str());
+  } else {
+    std::printf("latency publish-to-fusion: not measured (no measurement arrived)\n");
+  }
   for (const emulator::RequirementCheck& check : outcome.checks) {
     std::printf("%s\n", emulator::describe(check).c_str());
   }

@@ -362,6 +362,12 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
                           {"expected", t.expected},
                           {"wrong_version", t.wrong_version}});
   }
+  // Nothing that was not measured is a number: no mean without a complete episode, no spread
+  // without two, no latency without a measurement (null, which every reader shows as such).
+  const auto ofComplete = [&s](double value, std::uint64_t needed = 1) {
+    return s.episodes_complete >= needed ? numberOrNull(value) : json(nullptr);
+  };
+  const bool measured_latency = latencies_.count() > 0;
   json report = {
       {"run_id", run_id_},
       {"status", status},
@@ -373,18 +379,19 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
        {{"episodes", s.episodes},
         {"episodes_complete", s.episodes_complete},
         {"episodes_incomplete", s.episodes - s.episodes_complete},
-        {"mean", s.mean},
-        {"std", s.std_dev},
+        {"mean", ofComplete(s.mean)},
+        {"std", ofComplete(s.std_dev, 2)},
         {"ci95", optionalJson(s.ci95)},
-        {"ci95_low", s.ci95_low},
-        {"ci95_high", s.ci95_high},
-        {"realtime_mean", s.realtime_mean},
-        {"received_realtime_mean", numberOrNull(s.received_realtime_mean)},
-        {"bracket", bracketJson(s.bracket_mean)},
+        {"ci95_low", ofComplete(s.ci95_low, 2)},
+        {"ci95_high", ofComplete(s.ci95_high, 2)},
+        {"realtime_mean", ofComplete(s.realtime_mean)},
+        {"received_realtime_mean", ofComplete(s.received_realtime_mean)},
+        {"bracket", s.episodes_complete > 0 ? bracketJson(s.bracket_mean) : json(nullptr)},
         {"meets_bracket", optionalJson(s.meets_bracket)},
-        {"delivered_bracket", bracketJson(s.delivered_bracket_mean)},
+        {"delivered_bracket",
+         s.episodes_complete > 0 ? bracketJson(s.delivered_bracket_mean) : json(nullptr)},
         {"meets_delivered_bracket", optionalJson(s.meets_delivered_bracket)},
-        {"nees_mean", s.nees_mean},
+        {"nees_mean", ofComplete(s.nees_mean)},
         {"sent", s.sent},
         {"received", s.received},
         {"expected", s.expected},
@@ -395,8 +402,8 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
         {"rejected_by_reason", s.rejected}}},
       {"sensors", per_sensor},
       {"latency_s",
-       {{"median", s.latency_median_s},
-        {"p99", s.latency_p99_s},
+       {{"median", measured_latency ? numberOrNull(s.latency_median_s) : json(nullptr)},
+        {"p99", measured_latency ? numberOrNull(s.latency_p99_s) : json(nullptr)},
         {"quantile_relative_error", kLatencyQuantileRelativeError},
         {"histogram", latencies_.toJson()}}}};
   for (const auto& [key, value] : extra.items()) report[key] = value;

@@ -576,6 +576,37 @@ TEST(RunReport, SummarizesCompleteEpisodesWithAStudentTInterval) {
   EXPECT_DOUBLE_EQ(quantile({1.0, 2.0, 3.0, 4.0, 5.0}, 0.99), 4.96);
 }
 
+// Issue 31, finding 2: a run stopped before any episode completed reported 0.0 for the mean, the
+// interval, the bracket and the latency; what was not measured is null.
+TEST(RunReport, WritesNullForWhatNoCompleteEpisodeMeasured) {
+  using nlohmann::json;
+  RunReport none("r", "d", 2, 3);
+  const EpisodeResult cut = episodeWith(0, 931.5, 1.0, false);  // cut short: not in the statistics
+  none.addLatencies(cut.latencies_s);
+  none.add(episodeEntry(cut));
+  json s = none.toJson("interrupted", json::array(), json::array()).at("summary");
+  for (const char* key : {"mean", "std", "ci95", "ci95_low", "ci95_high", "realtime_mean",
+                          "nees_mean", "bracket", "delivered_bracket", "meets_bracket"}) {
+    EXPECT_TRUE(s.at(key).is_null()) << key << " = " << s.at(key);
+  }
+  const json latency = none.toJson("interrupted", json::array(), json::array()).at("latency_s");
+  EXPECT_NEAR(latency.at("median").get<double>(), 0.001, 0.001 * kLatencyQuantileRelativeError);
+
+  RunReport one("r", "d", 2, 3);
+  one.add(episodeEntry(episodeWith(0, 19.59, 1.0, true)));
+  s = one.toJson("completed", json::array(), json::array()).at("summary");
+  EXPECT_DOUBLE_EQ(s.at("mean").get<double>(), 19.59);
+  for (const char* key : {"std", "ci95", "ci95_low", "ci95_high"}) {
+    EXPECT_TRUE(s.at(key).is_null()) << key << ": one complete episode has no spread";
+  }
+  EXPECT_TRUE(s.at("bracket").is_object());
+
+  RunReport empty("r", "d", 2, 3);
+  const json nothing = empty.toJson("interrupted", json::array(), json::array());
+  EXPECT_TRUE(nothing.at("latency_s").at("median").is_null());
+  EXPECT_TRUE(nothing.at("latency_s").at("p99").is_null());
+}
+
 TEST(RunReport, CountsWhatTheNetworkDroppedPerEpisodePerSensorAndInTotal) {
   RunReport report("r", "d", 2, 3);
   for (std::uint32_t i = 0; i < 3; ++i) {
