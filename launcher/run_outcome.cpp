@@ -1,6 +1,7 @@
 #include "run_outcome.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -177,6 +178,46 @@ std::string arrivalsLine(const json& arrivals) {
          "says whether the cost lies in it";
 }
 
+// Two brackets differ beyond their rounding.
+bool differs(const json& a, const json& b) {
+  for (const char* end : {"info", "cov"}) {
+    const json x = field(a, end), y = field(b, end);
+    if (!x.is_number() || !y.is_number()) return false;
+    const double u = x.get<double>(), v = y.get<double>();
+    if (std::abs(u - v) > 1e-9 * std::max(std::abs(u), std::abs(v))) return true;
+  }
+  return false;
+}
+
+// What the schedule could deliver, when that is not what it planned (an emulated network's
+// losses and outages, a dead sensor under --on-sensor-failure continue), else "".
+std::string deliveredLine(const json& summary) {
+  const json delivered = field(summary, "delivered_bracket");
+  if (!differs(delivered, field(summary, "bracket"))) return "";
+  return "  against what the schedule delivered (network losses and outages, dead sensors): [" +
+         shown(field(delivered, "info")) + ", " + shown(field(delivered, "cov")) +
+         "]: meets_delivered_bracket " + meetsText(field(summary, "meets_delivered_bracket"));
+}
+
+// The real-time cost, when it differs from the realized one (measurements arrived late).
+std::string realtimeLine(const json& summary) {
+  const json realtime = field(summary, "realtime_mean"), mean = field(summary, "mean");
+  if (!realtime.is_number() || !mean.is_number() || realtime == mean) return "";
+  return "  real-time cost (the covariance of what had arrived by each instant): mean " +
+         shown(realtime);
+}
+
+std::string measurementsLine(const json& summary) {
+  std::string line = "measurements: " + shown(field(summary, "sent")) + " sent, " +
+                     shown(field(summary, "received")) + " received, ";
+  if (const json dropped = field(summary, "dropped_by_network");
+      dropped.is_number() && dropped.get<double>() > 0) {
+    line += shown(dropped) + " dropped by the emulated network, ";
+  }
+  return line + shown(field(summary, "lost")) + " lost, " +
+         shown(total(field(summary, "rejected"))) + " rejected";
+}
+
 }  // namespace
 
 RunOutcome settleRun(const RunEnd& end) {
@@ -257,24 +298,34 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
         shown(field(summary, "mean")).c_str(), interval.c_str(),
         shown(field(bracket, "info")).c_str(), shown(field(bracket, "cov")).c_str(),
         meetsText(field(summary, "meets_bracket")).c_str());
+    if (const std::string line = deliveredLine(summary); !line.empty()) {
+      std::printf("%s\n", line.c_str());
+    }
+    if (const std::string line = realtimeLine(summary); !line.empty()) {
+      std::printf("%s\n", line.c_str());
+    }
   } else {
     std::printf("realized cost: not measured (no complete episode)\n");
   }
   std::printf("%s\n", arrivalsLine(field(report, "arrivals")).c_str());
-  std::printf("measurements: %s sent, %s received, %s lost, %s rejected\n",
-              shown(field(summary, "sent")).c_str(), shown(field(summary, "received")).c_str(),
-              shown(field(summary, "lost")).c_str(),
-              shown(total(field(summary, "rejected"))).c_str());
+  std::printf("%s\n", measurementsLine(summary).c_str());
   const json latency = field(report, "latency_s");
   const auto ms = [](const json& seconds) {
     return seconds.is_number() ? json(1e3 * seconds.get<double>()) : seconds;
   };
+  const json delay = field(report, "network_delay_s");
+  const bool delayed = field(delay, "max").is_number() && field(delay, "max").get<double>() > 0.0;
+  const char* which = delayed ? " (the middleware's, without the emulated network's delay)" : "";
   if (field(latency, "median").is_number()) {
-    std::printf("latency publish-to-fusion: median %s ms, p99 %s ms\n",
+    std::printf("latency publish-to-fusion%s: median %s ms, p99 %s ms\n", which,
                 shown(ms(field(latency, "median"))).c_str(),
                 shown(ms(field(latency, "p99"))).c_str());
   } else {
     std::printf("latency publish-to-fusion: not measured (no measurement arrived)\n");
+  }
+  if (delayed) {
+    std::printf("emulated network delay: mean %s ms, largest %s ms (emulated time)\n",
+                shown(ms(field(delay, "mean"))).c_str(), shown(ms(field(delay, "max"))).c_str());
   }
   for (const emulator::RequirementCheck& check : outcome.checks) {
     std::printf("%s\n", emulator::describe(check).c_str());

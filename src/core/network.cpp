@@ -104,6 +104,23 @@ RateSchedule deliveredSchedule(const RateSchedule& schedule, const NetworkSpec& 
   return RateSchedule(schedule.horizon(), std::move(rates));
 }
 
+RateSchedule silencedSchedule(const RateSchedule& schedule,
+                              const std::vector<std::optional<double>>& silent_from_s) {
+  Eigen::MatrixXd rates = schedule.rates();
+  const double h = schedule.intervalLength();
+  const std::size_t silenced = std::min(silent_from_s.size(),
+                                        static_cast<std::size_t>(schedule.sensorCount()));
+  for (std::size_t j = 0; j < silenced; ++j) {
+    if (!silent_from_s[j]) continue;
+    const auto col = static_cast<Eigen::Index>(j);
+    for (int k = 0; k < schedule.intervals(); ++k) {
+      const double live = std::clamp(*silent_from_s[j] - k * h, 0.0, h) / h;  // part before it
+      rates(k, col) *= live;
+    }
+  }
+  return RateSchedule(schedule.horizon(), std::move(rates));
+}
+
 Eigen::MatrixXd deliveryFactors(const Scenario& scenario) {
   const int sensors = scenario.sensorCount();
   Eigen::MatrixXd factors = Eigen::MatrixXd::Ones(scenario.intervals, sensors);

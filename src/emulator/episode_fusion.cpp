@@ -7,6 +7,7 @@
 #include <deque>
 
 #include "sensornet/core/network.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -238,13 +239,15 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
   const std::size_t index = all_.size();
   const Key key{m.time_s, m.sensor, m.seq};
-  if (m.time_s < filter_.time()) {
+  const bool late = m.time_s < filter_.time();
+  if (late) {
     ++tally.late;
     replay_ = true;  // fused again, in order, by finish()
   } else {
     pending_.insert({key, index});
   }
   all_.push_back(std::move(m));
+  arrived_late_.push_back(late);
   return std::nullopt;
 }
 
@@ -327,14 +330,31 @@ CostBracket EpisodeFusion::bracketAfterSwitch(const RateSchedule& schedule) cons
   return {at_switch_->first + rest.info, at_switch_->first + rest.cov};
 }
 
+bool EpisodeFusion::anyFailed() const {
+  for (int j = 0; j < scenario_.sensorCount(); ++j) {
+    if (failed(j)) return true;
+  }
+  return false;
+}
+
+RateSchedule EpisodeFusion::deliveredScheduleOf(const RateSchedule& schedule) const {
+  const RateSchedule through_network =
+      scenario_.network ? deliveredSchedule(schedule, *scenario_.network, episode_) : schedule;
+  if (!anyFailed()) return through_network;
+  std::vector<std::optional<double>> silent_from(failed_at_.size());
+  for (std::size_t j = 0; j < silent_from.size(); ++j) {
+    if (failed_before_[j]) silent_from[j] = 0.0;
+    else silent_from[j] = failed_at_[j];
+  }
+  return silencedSchedule(through_network, silent_from);
+}
+
 CostBracket EpisodeFusion::deliveredBracket() const {
   if (segments_.empty()) return {};
   const ScheduleVersion& last = *segments_.back().version;
-  if (at_switch_) {
-    return bracketAfterSwitch(deliveredSchedule(last.schedule, *scenario_.network, episode_));
-  }
-  if (delivered_bracket_of_) return delivered_bracket_of_(last);
-  return computeBracket(scenario_, deliveredSchedule(last.schedule, *scenario_.network, episode_));
+  if (at_switch_) return bracketAfterSwitch(deliveredScheduleOf(last.schedule));
+  if (delivered_bracket_of_ && !anyFailed()) return delivered_bracket_of_(last);
+  return computeBracket(scenario_, deliveredScheduleOf(last.schedule));
 }
 
 std::string EpisodeFusion::incompleteReason() const {
@@ -376,7 +396,36 @@ double EpisodeFusion::receivedRealtimeCost(double realtime_cost) const {
   return realtimeCost(scenario_, switch_time_s_, received, 2 * received.size() + 10000);
 }
 
+// Measurements their sensor never sent: a sequence number at or past the count its tally gives
+// (a forged sample, or another participant's, for a sensor that sent fewer or none). Refused
+// once the tally says how many it sent; the episode is then fused again in order without them,
+// so its cost is that of what the sensor sent.
+void EpisodeFusion::refuseBeyondTallies() {
+  const auto beyond = [this](const FusedMeasurement& m) {
+    const SensorTally& t = tallies_[static_cast<std::size_t>(m.sensor)];
+    return t.tallied && m.seq >= t.sent;
+  };
+  if (std::none_of(all_.begin(), all_.end(), beyond)) return;
+  std::vector<FusedMeasurement> kept;
+  std::vector<bool> kept_late;
+  for (std::size_t i = 0; i < all_.size(); ++i) {
+    if (!beyond(all_[i])) {
+      kept.push_back(std::move(all_[i]));
+      kept_late.push_back(arrived_late_[i]);
+      continue;
+    }
+    SensorTally& t = tallies_[static_cast<std::size_t>(all_[i].sensor)];
+    --t.received;
+    if (arrived_late_[i]) --t.late;
+    ++rejected_[std::string(wordOf(RejectionReason::BeyondTally))];
+  }
+  all_ = std::move(kept);
+  arrived_late_ = std::move(kept_late);
+  replay_ = true;
+}
+
 EpisodeResult EpisodeFusion::finish() {
+  refuseBeyondTallies();
   scheduleChanged();
   if (replay_) {
     filter_.reset();
@@ -409,7 +458,9 @@ EpisodeResult EpisodeFusion::finish() {
   } else if (!segments_.empty()) {
     result.bracket = bracket_of_(*segments_.front().version);
   }
-  result.delivered_bracket = scenario_.network ? deliveredBracket() : result.bracket;
+  // What the schedule could deliver: thinned by the network, nothing from a dead sensor.
+  result.delivered_bracket =
+      scenario_.network || anyFailed() ? deliveredBracket() : result.bracket;
   const Eigen::VectorXd error = plant_.stateAt(episode_, plant_.tickCount()) - filter_.mean();
   result.nees = error.dot(filter_.covariance().llt().solve(error));
   result.incomplete_reason = incompleteReason();
@@ -447,9 +498,13 @@ EpisodeResult EpisodeFusion::finish() {
     if (tally.duplicates > by_network) result.rejected["duplicate"] += tally.duplicates - by_network;
     result.sensors.push_back(tally);
   }
+  double delay_sum_s = 0.0;
   for (const FusedMeasurement& m : all_) {
     result.latencies_s.push_back(1e-9 * static_cast<double>(m.receive_wall_ns - m.publish_wall_ns));
+    delay_sum_s += m.network_delay_s;
+    result.network_delay_max_s = std::max(result.network_delay_max_s, m.network_delay_s);
   }
+  if (!all_.empty()) result.network_delay_mean_s = delay_sum_s / static_cast<double>(all_.size());
   return result;
 }
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -39,6 +41,14 @@ json optionalJson(const std::optional<bool>& value) {
 constexpr const char* kPerEpisode = "per_episode";
 
 json numberOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+// A sum of many expected counts to 12 significant digits: the summation's rounding error
+// (216 printed as 215.99999999997434) is not part of the number.
+double roundedSum(double sum) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.12g", sum);
+  return std::strtod(text, nullptr);
+}
 
 json bracketJson(const CostBracket& b) {
   return {{"info", numberOrNull(b.info)}, {"cov", numberOrNull(b.cov)}};
@@ -97,7 +107,9 @@ json episodeEntry(const EpisodeResult& r) {
           {"drain_s", r.drain_s},
           {"backlog", r.backlog},
           {"latency_median_s", quantile(r.latencies_s, 0.5)},
-          {"latency_p99_s", quantile(r.latencies_s, 0.99)}};
+          {"latency_p99_s", quantile(r.latencies_s, 0.99)},
+          {"network_delay_mean_s", r.network_delay_mean_s},
+          {"network_delay_max_s", r.network_delay_max_s}};
 }
 
 EpisodeResult restartedEpisode(std::uint32_t episode, int sensor_count) {
@@ -154,6 +166,10 @@ void RunReport::add(const json& e) {
     }
   }
   episode_medians_.add(e.value("latency_median_s", 0.0));
+  const auto received_count = static_cast<double>(sumOf(e.at("received")));
+  delay_sum_s_ += e.value("network_delay_mean_s", 0.0) * received_count;
+  summed_.network_delay_max_s =
+      std::max(summed_.network_delay_max_s, e.value("network_delay_max_s", 0.0));
   if (!e.at("complete").get<bool>()) return;
   const double cost = e.at("realized_cost").get<double>();
   ++complete_count_;
@@ -206,6 +222,7 @@ RunSummary RunReport::summary() const {
     s.meets_bracket = meets(s, s.bracket_mean);
     s.meets_delivered_bracket = meets(s, s.delivered_bracket_mean);
   }
+  if (s.received > 0) s.network_delay_mean_s = delay_sum_s_ / static_cast<double>(s.received);
   const LatencyHistogram& latencies = latencies_.count() > 0 ? latencies_ : episode_medians_;
   s.latency_median_s = latencies.quantile(0.5);
   s.latency_p99_s = latencies.quantile(0.99);
@@ -394,7 +411,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
         {"nees_mean", ofComplete(s.nees_mean)},
         {"sent", s.sent},
         {"received", s.received},
-        {"expected", s.expected},
+        {"expected", roundedSum(s.expected)},
         {"lost", s.lost},
         {"dropped_by_network", s.dropped_by_network},
         {"late", s.late},
@@ -405,7 +422,11 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
        {{"median", measured_latency ? numberOrNull(s.latency_median_s) : json(nullptr)},
         {"p99", measured_latency ? numberOrNull(s.latency_p99_s) : json(nullptr)},
         {"quantile_relative_error", kLatencyQuantileRelativeError},
-        {"histogram", latencies_.toJson()}}}};
+        {"histogram", latencies_.toJson()}}},
+      // Apart from the latency: emulated seconds the emulated network held the received back.
+      {"network_delay_s",
+       {{"mean", s.received > 0 ? json(s.network_delay_mean_s) : json(nullptr)},
+        {"max", s.received > 0 ? json(s.network_delay_max_s) : json(nullptr)}}}};
   for (const auto& [key, value] : extra.items()) report[key] = value;
   report.erase(kPerEpisode);
   return report;

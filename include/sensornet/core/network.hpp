@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "sensornet/core/network_spec.hpp"
@@ -32,6 +33,15 @@ namespace sensornet {
 // see kMaxOutageRefinement).
 [[nodiscard]] RateSchedule deliveredSchedule(const RateSchedule& schedule,
                                              const NetworkSpec& network, std::uint32_t episode);
+
+// What `schedule` delivers when sensor j falls silent at emulated time silent_from_s[j] (a dead
+// sensor sends nothing; nullopt: it does not, <= 0: the whole episode): its rate is zero from
+// there on. The interval holding the instant keeps the fraction of its length before it (its
+// rate averaged over the interval, as deliveryFactors() treats an outage off the grid); on a
+// grid point, or dead before the episode, the schedule is exact. Sensors beyond the list are
+// untouched.
+[[nodiscard]] RateSchedule silencedSchedule(const RateSchedule& schedule,
+                                            const std::vector<std::optional<double>>& silent_from_s);
 
 // What a network-aware plan (PlanRequest::delivery) assumes the network delivers of each planned
 // rate, N x M: (1 - loss_j) times the fraction of interval k outside the outages of sensor j

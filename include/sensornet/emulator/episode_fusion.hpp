@@ -139,12 +139,16 @@ struct EpisodeResult {
   // more than 2 N + 10,000 of the N measurements a second time (an overloaded fusion center).
   double received_realtime_cost = 0.0;
   CostBracket bracket;
-  CostBracket delivered_bracket;        // of the schedule the emulated network delivers
+  CostBracket delivered_bracket;        // of what the schedule delivers: network, dead sensors
   std::vector<std::uint32_t> versions;  // in force during the episode, in time order
   double switch_time_s = 0.0;           // the last switch (0 when none)
   double nees = 0.0;                    // e(T)' P(T)^{-1} e(T) against the emulated truth
   std::vector<SensorTally> sensors;
   std::vector<double> latencies_s;      // publish to fusion, one per measurement
+  // The emulated network's delay of the measurements received (emulated seconds; not in the
+  // latencies, which start when the sensor writes the delayed measurement).
+  double network_delay_mean_s = 0.0;
+  double network_delay_max_s = 0.0;
   RejectionCounts rejected;
   bool complete = false;                // every tally in and every sent measurement received
   std::string incomplete_reason;        // why not complete ("sensor 3 failed at 1.25 s; ...")
@@ -229,6 +233,11 @@ class EpisodeFusion {
   [[nodiscard]] std::string incompleteReason() const;
   // The bracket of `schedule` on what is left after the last switch, plus the realized part.
   [[nodiscard]] CostBracket bracketAfterSwitch(const RateSchedule& schedule) const;
+  void refuseBeyondTallies();
+  [[nodiscard]] bool anyFailed() const;
+  // `schedule` as this episode can deliver it: thinned and cut by the emulated network, and
+  // silent from each dead sensor's death (silencedSchedule).
+  [[nodiscard]] RateSchedule deliveredScheduleOf(const RateSchedule& schedule) const;
   [[nodiscard]] CostBracket deliveredBracket() const;
   // The real-time cost with each measurement arriving when it was received (see above), given
   // the emulated one (the same number when nothing was received later than it was due).
@@ -245,6 +254,7 @@ class EpisodeFusion {
   std::optional<std::pair<double, Eigen::MatrixXd>> at_switch_;  // running cost, P(s)
   CdKalmanFilter filter_;
   std::vector<FusedMeasurement> all_;
+  std::vector<bool> arrived_late_;  // per entry of all_: it came after the filter had passed it
   std::set<std::pair<Key, std::size_t>> pending_;  // indices into all_, in timestamp order
   std::set<std::pair<int, std::uint64_t>> seen_;   // (sensor, seq)
   std::vector<SensorTally> tallies_;

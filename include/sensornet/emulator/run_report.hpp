@@ -104,6 +104,8 @@ struct RunSummary {
   RejectionCounts rejected;               // by reason, over episodes and the run's wire
   double latency_median_s = 0.0;          // within kLatencyQuantileRelativeError (LatencyHistogram)
   double latency_p99_s = 0.0;
+  double network_delay_mean_s = 0.0;      // over the received measurements (emulated seconds)
+  double network_delay_max_s = 0.0;
   [[nodiscard]] std::uint64_t rejectedTotal() const;
 };
 
@@ -168,6 +170,7 @@ class RunReport {
   CostBracket bracket_sum_;
   CostBracket delivered_bracket_sum_;
   double nees_sum_ = 0.0;
+  double delay_sum_s_ = 0.0;  // network_delay_mean_s times received, over every episode
   RunSummary summed_;  // its counts (sent, received, lost, ...) over every episode
   RejectionCounts rejected_in_episodes_;
   struct SensorTotals {

@@ -66,6 +66,7 @@ enum class RejectionReason {
   StaleSchedule,            // a Schedule version older than one in force
   MalformedSchedule,        // a Schedule sample that does not parse
   MalformedEpisodeControl,  // an EpisodeControl sample that does not parse
+  BeyondTally,              // a sequence number at or past its sensor's tally: never sent by it
 };
 
 // What the coordinator does when the launcher reports that sensors died
@@ -127,7 +128,7 @@ struct Words<emulator::FaultKind> {
 template <>
 struct Words<emulator::RejectionReason> {
   using R = emulator::RejectionReason;
-  static constexpr std::array<WordOf<R>, 13> kTable{
+  static constexpr std::array<WordOf<R>, 14> kTable{
       {{R::Malformed, "malformed"},
        {R::UnknownSensor, "unknown_sensor"},
        {R::Duplicate, "duplicate"},
@@ -140,7 +141,8 @@ struct Words<emulator::RejectionReason> {
        {R::MalformedScenario, "malformed_scenario"},
        {R::StaleSchedule, "stale_schedule"},
        {R::MalformedSchedule, "malformed_schedule"},
-       {R::MalformedEpisodeControl, "malformed_episode_control"}}};
+       {R::MalformedEpisodeControl, "malformed_episode_control"},
+       {R::BeyondTally, "beyond_tally"}}};
 };
 
 }  // namespace sensornet

@@ -260,5 +260,22 @@ TEST(NetworkAwarePlanning, RefusesDeliveryFactorsThatDoNotFit) {
   EXPECT_THROW((void)planSchedule(s, request), InputError);
 }
 
+// A sensor dead from 1.25 s of the ramp: by hand, ∫_0^1.25 (1 + 0.1 k) over intervals 0..11
+// (0.1 (12 + 6.6) = 1.86) plus half of interval 12 (0.05 * 2.2 = 0.11) is 1.97, and nothing
+// after; the other sensor keeps its 10.35; one dead before the episode (0) delivers nothing.
+TEST(SilencedSchedule, ADeadSensorDeliversNothingFromItsDeath) {
+  const RateSchedule ramp = rampSchedule();
+  const RateSchedule from_death = silencedSchedule(ramp, {1.25, std::nullopt});
+  EXPECT_NEAR(from_death.expectedCounts(0.0, 3.0)(0), 1.97, 1e-12);
+  EXPECT_NEAR(from_death.expectedCounts(1.3, 3.0)(0), 0.0, 1e-15);
+  EXPECT_NEAR(from_death.expectedCounts(0.0, 3.0)(1), 10.35, 1e-12);
+  EXPECT_DOUBLE_EQ(from_death.rate(11, 0), ramp.rate(11, 0));
+  const RateSchedule dead_before = silencedSchedule(ramp, {std::nullopt, 0.0});
+  EXPECT_EQ(dead_before.rates().col(1).norm(), 0.0);
+  EXPECT_EQ(dead_before.rates().col(0), ramp.rates().col(0));
+  // A list shorter than the sensors leaves the rest as they are.
+  EXPECT_EQ(silencedSchedule(ramp, {}).rates(), ramp.rates());
+}
+
 }  // namespace
 }  // namespace sensornet

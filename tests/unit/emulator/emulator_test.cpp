@@ -367,6 +367,51 @@ TEST_F(EpisodeFusionTest, ASensorDeadBeforeTheEpisodeSendsNothingAndLeavesItComp
   EXPECT_DOUBLE_EQ(r.sensors[1].expected,
                    uniformSchedule(scenario_).expectedCounts(0.0, scenario_.horizon_s)(1));
   EXPECT_GT(r.sensors[1].expected, 0.0);
+  // The planned bracket is the schedule's; what it can deliver is that schedule without sensor 1,
+  // built here by hand, and costs more (fewer measurements).
+  const RateSchedule planned = uniformSchedule(scenario_);
+  Eigen::MatrixXd without_1 = planned.rates();
+  without_1.col(1).setZero();
+  const CostBracket planned_bracket = computeBracket(scenario_, planned);
+  const CostBracket delivered = computeBracket(scenario_, RateSchedule(planned.horizon(), without_1));
+  EXPECT_DOUBLE_EQ(r.bracket.info, planned_bracket.info);
+  EXPECT_DOUBLE_EQ(r.delivered_bracket.info, delivered.info);
+  EXPECT_DOUBLE_EQ(r.delivered_bracket.cov, delivered.cov);
+  EXPECT_GT(r.delivered_bracket.info, r.bracket.info);
+  EXPECT_GT(r.delivered_bracket.cov, r.bracket.cov);
+}
+
+// Samples for a sensor beyond what its tally says it sent (a silent sensor spoken for, issue
+// 30): refused once the tally is in, counted as beyond_tally, and the cost is that of what the
+// sensors sent, as if the forged ones never came (some arrive out of order on purpose).
+TEST_F(EpisodeFusionTest, RefusesWhatASensorNeverSentOnceItsTallyIsIn) {
+  const std::vector<FusedMeasurement> real = measurements(7);
+  std::vector<std::uint64_t> sent(4, 0);
+  for (const auto& m : real) sent[static_cast<std::size_t>(m.sensor)] = m.seq + 1;
+  std::vector<FusedMeasurement> forged;
+  for (std::uint64_t i = 0; i < 5; ++i) {  // sensor 1's next seqs, and sensor 3 beyond its count
+    FusedMeasurement m = real.front();
+    m.sensor = i < 3 ? 1 : 3;
+    m.seq = sent[static_cast<std::size_t>(m.sensor)] + i;
+    m.time_s = 0.3 * static_cast<double>(i + 1);
+    m.z = Eigen::VectorXd::Constant(scenario_.sensors[static_cast<std::size_t>(m.sensor)].H.rows(),
+                                    50.0);
+    forged.push_back(m);
+  }
+  EpisodeFusion fusion(scenario_, plant_, book_, 7, bracketOf());
+  for (std::size_t i = 0; i < real.size(); ++i) {
+    EXPECT_FALSE(fusion.add(real[i]));
+    if (i == real.size() / 2) {
+      for (const auto& m : forged) EXPECT_FALSE(fusion.add(m));  // not yet known to be forged
+    }
+  }
+  for (int j = 0; j < 4; ++j) fusion.setTally(j, {sent[static_cast<std::size_t>(j)]});
+  const EpisodeResult r = fusion.finish();
+  EXPECT_EQ(r.rejected.at("beyond_tally"), 5u);
+  EXPECT_EQ(r.sensors[1].received, sent[1]);
+  EXPECT_EQ(r.sensors[3].received, sent[3]);
+  EXPECT_TRUE(r.complete);
+  EXPECT_EQ(r.realized_cost, inOrderCost(real));
 }
 
 TEST_F(EpisodeFusionTest, AnIncompleteEpisodeSaysWhatItMissed) {
@@ -605,6 +650,40 @@ TEST(RunReport, WritesNullForWhatNoCompleteEpisodeMeasured) {
   const json nothing = empty.toJson("interrupted", json::array(), json::array());
   EXPECT_TRUE(nothing.at("latency_s").at("median").is_null());
   EXPECT_TRUE(nothing.at("latency_s").at("p99").is_null());
+}
+
+// The emulated network's delay, apart from the latency: the mean over every received
+// measurement (episode means weighted by what each received), and the largest.
+TEST(RunReport, KeepsTheEmulatedNetworkDelayApartFromTheLatency) {
+  RunReport report("r", "d", 2, 3);
+  EpisodeResult a = episodeWith(0, 3.0, 1.0, true);  // received 4 (sensor 0) + 0
+  a.network_delay_mean_s = 0.010;
+  a.network_delay_max_s = 0.030;
+  EpisodeResult b = episodeWith(1, 4.0, 1.0, true);
+  b.sensors[1].sent = b.sensors[1].received = 4;  // received 8
+  b.network_delay_mean_s = 0.040;
+  b.network_delay_max_s = 0.090;
+  report.add(episodeEntry(a));
+  report.add(episodeEntry(b));
+  const nlohmann::json delay = report.toJson("completed", {}, {}).at("network_delay_s");
+  EXPECT_NEAR(delay.at("mean").get<double>(), (4 * 0.010 + 8 * 0.040) / 12.0, 1e-15);
+  EXPECT_DOUBLE_EQ(delay.at("max").get<double>(), 0.090);
+  EXPECT_TRUE(RunReport("r", "d", 2, 3).toJson("completed", {}, {}).at("network_delay_s")
+                  .at("mean").is_null());
+}
+
+// Ten expected counts of 0.1 add up to 0.9999999999999999 in doubles: the report says 1.
+TEST(RunReport, ReportsTheExpectedTotalWithoutTheSummationsRoundingError) {
+  RunReport report("r", "d", 2, 3);
+  double direct = 0.0;
+  for (std::uint32_t i = 0; i < 10; ++i) {
+    EpisodeResult e = episodeWith(i, 3.0, 1.0, true);
+    e.sensors[0].expected = 0.1;
+    direct += 0.1;
+    report.add(episodeEntry(e));
+  }
+  ASSERT_NE(direct, 1.0);
+  EXPECT_EQ(report.toJson("completed", {}, {}).at("summary").at("expected").get<double>(), 1.0);
 }
 
 TEST(RunReport, CountsWhatTheNetworkDroppedPerEpisodePerSensorAndInTotal) {
