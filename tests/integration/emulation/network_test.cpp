@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -84,10 +85,20 @@ class Network : public LaunchTest {
     const LeftoverGuard guard(run_id_ + "-" + tag);
     const ProcessResult r = runProcess(argv, 180s);
     EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+    last_out_ = r.out;
     EXPECT_TRUE(processesMentioning(run_id_ + "-" + tag).empty());
     return readJson(dir_ / (tag + ".json"));
   }
+
+  mutable std::string last_out_;  // what the last launch printed
 };
+
+// A number as the launcher's closing lines print it (%.6g).
+std::string printed(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
 
 TEST_F(Network, LossIsCountedApartAndTheDeliveredBracketHoldsTheMean) {
   const std::string text = std::string(kTightScenario) + "network:\n  default: {loss: 0.3}\n";
@@ -143,6 +154,16 @@ TEST_F(Network, LossIsCountedApartAndTheDeliveredBracketHoldsTheMean) {
   EXPECT_GT(low, planned_bracket.cov);
   EXPECT_EQ(summary["meets_delivered_bracket"], true);
   EXPECT_EQ(summary["meets_bracket"], false);
+
+  // The closing lines say what the network dropped and what it delivered, beside the plan.
+  EXPECT_NE(last_out_.find(", " + std::to_string(dropped) + " dropped by the emulated network, 0 lost"),
+            std::string::npos)
+      << last_out_;
+  EXPECT_NE(last_out_.find("against what the schedule delivered (network losses and outages, dead "
+                           "sensors): [" + printed(delivered.info) + ", " + printed(delivered.cov) +
+                           "]: meets_delivered_bracket true"),
+            std::string::npos)
+      << last_out_;
 }
 
 TEST_F(Network, SameSeedSameImpairmentsAndDelayRaisesTheRealTimeCost) {
@@ -175,6 +196,22 @@ TEST_F(Network, SameSeedSameImpairmentsAndDelayRaisesTheRealTimeCost) {
     EXPECT_EQ(a["rejected"].value("duplicate", 0), 0) << a["rejected"].dump();
   }
   EXPECT_TRUE(delayed_cost_higher);
+
+  // The emulated delay, 0.02 s + Exp(mean 0.05 s), apart from the latency: its mean over the n
+  // received is within 5 standard errors (0.05 / sqrt(n)) of 0.07 (false alarm below 1e-6);
+  // none is shorter than the fixed part; the middleware's median latency stays below the fixed
+  // part's wall time (0.02 / 5 s = 4 ms), which it would exceed if it held the delay.
+  const double n = static_cast<double>(first["summary"]["received"].get<std::uint64_t>());
+  ASSERT_GT(n, 50.0);
+  const json& delay = first["network_delay_s"];
+  EXPECT_NEAR(delay["mean"].get<double>(), 0.07, 5.0 * 0.05 / std::sqrt(n)) << delay.dump();
+  EXPECT_GE(delay["max"].get<double>(), 0.02);
+  EXPECT_LT(first["latency_s"]["median"].get<double>(), 0.004);
+  EXPECT_NE(last_out_.find("latency publish-to-fusion (the middleware's, without the emulated "
+                           "network's delay)"),
+            std::string::npos)
+      << last_out_;
+  EXPECT_NE(last_out_.find("emulated network delay: mean "), std::string::npos) << last_out_;
 }
 
 }  // namespace
