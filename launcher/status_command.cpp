@@ -102,19 +102,19 @@ void printText(const RunView& view, const std::string& run_id) {
   }
 }
 
-// Why nothing may have answered, as far as this host can tell.
+// Why nothing may have answered, as far as this host can tell (to follow "... within 2 s").
 std::string likelyCause(const LiveRun& run, const StatusOptions& options) {
   if (options.run.security_dir.empty()) {
     if (const auto dir = securityOfLauncher(run.launcher_pid)) {
-      return "run " + run.run_id + " is secured (its launcher, pid " +
+      return "; run " + run.run_id + " is secured (its launcher, pid " +
              std::to_string(run.launcher_pid) + ", runs with --security " + *dir +
-             "): a secured run answers only with --security, e.g. `sensornet status --run-id " +
-             run.run_id + " --security " + *dir + "`";
+             ") and answers only with --security: sensornet status --run-id " + run.run_id +
+             " --security " + *dir;
     }
   }
-  return "is it running? start one with `sensornet launch SCENARIO`; a secured run answers only "
-         "with --security, a run across --hosts only with --cyclone-config <its log "
-         "dir>/cyclone-launcher.xml";
+  return " (is it running? start one with `sensornet launch SCENARIO`; a secured run answers "
+         "only with --security, a run across --hosts only with --cyclone-config <its log "
+         "dir>/cyclone-launcher.xml)";
 }
 
 int runStatus(StatusOptions options) {
@@ -131,7 +131,7 @@ int runStatus(StatusOptions options) {
     printText(view, options.run.run_id);
   }
   if (nothing) {
-    std::fprintf(stderr, "sensornet status: nothing of run %s answered within %g s (%s)\n",
+    std::fprintf(stderr, "sensornet status: nothing of run %s answered within %g s%s\n",
                  options.run.run_id.c_str(), options.wait_s, likelyCause(run, options).c_str());
     return kExitFailure;
   }

@@ -38,7 +38,7 @@ void redraw(const RunView& view, std::int64_t now_ns) {
 }
 
 int runWatch(WatchOptions options) {
-  options.run.run_id = chooseLiveRun(options.run.run_id, options.run.domain_id);
+  options.run.run_id = chooseLiveRun(options.run.run_id, options.run.domain_id).run_id;
   const bool screen = !options.plain && ::isatty(STDOUT_FILENO) == 1;
   RunFollower follower(options.run.domainConfig());
   RunViewConfig config;

@@ -82,7 +82,7 @@ std::string formatProgress(const EpisodeReportSeen& report,
 RunView::RunView(RunViewConfig config)
     : config_(std::move(config)), planned_(config_.episodes_planned) {}
 
-void RunView::onScenario(const ScenarioSeen& scenario, std::int64_t /*now_ns*/) {
+void RunView::onScenario(const ScenarioSeen& scenario, std::int64_t now_ns) {
   answered_ = true;
   if (scenario_) return;
   scenario_ = scenario;
@@ -93,6 +93,10 @@ void RunView::onScenario(const ScenarioSeen& scenario, std::int64_t /*now_ns*/) 
                        scenario.sensor_count, scenario.state_dim, scenario.horizon_s,
                        static_cast<unsigned long long>(scenario.seed)));
   releaseReports();
+  // The starts that came before it: news only if their episode is not over by now.
+  for (const EpisodeAnnounced& start : std::exchange(starts_before_scenario_, {})) {
+    sayStart(start, now_ns);
+  }
 }
 
 void RunView::onSchedule(const ScheduleSeen& s, std::int64_t /*now_ns*/) {
@@ -118,10 +122,16 @@ void RunView::onEpisodeStart(const EpisodeAnnounced& start, std::int64_t now_ns)
   while (announced_.size() > kAnnouncedKept) announced_.erase(announced_.begin());
   if (!planned_) planned_ = start.episodes_planned;
   releaseReports();
-  // A replayed start of an episode that is over by now is history, not news.
-  const bool over =
-      scenario_ && now_ns > start.clock.wallAt(scenario_->horizon_s);
-  if (over) return;
+  if (!scenario_) {
+    starts_before_scenario_.push_back(start);
+    return;
+  }
+  sayStart(start, now_ns);
+}
+
+// A replayed start of an episode that is over by now is history, not news.
+void RunView::sayStart(const EpisodeAnnounced& start, std::int64_t now_ns) {
+  if (reportedAlready(start.episode) || now_ns > start.clock.wallAt(scenario_->horizon_s)) return;
   say(format("%s episode %u started (schedule v%u, time scale %g)", place(start.episode).c_str(),
              start.episode, start.schedule_version, start.clock.time_scale));
 }

@@ -219,6 +219,7 @@ class RunView {
   void flushSensorLines();
   void releaseReports(bool even_unplaced = false);
   void sayReport(const EpisodeReportSeen& report);
+  void sayStart(const EpisodeAnnounced& start, std::int64_t now_ns);
   void markEnded(std::int64_t now_ns);
   [[nodiscard]] bool reportedAlready(std::uint32_t episode) const;
   void noteReported(std::uint32_t episode);
@@ -232,6 +233,7 @@ class RunView {
   std::set<std::uint32_t> versions_;
   std::optional<ScheduleSeen> newest_schedule_;
   std::map<std::uint32_t, EpisodeAnnounced> announced_;  // the latest few
+  std::vector<EpisodeAnnounced> starts_before_scenario_;  // said once its horizon is known
   std::set<std::uint32_t> failed_;
   std::map<std::uint32_t, SensorView> sensors_;
   // Reported episodes: every one below reported_below_, and those in reported_above_.

@@ -97,8 +97,10 @@ TEST_F(WatchStatus, TheTerminalViewFollowsTheRunningEpisodeAtTimeScaleOne) {
 // every episode once as "[k/N] episode k-1", the launcher's numbering.
 TEST_F(WatchStatus, WatchersEndWithTheRunAndALateOneNumbersEpisodesAsTheLauncher) {
   const LeftoverGuard guard(run_id_);
-  constexpr int kEpisodes = 4;
-  BackgroundProcess launch(launchArgs(kEpisodes, "10"), (dir_ / "launch.log").string());
+  // Time scale 3: the late watcher joins with about four seconds left, time for the sensor
+  // agents (discovery leaves, announcing themselves once a second) to find it.
+  constexpr int kEpisodes = 6;
+  BackgroundProcess launch(launchArgs(kEpisodes, "3"), (dir_ / "launch.log").string());
   BackgroundProcess early({kLauncher, "watch", "--run-id", run_id_}, (dir_ / "early.log").string());
   ASSERT_TRUE(waitUntil([&] { return readJsonLines(dir_ / "report.jsonl").size() >= 2; }, 60s))
       << launch.log();
@@ -128,11 +130,11 @@ TEST_F(WatchStatus, WatchersEndWithTheRunAndALateOneNumbersEpisodesAsTheLauncher
       EXPECT_EQ(text.find(line, first + 1), std::string::npos) << "once: " << line << "\n" << text;
     }
     EXPECT_NE(text.find("sensors 0, 1, 2, 3, 4, 5: stopped"), std::string::npos) << text;
-    EXPECT_NE(text.find("run ended: 4 episode(s), 4 reported"), std::string::npos) << text;
-    EXPECT_EQ(text.find(" of 4 started"), std::string::npos) << text;
+    EXPECT_NE(text.find("run ended: 6 episode(s), 6 reported"), std::string::npos) << text;
+    EXPECT_EQ(text.find(" of 6 started"), std::string::npos) << text;
   }
   const std::string early_text = early.log();
-  EXPECT_NE(early_text.find("[1/4] episode 0 started"), std::string::npos) << early_text;
+  EXPECT_NE(early_text.find("[1/6] episode 0 started"), std::string::npos) << early_text;
 }
 
 // Two runs live on this host (default log folders in the scratch folder): without --run-id,

@@ -242,6 +242,20 @@ TEST(RunView, AReplayedStartOfAnEpisodeThatIsOverIsNotNews) {
   EXPECT_TRUE(has(lines, "episode 5 started")) << joined(lines);
 }
 
+// A late watcher may get the replayed starts before the scenario (other topics): they wait for
+// its horizon, and those of episodes over by now are left out.
+TEST(RunView, StartsBeforeTheScenarioAreSaidOnlyIfTheirEpisodeIsNotOver) {
+  const std::int64_t now = kT0 + 100 * kSecond;
+  RunView view(named("run-1"));
+  view.onEpisodeStart(start(4, kT0, 1.0, 9), now);               // over at kT0 + 3 s
+  view.onEpisodeStart(start(5, now - kSecond, 1.0, 9), now);     // runs
+  view.onScenario(scenario(), now);
+  const std::vector<std::string> lines = view.takeLines(now);
+  ASSERT_EQ(lines.size(), 2u) << joined(lines);
+  EXPECT_EQ(lines[0].rfind("run run-1: scenario", 0), 0u) << joined(lines);
+  EXPECT_EQ(lines[1], "[6/9] episode 5 started (schedule v1, time scale 1)");
+}
+
 TEST(RunView, AReportIsTakenOnce) {
   RunViewConfig config;  // the launcher's
   config.episodes_planned = 3;
