@@ -10,7 +10,7 @@ namespace {
 RunViewConfig launcherView(int episodes_planned) {
   RunViewConfig config;
   config.episodes_planned = static_cast<std::uint32_t>(episodes_planned);
-  config.keep_lines = false;    // it prints only the episodes' lines
+  config.keep_lines = false;  // it prints only the episodes' lines
   config.keep_reports = true;
   return config;
 }
@@ -19,9 +19,7 @@ RunViewConfig launcherView(int episodes_planned) {
 
 ProgressWatcher::ProgressWatcher(const dds::DomainConfig& config, int episodes_planned,
                                  double /*horizon_s*/, int sensor_count)
-    : follower_(config),
-      view_(launcherView(episodes_planned)),
-      sensor_count_(sensor_count) {}
+    : follower_(config), view_(launcherView(episodes_planned)), sensor_count_(sensor_count) {}
 
 void ProgressWatcher::poll(std::chrono::milliseconds wait) {
   follower_.pollInto(view_, wait);

@@ -12,12 +12,11 @@ constexpr std::string_view kPartitionPrefix = "sensornet/";
 constexpr std::chrono::milliseconds kProbeStep{20};
 
 ScenarioSeen scenarioOf(const sensornet_Scenario& s) {
-  return {std::string(dds::viewString(s.digest)), s.sensor_count, s.state_dim, s.horizon_s,
-          s.seed};
+  return {std::string(dds::viewString(s.digest)), s.sensor_count, s.state_dim, s.horizon_s, s.seed};
 }
 
 ScheduleSeen scheduleOf(const sensornet_Schedule& s) {
-  return {s.version,          std::string(dds::viewString(s.surrogate)),
+  return {s.version,           std::string(dds::viewString(s.surrogate)),
           s.effective_episode, s.effective_time_s,
           s.bracket_lower,     s.bracket_upper};
 }
@@ -147,7 +146,9 @@ void RunFollower::takeControls(RunView& view, std::int64_t now) {
     if (!ours(c.run_id)) continue;
     switch (c.command) {
       case sensornet_EPISODE_START:
-        view.onEpisodeStart({c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned,
+        view.onEpisodeStart({c.episode,
+                             {c.start_wall_time_ns, c.time_scale},
+                             c.episodes_planned,
                              c.schedule_version},
                             now);
         break;
@@ -155,8 +156,8 @@ void RunFollower::takeControls(RunView& view, std::int64_t now) {
         view.onEpisodeStop(c.episode, now);
         break;
       case sensornet_EPISODE_SENSORS_FAILED: {
-        emulator::SensorFailure failure{c.episode, c.failed_at_s, {},
-                                        std::string(dds::viewString(c.detail))};
+        emulator::SensorFailure failure{
+            c.episode, c.failed_at_s, {}, std::string(dds::viewString(c.detail))};
         for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
           failure.sensors.insert(static_cast<int>(id));
         }
@@ -164,8 +165,7 @@ void RunFollower::takeControls(RunView& view, std::int64_t now) {
         break;
       }
       case sensornet_RUN_SHUTDOWN:
-        view.onRunEnd({c.episodes_planned, c.aborted, std::string(dds::viewString(c.detail))},
-                      now);
+        view.onRunEnd({c.episodes_planned, c.aborted, std::string(dds::viewString(c.detail))}, now);
         break;
     }
   }

@@ -38,8 +38,7 @@ RunView collectStatus(const dds::DomainConfig& config, const std::string& run_id
   lines_unsaid.keep_lines = false;
   RunView view(lines_unsaid);
   const auto deadline = Clock::now() + wait;
-  while (Clock::now() < deadline &&
-         !(view.newestSchedule() && view.allSensorsAccounted())) {
+  while (Clock::now() < deadline && !(view.newestSchedule() && view.allSensorsAccounted())) {
     follower.pollInto(view, kWaitStep);
   }
   return view;
@@ -149,8 +148,9 @@ Subcommand addStatusCommand(CLI::App& app) {
       "  sensornet status --json");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
-      ->description("the run to look at (default: the one run live on this host; with several, "
-                    "it lists them and asks)");
+      ->description(
+          "the run to look at (default: the one run live on this host; with several, "
+          "it lists them and asks)");
   cmd->add_option("--wait", options->wait_s,
                   "at most this many seconds to listen; it answers as soon as every sensor of "
                   "the scenario has")

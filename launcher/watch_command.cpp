@@ -86,14 +86,14 @@ Subcommand addWatchCommand(CLI::App& app) {
       "planned. Example:\n  sensornet watch            (the one run live on this host)");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
-      ->description("the run to watch (default: the one run live on this host; with several, "
-                    "it lists them and asks)");
+      ->description(
+          "the run to watch (default: the one run live on this host; with several, "
+          "it lists them and asks)");
   cmd->add_option("--wait", options->wait_s,
                   "seconds to wait for the run to show itself before giving up (exit 1)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_flag("--plain", options->plain,
-                "plain lines, one per change, even on a terminal");
+  cmd->add_flag("--plain", options->plain, "plain lines, one per change, even on a terminal");
   return {cmd, [options] { return runWatch(*options); }};
 }
 

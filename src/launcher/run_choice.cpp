@@ -22,9 +22,8 @@ RunChoice chooseRun(const std::string& given, const std::optional<RecordedRun>& 
   }
   std::vector<LiveRun> live = found;
   if (record && record->launcher_alive) {
-    const auto same = std::find_if(live.begin(), live.end(), [&](const LiveRun& r) {
-      return r.run_id == record->run.run_id;
-    });
+    const auto same = std::find_if(
+        live.begin(), live.end(), [&](const LiveRun& r) { return r.run_id == record->run.run_id; });
     if (same == live.end()) {
       live.insert(live.begin(), record->run);
     } else if (!same->domain_id) {

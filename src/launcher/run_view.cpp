@@ -87,11 +87,12 @@ void RunView::onScenario(const ScenarioSeen& scenario, std::int64_t now_ns) {
   if (scenario_) return;
   scenario_ = scenario;
   // First of all lines: what was said before it waited for it.
-  if (config_.keep_lines) lines_.insert(lines_.begin(),
-                format("run %s: scenario %s, %u sensors, %u states, T = %g s, seed %llu",
-                       config_.run_id.c_str(), scenario.digest.substr(0, 12).c_str(),
-                       scenario.sensor_count, scenario.state_dim, scenario.horizon_s,
-                       static_cast<unsigned long long>(scenario.seed)));
+  if (config_.keep_lines)
+    lines_.insert(lines_.begin(),
+                  format("run %s: scenario %s, %u sensors, %u states, T = %g s, seed %llu",
+                         config_.run_id.c_str(), scenario.digest.substr(0, 12).c_str(),
+                         scenario.sensor_count, scenario.state_dim, scenario.horizon_s,
+                         static_cast<unsigned long long>(scenario.seed)));
   releaseReports();
   // The starts that came before it: news only if their episode is not over by now.
   for (const EpisodeAnnounced& start : std::exchange(starts_before_scenario_, {})) {
@@ -150,9 +151,9 @@ void RunView::onSensorsFailed(const emulator::SensorFailure& failure, std::int64
     sensors_[id].failed = true;
   }
   if (fresh.empty()) return;
-  say(format("%s %s failed (episode %u, t = %g s)%s%s",
-             fresh.size() == 1 ? "sensor" : "sensors", listed(fresh).c_str(), failure.episode,
-             failure.at_s, failure.detail.empty() ? "" : ": ", failure.detail.c_str()));
+  say(format("%s %s failed (episode %u, t = %g s)%s%s", fresh.size() == 1 ? "sensor" : "sensors",
+             listed(fresh).c_str(), failure.episode, failure.at_s,
+             failure.detail.empty() ? "" : ": ", failure.detail.c_str()));
 }
 
 void RunView::onRunEnd(const emulator::RunEnd& end, std::int64_t now_ns) {
@@ -197,8 +198,7 @@ void RunView::onSensorGone(std::uint32_t sensor, std::int64_t now_ns) {
   found->second.alive = false;
   const auto& state = found->second.state;
   if (state == SensorState::Stopped || state == SensorState::Failed) return;
-  saySensor(sensor, "its process is gone (" + stateWord(found->second.state) + " before)",
-            now_ns);
+  saySensor(sensor, "its process is gone (" + stateWord(found->second.state) + " before)", now_ns);
 }
 
 void RunView::onReport(const EpisodeReportSeen& report, std::int64_t /*now_ns*/) {
@@ -270,9 +270,9 @@ RunPosition RunView::positionAt(std::int64_t now_ns) const {
 }
 
 std::size_t RunView::sensorsReady() const {
-  return static_cast<std::size_t>(std::count_if(sensors_.begin(), sensors_.end(), [](const auto& s) {
-    return s.second.state.has_value() && s.second.schedule_version >= 1;
-  }));
+  return static_cast<std::size_t>(std::count_if(
+      sensors_.begin(), sensors_.end(),
+      [](const auto& s) { return s.second.state.has_value() && s.second.schedule_version >= 1; }));
 }
 
 bool RunView::allSensorsAccounted() const {
@@ -299,9 +299,8 @@ bool RunView::finished(std::int64_t now_ns) const {
 std::vector<std::string> RunView::takeLines(std::int64_t now_ns) {
   const bool done = finished(now_ns);
   // After the run's end the sensors' last words wait for each other: one line says them all.
-  const bool batch_due =
-      !ended() && sensor_lines_since_ns_ &&
-      now_ns - *sensor_lines_since_ns_ >= config_.sensor_batch_ns;
+  const bool batch_due = !ended() && sensor_lines_since_ns_ &&
+                         now_ns - *sensor_lines_since_ns_ >= config_.sensor_batch_ns;
   if (sensor_lines_since_ns_ && (done || batch_due)) {
     flushSensorLines();
   }
@@ -309,11 +308,10 @@ std::vector<std::string> RunView::takeLines(std::int64_t now_ns) {
     end_said_ = true;
     releaseReports(/*even_unplaced=*/true);
     if (run_end_) {
-      say(run_end_->aborted
-              ? format("run aborted after %u episode(s): %s", run_end_->episodes_run,
-                       run_end_->detail.c_str())
-              : format("run ended: %u episode(s), %zu reported", run_end_->episodes_run,
-                       reported_count_));
+      say(run_end_->aborted ? format("run aborted after %u episode(s): %s", run_end_->episodes_run,
+                                     run_end_->detail.c_str())
+                            : format("run ended: %u episode(s), %zu reported",
+                                     run_end_->episodes_run, reported_count_));
     }
   }
   if (!scenario_ && !done) return {};  // the scenario's line comes first
@@ -402,30 +400,31 @@ std::string RunView::progressLine(std::int64_t now_ns) const {
       break;
   }
   constexpr int kWidth = 30;
-  const int filled = at.horizon_s > 0.0
-                         ? std::clamp(static_cast<int>(std::lround(kWidth * at.t_s / at.horizon_s)),
-                                      0, kWidth)
-                         : 0;
+  const int filled =
+      at.horizon_s > 0.0
+          ? std::clamp(static_cast<int>(std::lround(kWidth * at.t_s / at.horizon_s)), 0, kWidth)
+          : 0;
   std::string line = format("%s episode %u  [%s%s]  t = %.3g / %g s", place(*at.episode).c_str(),
                             *at.episode, std::string(static_cast<std::size_t>(filled), '=').c_str(),
                             std::string(static_cast<std::size_t>(kWidth - filled), ' ').c_str(),
                             at.t_s, at.horizon_s);
   if (at.phase == EpisodePhase::Closing) {
-    line += at.starts_in_s > 0.0 ? format(" (over; episode %u starts in %.1f s)", *at.episode + 1,
-                                          at.starts_in_s)
-                                 : std::string(" (over; its report is awaited)");
+    line += at.starts_in_s > 0.0
+                ? format(" (over; episode %u starts in %.1f s)", *at.episode + 1, at.starts_in_s)
+                : std::string(" (over; its report is awaited)");
   }
   return line;
 }
 
 std::string RunView::screen(std::int64_t now_ns) const {
-  std::string out = format("sensornet watch: run %s (Ctrl-C leaves; the run goes on)\n",
-                           config_.run_id.c_str());
+  std::string out =
+      format("sensornet watch: run %s (Ctrl-C leaves; the run goes on)\n", config_.run_id.c_str());
   out += progressLine(now_ns) + "\n";
   if (newest_schedule_) {
     const ScheduleSeen& s = *newest_schedule_;
     const EpisodeProgress at = progressAt(now_ns);
-    if (at.episode) out += format("schedule v%u in force at the episode's start; ", at.schedule_version);
+    if (at.episode)
+      out += format("schedule v%u in force at the episode's start; ", at.schedule_version);
     out += format("newest v%u (%s) from episode %u at t = %g s, bracket [%.4g, %.4g]\n", s.version,
                   s.surrogate.c_str(), s.effective_episode, s.effective_time_s, s.bracket_lower,
                   s.bracket_upper);
@@ -457,19 +456,20 @@ std::string RunView::screen(std::int64_t now_ns) const {
                 "rate (Hz)", "sent now", "sent", "received", "lost");
   for (const auto& [id, v] : sensors_) {
     if (!v.state && !v.failed) continue;  // counts of a report only
-    out += format("%6u  %-9s %8s %10.4g %10llu   %10llu %10llu %8llu%s\n", id,
-                  (v.failed && v.state != emulator::SensorState::Failed ? std::string("failed")
-                                                                        : stateWord(v.state))
-                      .c_str(),
-                  ("v" + std::to_string(v.schedule_version)).c_str(), v.rate_hz,
-                  static_cast<unsigned long long>(v.sent_total),
-                  static_cast<unsigned long long>(v.sent),
-                  static_cast<unsigned long long>(v.received),
-                  static_cast<unsigned long long>(v.lost), v.alive ? "" : "  (gone)");
+    out +=
+        format("%6u  %-9s %8s %10.4g %10llu   %10llu %10llu %8llu%s\n", id,
+               (v.failed && v.state != emulator::SensorState::Failed ? std::string("failed")
+                                                                     : stateWord(v.state))
+                   .c_str(),
+               ("v" + std::to_string(v.schedule_version)).c_str(), v.rate_hz,
+               static_cast<unsigned long long>(v.sent_total),
+               static_cast<unsigned long long>(v.sent), static_cast<unsigned long long>(v.received),
+               static_cast<unsigned long long>(v.lost), v.alive ? "" : "  (gone)");
   }
-  out += format("%6s  (sent now: as the sensor says, all episodes; sent/received/lost: over "
-                "the reported episodes)\n",
-                "");
+  out += format(
+      "%6s  (sent now: as the sensor says, all episodes; sent/received/lost: over "
+      "the reported episodes)\n",
+      "");
   return out;
 }
 

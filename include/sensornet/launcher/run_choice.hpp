@@ -37,7 +37,8 @@ struct RunChoice {
 };
 
 // `record_path` only names the record in the message when there is none.
-[[nodiscard]] RunChoice chooseRun(const std::string& given, const std::optional<RecordedRun>& record,
+[[nodiscard]] RunChoice chooseRun(const std::string& given,
+                                  const std::optional<RecordedRun>& record,
                                   const std::vector<LiveRun>& found,
                                   const std::string& record_path);
 

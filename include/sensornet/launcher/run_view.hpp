@@ -119,9 +119,9 @@ enum class EpisodePhase {
 struct EpisodeProgress {
   EpisodePhase phase = EpisodePhase::NotStarted;
   std::optional<std::uint32_t> episode;
-  double t_s = 0.0;         // in [0, horizon_s]
+  double t_s = 0.0;  // in [0, horizon_s]
   double horizon_s = 0.0;
-  double starts_in_s = 0.0;  // StartsSoon: wall seconds until it starts
+  double starts_in_s = 0.0;            // StartsSoon: wall seconds until it starts
   std::uint32_t schedule_version = 0;  // in force at the episode's start
 };
 
@@ -137,7 +137,7 @@ struct SensorView {
   std::int32_t process_id = 0;
   std::int64_t status_wall_ns = 0;
   std::string detail;
-  bool alive = true;   // false once its process is gone
+  bool alive = true;    // false once its process is gone
   bool failed = false;  // the coordinator said it died
   // Over the reported episodes.
   std::uint64_t sent = 0, received = 0, lost = 0;
@@ -182,9 +182,7 @@ class RunView {
   [[nodiscard]] const std::optional<ScheduleSeen>& newestSchedule() const noexcept {
     return newest_schedule_;
   }
-  [[nodiscard]] std::optional<std::uint32_t> episodesPlanned() const noexcept {
-    return planned_;
-  }
+  [[nodiscard]] std::optional<std::uint32_t> episodesPlanned() const noexcept { return planned_; }
   [[nodiscard]] EpisodeProgress progressAt(std::int64_t now_ns) const;
   [[nodiscard]] RunPosition positionAt(std::int64_t now_ns) const;
   [[nodiscard]] const std::map<std::uint32_t, SensorView>& sensors() const noexcept {
@@ -232,7 +230,7 @@ class RunView {
   std::optional<std::uint32_t> planned_;
   std::set<std::uint32_t> versions_;
   std::optional<ScheduleSeen> newest_schedule_;
-  std::map<std::uint32_t, EpisodeAnnounced> announced_;  // the latest few
+  std::map<std::uint32_t, EpisodeAnnounced> announced_;   // the latest few
   std::vector<EpisodeAnnounced> starts_before_scenario_;  // said once its horizon is known
   std::set<std::uint32_t> failed_;
   std::map<std::uint32_t, SensorView> sensors_;

@@ -161,8 +161,7 @@ TEST_F(WatchStatus, WithSeveralRunsLiveWatchAndStatusAskWhichOne) {
     EXPECT_NE(r.err.find(run_id_ + " (launcher pid " + std::to_string(one.pid())),
               std::string::npos)
         << r.err;
-    EXPECT_NE(r.err.find(other + " (launcher pid " + std::to_string(two.pid())),
-              std::string::npos)
+    EXPECT_NE(r.err.find(other + " (launcher pid " + std::to_string(two.pid())), std::string::npos)
         << r.err;
   }
   ::kill(one.pid(), SIGINT);
@@ -252,9 +251,8 @@ TEST_F(WatchStatus, StatusOfASecuredRunFindsEverySensorAndSaysWhenSecurityIsMiss
   ASSERT_TRUE(waitUntil([&] { return launch.log().find(ready) != std::string::npos; }, 60s))
       << launch.log();
 
-  const ProcessResult secured =
-      runProcess({kLauncher, "status", "--run-id", run_id_, "--security", pki.string(), "--json"},
-                 60s);
+  const ProcessResult secured = runProcess(
+      {kLauncher, "status", "--run-id", run_id_, "--security", pki.string(), "--json"}, 60s);
   EXPECT_EQ(secured.exit_code, 0) << secured.err;
   const json doc = json::parse(secured.out, nullptr, false);
   ASSERT_TRUE(doc.is_object()) << secured.out << secured.err;

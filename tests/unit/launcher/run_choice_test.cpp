@@ -8,7 +8,9 @@
 namespace sensornet::launcher {
 namespace {
 
-LiveRun live(const std::string& id, pid_t pid) { return {id, pid, std::nullopt, "/tmp/s/" + id, "23:10:05"}; }
+LiveRun live(const std::string& id, pid_t pid) {
+  return {id, pid, std::nullopt, "/tmp/s/" + id, "23:10:05"};
+}
 
 TEST(RunChoice, TakesTheOneLiveRun) {
   const RunChoice choice = chooseRun("", std::nullopt, {live("run-a", 10)}, "/rec");
@@ -25,8 +27,7 @@ TEST(RunChoice, TheRecordAndTheScratchFolderNamingOneRunAreOneRun) {
 
 TEST(RunChoice, SeveralLiveRunsAreListedAndNoneIsPicked) {
   const RecordedRun record{{"run-b", 20, std::nullopt, "", ""}, true};
-  const RunChoice choice =
-      chooseRun("", record, {live("run-a", 10), live("run-c", 30)}, "/rec");
+  const RunChoice choice = chooseRun("", record, {live("run-a", 10), live("run-c", 30)}, "/rec");
   EXPECT_FALSE(choice.run.has_value());
   EXPECT_NE(choice.expected.find("3 runs are live on this host"), std::string::npos)
       << choice.expected;
@@ -37,7 +38,8 @@ TEST(RunChoice, SeveralLiveRunsAreListedAndNoneIsPicked) {
 }
 
 TEST(RunChoice, AGivenRunIdIsTakenAsGiven) {
-  const RunChoice choice = chooseRun("run-x", std::nullopt, {live("run-a", 10), live("run-b", 2)}, "/r");
+  const RunChoice choice =
+      chooseRun("run-x", std::nullopt, {live("run-a", 10), live("run-b", 2)}, "/r");
   ASSERT_TRUE(choice.run.has_value());
   EXPECT_EQ(choice.run->run_id, "run-x");
 }

@@ -78,7 +78,8 @@ RunView runningView(std::int64_t now) {
   RunView view(named("run-1"));
   view.onScenario(scenario(), now);
   view.onSchedule(version1(), now);
-  for (std::uint32_t j = 0; j < kSensors; ++j) view.onSensorStatus(status(j, SensorState::Ready, now), now);
+  for (std::uint32_t j = 0; j < kSensors; ++j)
+    view.onSensorStatus(status(j, SensorState::Ready, now), now);
   return view;
 }
 
@@ -247,8 +248,8 @@ TEST(RunView, AReplayedStartOfAnEpisodeThatIsOverIsNotNews) {
 TEST(RunView, StartsBeforeTheScenarioAreSaidOnlyIfTheirEpisodeIsNotOver) {
   const std::int64_t now = kT0 + 100 * kSecond;
   RunView view(named("run-1"));
-  view.onEpisodeStart(start(4, kT0, 1.0, 9), now);               // over at kT0 + 3 s
-  view.onEpisodeStart(start(5, now - kSecond, 1.0, 9), now);     // runs
+  view.onEpisodeStart(start(4, kT0, 1.0, 9), now);            // over at kT0 + 3 s
+  view.onEpisodeStart(start(5, now - kSecond, 1.0, 9), now);  // runs
   view.onScenario(scenario(), now);
   const std::vector<std::string> lines = view.takeLines(now);
   ASSERT_EQ(lines.size(), 2u) << joined(lines);
