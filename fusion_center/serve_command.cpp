@@ -247,6 +247,7 @@ sensornet_Report reportSample(const std::string& run_id, const emulator::Episode
   r.summary.latency_median_s = s.latency_median_s;
   r.summary.latency_p99_s = s.latency_p99_s;
   r.complete = e.complete;
+  r.incomplete_reason = dds::borrowString(e.incomplete_reason);
   return r;
 }
 

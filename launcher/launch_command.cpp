@@ -386,10 +386,18 @@ int runLaunch(LaunchOptions options) {
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
   if (placement) writeLauncherConfig(plan, domain);
 
+  // The flags a tool on this host needs to reach the run (--hosts: the launcher's config).
+  const std::string reach = " --run-id " + plan.run_id +
+                            (placement ? " --cyclone-config " +
+                                             (plan.log_dir / "cyclone-launcher.xml").string()
+                                       : std::string()) +
+                            (options.run.security_dir.empty()
+                                 ? std::string()
+                                 : " --security " + options.run.security_dir);
   std::fprintf(stderr,
-               "run id: %s; change it live with: sensornet replan --run-id %s --surrogate info "
-               "(or --exclude, --budget, --schedule); see it with: sensornet status\n",
-               plan.run_id.c_str(), plan.run_id.c_str());
+               "run id: %s; change it live with: sensornet replan%s --surrogate info (or "
+               "--exclude, --budget, --schedule); see it with: sensornet status%s\n",
+               plan.run_id.c_str(), reach.c_str(), reach.c_str());
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   installInterruptHandlers();
   ProcessGroup group;

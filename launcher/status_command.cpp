@@ -3,153 +3,70 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
-#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 
+#include "live_runs.hpp"
 #include "run_files.hpp"
-#include "sensornet/dds/reader.hpp"
-#include "sensornet/dds/topics.hpp"
-#include "sensornet/dds/waitset.hpp"
-#include "sensornet/dds/wire.hpp"
+#include "run_follower.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/launcher/run_view.hpp"
 
 namespace sensornet::launcher {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr dds_attach_t kStatuses = 1;
-constexpr dds_attach_t kSchedules = 2;
-constexpr dds_attach_t kScenarios = 3;
 constexpr std::chrono::milliseconds kWaitStep{50};
 
 struct StatusOptions {
   emulator::RunOptions run;
-  double wait_s = 2.0;
+  // An upper bound: it answers as soon as every sensor of the scenario has (or is known dead).
+  // Discovery under DDS Security takes seconds for a handful of sensors.
+  double wait_s = 10.0;
   bool json = false;
 };
 
-struct SensorRow {
-  std::uint32_t sensor_id = 0;
-  std::string state;
-  std::uint32_t episode = 0;
-  std::uint32_t schedule_version = 0;
-  double rate_hz = 0.0;
-  std::uint64_t sent_in_episode = 0;
-  std::uint64_t sent_total = 0;
-  std::uint64_t write_timeouts = 0;
-  std::int32_t pid = 0;
-  std::int64_t wall_time_ns = 0;
-  std::string detail;
-  bool alive = true;  // false once the sensor's process left or died (no writers)
-};
-
-struct ScheduleRow {
-  std::uint32_t version = 0;
-  std::string surrogate;
-  std::uint32_t effective_episode = 0;
-  double effective_time_s = 0.0;
-  double bracket_lower = 0.0;
-  double bracket_upper = 0.0;
-};
-
-struct RunStatus {
-  std::map<std::uint32_t, SensorRow> sensors;
-  std::optional<ScheduleRow> schedule;        // the highest version seen
-  std::optional<std::uint32_t> sensor_count;  // from the Scenario topic
-  [[nodiscard]] bool complete() const {
-    return sensor_count && schedule && sensors.size() >= *sensor_count;
-  }
-};
-
-SensorRow toRow(const sensornet_SensorStatus& s) {
-  SensorRow row;
-  row.sensor_id = s.sensor_id;
-  row.state = emulator::sensorStateName(s.state);
-  row.episode = s.episode;
-  row.schedule_version = s.schedule_version;
-  row.rate_hz = s.current_rate_hz;
-  row.sent_in_episode = s.sent_in_episode;
-  row.sent_total = s.sent_total;
-  row.write_timeouts = s.write_timeouts;
-  row.pid = s.process_id;
-  row.wall_time_ns = s.wall_time_ns;
-  row.detail = std::string(dds::viewString(s.detail));
-  return row;
-}
-
-// Reads what the run's sensors and coordinator have published, for up to `wait`; returns early
-// once every sensor of the scenario and a schedule have been seen.
-RunStatus collectStatus(const dds::DomainConfig& config, const std::string& run_id,
-                        std::chrono::nanoseconds wait) {
-  dds::Domain domain(config);
-  dds::Participant participant(domain);
-  dds::Topic<sensornet_SensorStatus> status_topic(participant);
-  dds::Topic<sensornet_Schedule> schedule_topic(participant);
-  dds::Topic<sensornet_Scenario> scenario_topic(participant);
-  dds::Reader<sensornet_SensorStatus> statuses(participant, status_topic);
-  dds::Reader<sensornet_Schedule> schedules(participant, schedule_topic);
-  dds::Reader<sensornet_Scenario> scenarios(participant, scenario_topic);
-  dds::ReadCondition has_status(statuses), has_schedule(schedules), has_scenario(scenarios);
-  dds::WaitSet waitset(participant);
-  waitset.attach(has_status, kStatuses);
-  waitset.attach(has_schedule, kSchedules);
-  waitset.attach(has_scenario, kScenarios);
-
-  RunStatus status;
+// Follows the run for up to `wait`; returns early once the scenario, a schedule and every sensor
+// of the scenario (or the news of its death) are in.
+RunView collectStatus(const dds::DomainConfig& config, const std::string& run_id,
+                      std::chrono::nanoseconds wait) {
+  RunFollower follower(config);
+  RunViewConfig lines_unsaid;
+  lines_unsaid.run_id = run_id;
+  lines_unsaid.keep_lines = false;
+  RunView view(lines_unsaid);
   const auto deadline = Clock::now() + wait;
-  while (Clock::now() < deadline && !status.complete()) {
-    (void)waitset.wait(kWaitStep);
-    const auto batch = statuses.take();
-    for (const auto& received : batch.samples) {
-      const sensornet_SensorStatus& s = *received.sample;
-      if (dds::viewString(s.run_id) != run_id) continue;
-      SensorRow& row = status.sensors[s.sensor_id];
-      if (s.wall_time_ns >= row.wall_time_ns) row = toRow(s);
-      row.alive = received.info.instance_state == dds::InstanceState::Alive;
-    }
-    for (const auto& change : batch.changes) {
-      auto found = status.sensors.find(change.key->sensor_id);
-      if (found != status.sensors.end()) {
-        found->second.alive = change.info.instance_state == dds::InstanceState::Alive;
-      }
-    }
-    for (const auto& received : schedules.take().samples) {
-      const sensornet_Schedule& s = *received.sample;
-      if (dds::viewString(s.run_id) != run_id) continue;
-      if (status.schedule && status.schedule->version >= s.version) continue;
-      status.schedule = ScheduleRow{s.version,           std::string(dds::viewString(s.surrogate)),
-                                    s.effective_episode, s.effective_time_s,
-                                    s.bracket_lower,     s.bracket_upper};
-    }
-    for (const auto& received : scenarios.take().samples) {
-      if (dds::viewString(received.sample->run_id) == run_id) {
-        status.sensor_count = received.sample->sensor_count;
-      }
-    }
+  while (Clock::now() < deadline && !(view.newestSchedule() && view.allSensorsAccounted())) {
+    follower.pollInto(view, kWaitStep);
   }
-  return status;
+  return view;
 }
 
-nlohmann::json toJson(const RunStatus& status, const std::string& run_id) {
+std::string stateOf(const SensorView& s) {
+  return s.state ? std::string(wordOf(*s.state)) : std::string(s.failed ? "failed" : "unknown");
+}
+
+nlohmann::json toJson(const RunView& view, const std::string& run_id) {
   nlohmann::json sensors = nlohmann::json::array();
-  for (const auto& [id, row] : status.sensors) {
+  for (const auto& [id, row] : view.sensors()) {
+    if (!row.state && !row.failed) continue;
     sensors.push_back({{"sensor_id", id},
-                       {"state", row.state},
+                       {"state", stateOf(row)},
                        {"alive", row.alive},
+                       {"failed", row.failed},
                        {"episode", row.episode},
                        {"schedule_version", row.schedule_version},
                        {"rate_hz", row.rate_hz},
                        {"sent_in_episode", row.sent_in_episode},
                        {"sent_total", row.sent_total},
                        {"write_timeouts", row.write_timeouts},
-                       {"pid", row.pid},
+                       {"pid", row.process_id},
                        {"detail", row.detail}});
   }
   nlohmann::json schedule = nullptr;
-  if (const auto& s = status.schedule) {
+  if (const auto& s = view.newestSchedule()) {
     schedule = {{"version", s->version},
                 {"surrogate", s->surrogate},
                 {"effective_episode", s->effective_episode},
@@ -157,22 +74,25 @@ nlohmann::json toJson(const RunStatus& status, const std::string& run_id) {
                 {"bracket", {{"info", s->bracket_lower}, {"cov", s->bracket_upper}}}};
   }
   nlohmann::json doc = {{"run_id", run_id}, {"schedule", schedule}, {"sensors", sensors}};
-  if (status.sensor_count) doc["sensor_count"] = *status.sensor_count;
+  if (const auto& scenario = view.scenario()) doc["sensor_count"] = scenario->sensor_count;
   return doc;
 }
 
-void printText(const RunStatus& status, const std::string& run_id) {
-  std::printf("run %s: %zu sensor(s) answered", run_id.c_str(), status.sensors.size());
-  if (status.sensor_count) std::printf(" of %u", *status.sensor_count);
+void printText(const RunView& view, const std::string& run_id) {
+  std::size_t answered = 0;
+  for (const auto& [id, row] : view.sensors()) answered += row.state.has_value() ? 1 : 0;
+  std::printf("run %s: %zu sensor(s) answered", run_id.c_str(), answered);
+  if (const auto& scenario = view.scenario()) std::printf(" of %u", scenario->sensor_count);
   std::printf("\n%6s  %-8s  %7s  %8s  %9s  %10s  %8s\n", "sensor", "state", "episode", "schedule",
               "rate (Hz)", "sent", "pid");
-  for (const auto& [id, row] : status.sensors) {
-    std::printf("%6u  %-8s  %7u  %8s  %9.4g  %10llu  %8d%s%s\n", id, row.state.c_str(), row.episode,
-                ("v" + std::to_string(row.schedule_version)).c_str(), row.rate_hz,
-                static_cast<unsigned long long>(row.sent_total), row.pid,
+  for (const auto& [id, row] : view.sensors()) {
+    if (!row.state && !row.failed) continue;
+    std::printf("%6u  %-8s  %7u  %8s  %9.4g  %10llu  %8d%s%s\n", id, stateOf(row).c_str(),
+                row.episode, ("v" + std::to_string(row.schedule_version)).c_str(), row.rate_hz,
+                static_cast<unsigned long long>(row.sent_total), row.process_id,
                 row.alive ? "" : "  (gone)", row.detail.empty() ? "" : ("  " + row.detail).c_str());
   }
-  if (const auto& s = status.schedule) {
+  if (const auto& s = view.newestSchedule()) {
     std::printf("schedule: version %u (%s) from episode %u at t = %g s, bracket [%.6g, %.6g]\n",
                 s->version, s->surrogate.c_str(), s->effective_episode, s->effective_time_s,
                 s->bracket_lower, s->bracket_upper);
@@ -181,23 +101,37 @@ void printText(const RunStatus& status, const std::string& run_id) {
   }
 }
 
+// Why nothing may have answered, as far as this host can tell (to follow "... within 2 s").
+std::string likelyCause(const LiveRun& run, const StatusOptions& options) {
+  if (options.run.security_dir.empty()) {
+    if (const auto dir = securityOfLauncher(run.launcher_pid)) {
+      return "; run " + run.run_id + " is secured (its launcher, pid " +
+             std::to_string(run.launcher_pid) + ", runs with --security " + *dir +
+             ") and answers only with --security: sensornet status --run-id " + run.run_id +
+             " --security " + *dir;
+    }
+  }
+  return " (is it running? start one with `sensornet launch SCENARIO`; a secured run answers "
+         "only with --security, a run across --hosts only with --cyclone-config <its log "
+         "dir>/cyclone-launcher.xml)";
+}
+
 int runStatus(StatusOptions options) {
-  options.run.run_id = chooseRunId(options.run.run_id, options.run.domain_id);
+  const LiveRun run = chooseLiveRun(options.run.run_id, options.run.domain_id);
+  options.run.run_id = run.run_id;
   const dds::DomainConfig config = options.run.domainConfig();
-  const RunStatus status = collectStatus(config, options.run.run_id,
-                                         std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                             std::chrono::duration<double>(options.wait_s)));
-  const bool nothing = status.sensors.empty() && !status.schedule;
+  const RunView view = collectStatus(config, options.run.run_id,
+                                     std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                         std::chrono::duration<double>(options.wait_s)));
+  const bool nothing = !view.answered();
   if (options.json) {
-    printJson(toJson(status, options.run.run_id));
+    printJson(toJson(view, options.run.run_id));
   } else if (!nothing) {
-    printText(status, options.run.run_id);
+    printText(view, options.run.run_id);
   }
   if (nothing) {
-    std::fprintf(stderr,
-                 "sensornet status: nothing of run %s answered within %g s (is it running? "
-                 "start one with `sensornet launch SCENARIO`)\n",
-                 options.run.run_id.c_str(), options.wait_s);
+    std::fprintf(stderr, "sensornet status: nothing of run %s answered within %g s%s\n",
+                 options.run.run_id.c_str(), options.wait_s, likelyCause(run, options).c_str());
     return kExitFailure;
   }
   return kExitOk;
@@ -214,12 +148,17 @@ Subcommand addStatusCommand(CLI::App& app) {
       "  sensornet status --json");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
-      ->description("the run to look at (default: the run last launched on this host)");
-  cmd->add_option("--wait", options->wait_s, "seconds to listen for the sensors")
+      ->description(
+          "the run to look at (default: the one run live on this host; with several, "
+          "it lists them and asks)");
+  cmd->add_option("--wait", options->wait_s,
+                  "at most this many seconds to listen; it answers as soon as every sensor of "
+                  "the scenario has")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_flag("--json", options->json,
-                "print {\"run_id\", \"schedule\", \"sensors\": [...]} as one JSON line");
+                "print {\"run_id\", \"schedule\", \"sensor_count\", \"sensors\": [...]} as one "
+                "JSON line");
   return {cmd, [options] { return runStatus(*options); }};
 }
 

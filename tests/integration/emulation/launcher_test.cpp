@@ -287,7 +287,9 @@ TEST_F(Launcher, WatchFollowsARunInPlainLinesAndExitsWithIt) {
       << watch.out;
   for (const json& e : report["per_episode"]) {
     const int k = e["episode"].get<int>();
-    EXPECT_NE(watch.out.find("episode " + std::to_string(k) + " of 3 started"), std::string::npos)
+    EXPECT_NE(watch.out.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
+                             " started"),
+              std::string::npos)
         << watch.out;
     EXPECT_NE(watch.out.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
                              ": realized " +
