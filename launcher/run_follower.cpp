@@ -55,7 +55,8 @@ EpisodeReportSeen reportOf(const sensornet_Report& r) {
   const sensornet_RunSummary& s = r.summary;
   out.summary = {s.episodes,           s.episodes_complete,  s.realized_mean,
                  s.realized_ci95_low,  s.realized_ci95_high, s.bracket_lower_mean,
-                 s.bracket_upper_mean, s.meets_bracket};
+                 s.bracket_upper_mean, s.meets_bracket,       s.delivered_lower_mean,
+                 s.delivered_upper_mean};
   return out;
 }
 

@@ -57,6 +57,12 @@ std::string formatProgress(const EpisodeReportSeen& report,
       text += format(" (95%%: [%.4g, %.4g])", s.ci95_low, s.ci95_high);
     }
     text += format(", bracket [%.4g, %.4g]", s.bracket_lower_mean, s.bracket_upper_mean);
+    // Beside the plan, what it could deliver: a dead sensor's share, the network's losses.
+    const double tolerance = 1e-9 * std::max(std::abs(s.bracket_upper_mean), 1.0);
+    if (std::abs(s.delivered_lower_mean - s.bracket_lower_mean) > tolerance ||
+        std::abs(s.delivered_upper_mean - s.bracket_upper_mean) > tolerance) {
+      text += format(" (delivered [%.4g, %.4g])", s.delivered_lower_mean, s.delivered_upper_mean);
+    }
   }
   const std::vector<std::uint32_t>& versions = report.schedule_versions;
   if (!versions.empty() && (versions.size() > 1 || versions.front() != 1)) {

@@ -88,6 +88,10 @@ struct RunningSummary {
   double bracket_lower_mean = 0.0;
   double bracket_upper_mean = 0.0;
   bool meets_bracket = false;
+  // Of what the schedules delivered (network losses and outages, dead sensors): the same as the
+  // bracket above when nothing was lost on the way.
+  double delivered_lower_mean = 0.0;
+  double delivered_upper_mean = 0.0;
 };
 
 struct EpisodeReportSeen {

@@ -52,6 +52,8 @@ EpisodeReportSeen report(std::uint32_t episode, bool complete = true) {
   r.summary.realized_mean = 12.5;
   r.summary.bracket_lower_mean = 10.0;
   r.summary.bracket_upper_mean = 30.0;
+  r.summary.delivered_lower_mean = 10.0;  // nothing lost on the way
+  r.summary.delivered_upper_mean = 30.0;
   return r;
 }
 
@@ -280,6 +282,17 @@ TEST(RunView, ProgressLineSaysWhyAnEpisodeIsIncomplete) {
             std::string::npos)
       << line;
   EXPECT_EQ(line.rfind("[2/3] episode 1: realized 13.5", 0), 0u) << line;
+}
+
+// After a death under `continue` (or on a lossy network) the line shows, beside the planned
+// bracket, what the schedule could deliver; with nothing lost on the way only the plan.
+TEST(RunView, ProgressLineShowsTheDeliveredBracketBesideThePlannedOne) {
+  EpisodeReportSeen r = report(3);
+  EXPECT_EQ(formatProgress(r, 6).find("delivered"), std::string::npos) << formatProgress(r, 6);
+  r.summary.delivered_lower_mean = 10.93;
+  r.summary.delivered_upper_mean = 74.85;
+  const std::string line = formatProgress(r, 6);
+  EXPECT_NE(line.find("bracket [10, 30] (delivered [10.93, 74.85])"), std::string::npos) << line;
 }
 
 TEST(RunView, ProgressLineWithoutACompleteEpisodeShowsNoMean) {
