@@ -52,6 +52,7 @@ struct Options {
   fs::path work;   // trial folders; default: a fresh folder in /tmp
   fs::path cache;  // clean runs' costs; default: <work>/clean
   bool keep = false;
+  bool list = false;  // print the trials the seeds draw, run nothing
 };
 
 std::string readText(const fs::path& path) {
@@ -361,7 +362,7 @@ std::string outcomeLine(const TrialRecord& r, const std::vector<std::string>& vi
 int usage(const std::string& why) {
   std::cerr << "chaos: " << why << "\n"
             << "usage: chaos (--seed S | --seeds S1,S2,... | --trials N [--first-seed S])\n"
-            << "             [--launcher PATH] [--source-dir DIR] [--work DIR] [--cache DIR] [--keep]\n";
+            << "             [--launcher PATH] [--source-dir DIR] [--work DIR] [--cache DIR] [--keep] [--list]\n";
   return 2;
 }
 
@@ -414,6 +415,8 @@ int main(int argc, char** argv) {
       o.cache = value();
     } else if (arg == "--keep") {
       o.keep = true;
+    } else if (arg == "--list") {
+      o.list = true;
     } else {
       return usage("unknown option " + arg);
     }
@@ -422,6 +425,12 @@ int main(int argc, char** argv) {
     for (std::uint64_t k = 0; k < *trials; ++k) o.seeds.push_back(first + k);
   }
   if (o.seeds.empty()) return usage("no trial: give --seed, --seeds or --trials");
+  if (o.list) {
+    for (const std::uint64_t seed : o.seeds) {
+      std::cout << "seed " << seed << " [" << describe(drawTrial(seed)) << "]\n";
+    }
+    return 0;
+  }
   namespace fs = std::filesystem;
   if (o.work.empty()) {
     char pattern[] = "/tmp/sensornet-chaos-XXXXXX";
