@@ -432,7 +432,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   namespace fs = std::filesystem;
-  if (o.work.empty()) {
+  const bool own_work = o.work.empty();
+  if (own_work) {
     char pattern[] = "/tmp/sensornet-chaos-XXXXXX";
     if (::mkdtemp(pattern) == nullptr) return usage("cannot make a folder in /tmp");
     o.work = pattern;
@@ -453,9 +454,12 @@ int main(int argc, char** argv) {
     const fs::path dir = o.work / ("trial-" + std::to_string(seed));
     std::error_code ignored;
     fs::remove_all(dir, ignored);
+    const auto began = Clock::now();
     const TrialRecord record = runTrial(o, trial, dir);
     const std::vector<std::string> violations = checkInvariants(record);
-    std::cout << outcomeLine(record, violations) << std::endl;
+    char took[32];
+    std::snprintf(took, sizeof took, " (%.0f s)", secondsSince(began));
+    std::cout << outcomeLine(record, violations) << took << std::endl;
     for (const InjectedFault& f : record.faults) {
       if (!f.injected) continue;
       ++injected;
@@ -475,5 +479,9 @@ int main(int argc, char** argv) {
     first_kind = false;
   }
   std::cout << "), " << violated << " with violations" << std::endl;
+  if (own_work && violated == 0 && !o.keep) {
+    std::error_code ignored;
+    fs::remove_all(o.work, ignored);  // the clean runs and the scratch folder too
+  }
   return violated == 0 ? 0 : 1;
 }
