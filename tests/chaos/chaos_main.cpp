@@ -444,7 +444,9 @@ int main(int argc, char** argv) {
   ::setenv("XDG_RUNTIME_DIR", o.work.c_str(), 1);
   ::setenv("SENSORNET_SCRATCH_DIR", (o.work / "scratch").c_str(), 1);
   ::unsetenv("SENSORNET_CYCLONE_CONFIG");
-  ::signal(SIGPIPE, SIG_IGN);
+  // A shell starts background jobs with SIGINT ignored, and the launcher would inherit that:
+  // its signals must be the defaults a user's terminal gives it.
+  for (const int signal : {SIGINT, SIGTERM}) ::signal(signal, SIG_DFL);
 
   int violated = 0;
   std::size_t injected = 0;
