@@ -155,8 +155,12 @@ void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_
   }
   for (const int j : failure.sensors) {
     const auto heard = heard_ns_.find(j);
-    if (heard != heard_ns_.end() && silent_from_ns_.count(j) == 0 &&
-        awakeSince(heard->second, now) > kLateFailureNoticeS) {
+    if (heard == heard_ns_.end() || silent_from_ns_.count(j) > 0) continue;
+    // It still owes an earlier episode its count: it died there, whenever the notice came.
+    const bool owes_earlier = std::any_of(open_.begin(), open_.end(), [&](const auto& open) {
+      return open.first < failure.episode && !open.second->fusion->settled(j);
+    });
+    if (owes_earlier || awakeSince(heard->second, now) > kLateFailureNoticeS) {
       silent_from_ns_[j] = heard->second;
     }
   }

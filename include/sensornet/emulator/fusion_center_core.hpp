@@ -263,8 +263,9 @@ class FusionCenterCore {
   std::map<std::uint32_t, std::vector<EpisodeTally>> early_tallies_;
   std::vector<SensorFailure> failures_;  // the coordinator's notices, in order
   std::map<int, std::int64_t> heard_ns_;  // per sensor: when anything of it last arrived
-  // Failed sensors whose notice came long after they fell silent (the launcher, which tells the
-  // coordinator, was stalled): when they were last heard, which dates the death better.
+  // Failed sensors whose notice came late (the launcher, which tells the coordinator, was
+  // stalled): long after they fell silent, or after the end of an episode whose count they
+  // still owed. When they were last heard dates the death better than the notice.
   std::map<int, std::int64_t> silent_from_ns_;
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
