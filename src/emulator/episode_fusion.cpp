@@ -186,7 +186,8 @@ EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plan
       tallies_(static_cast<std::size_t>(scenario.sensorCount())),
       sent_at_least_(tallies_.size(), 0),
       failed_at_(tallies_.size()),
-      failed_before_(tallies_.size(), false) {
+      failed_before_(tallies_.size(), false),
+      failed_silent_(tallies_.size(), false) {
   scheduleChanged();
 }
 
@@ -271,6 +272,16 @@ void EpisodeFusion::sensorFailedAt(int sensor, double at_s) {
   const auto j = static_cast<std::size_t>(sensor);
   if (failed_before_[j]) return;
   if (!failed_at_[j] || at_s < *failed_at_[j]) failed_at_[j] = at_s;
+}
+
+void EpisodeFusion::sensorFellSilentAt(int sensor, double last_heard_s) {
+  if (sensor < 0 || sensor >= scenario_.sensorCount()) return;
+  const auto j = static_cast<std::size_t>(sensor);
+  if (failed_before_[j]) return;
+  if (!failed_at_[j] || last_heard_s < *failed_at_[j]) {
+    failed_at_[j] = last_heard_s;
+    failed_silent_[j] = true;
+  }
 }
 
 void EpisodeFusion::sensorFailedBefore(int sensor) {
@@ -366,10 +377,11 @@ std::string EpisodeFusion::incompleteReason() const {
     if (!failed_at_[j]) continue;
     char at[32];
     std::snprintf(at, sizeof at, "%.6g", *failed_at_[j]);
+    const bool during = *failed_at_[j] < scenario_.horizon_s;
     add("sensor " + std::to_string(j) +
-        (*failed_at_[j] < scenario_.horizon_s
-             ? " failed at " + std::string(at) + " s"
-             : " failed after the episode's end, before its count arrived"));
+        (!during           ? " failed after the episode's end, before its count arrived"
+         : failed_silent_[j] ? " failed after " + std::string(at) + " s (last heard then)"
+                             : " failed at " + std::string(at) + " s"));
   }
   for (const int j : unsettled()) {
     const SensorTally& t = tallies_[static_cast<std::size_t>(j)];

@@ -144,7 +144,7 @@ void FusionCenterCore::startEpisode(const EpisodeStart& start, std::int64_t now)
   }
 }
 
-void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_t /*now*/) {
+void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_t now) {
   log(spdlog::level::warn, "sensors failed in episode " + std::to_string(failure.episode) +
                                " at " + formatSeconds(failure.at_s) + " s: " + failure.detail);
   if (resumed_ && open_.count(failure.episode) == 0 &&
@@ -152,6 +152,17 @@ void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_
     // Under way, and its start was before this process joined (the durable control sample
     // is this notice now): it cannot be fused; its end is unknown.
     for (const std::uint32_t e : resumed_->heardOfRunning(failure.episode)) restarted_.emplace(e, 0);
+  }
+  for (const int j : failure.sensors) {
+    const auto heard = heard_ns_.find(j);
+    if (heard == heard_ns_.end() || silent_from_ns_.count(j) > 0) continue;
+    // It still owes an earlier episode its count: it died there, whenever the notice came.
+    const bool owes_earlier = std::any_of(open_.begin(), open_.end(), [&](const auto& open) {
+      return open.first < failure.episode && !open.second->fusion->settled(j);
+    });
+    if (owes_earlier || awakeSince(heard->second, now) > kLateFailureNoticeS) {
+      silent_from_ns_[j] = heard->second;
+    }
   }
   failed_sensors_.insert(failure.sensors.begin(), failure.sensors.end());
   failures_.push_back(failure);
@@ -161,10 +172,16 @@ void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_
 
 // A failed sensor is never awaited: in the episode it died in (the episode is incomplete), in
 // the later ones (dead from their start), and in an earlier one still waiting for its count.
+// A notice that came late is not when it died: its silence says so (applySilentFailure).
 void FusionCenterCore::applyFailure(std::uint32_t number, OpenEpisode& open,
                                     const SensorFailure& failure) {
   for (const int j : failure.sensors) {
-    if (number == failure.episode) {
+    const auto silent = silent_from_ns_.find(j);
+    if (number <= failure.episode && silent != silent_from_ns_.end()) {
+      if (number == failure.episode || !open.fusion->settled(j)) {
+        applySilentFailure(open, j, silent->second);
+      }
+    } else if (number == failure.episode) {
       open.fusion->sensorFailedAt(j, failure.at_s);
     } else if (number > failure.episode) {
       open.fusion->sensorFailedBefore(j);
@@ -172,6 +189,24 @@ void FusionCenterCore::applyFailure(std::uint32_t number, OpenEpisode& open,
       open.fusion->sensorFailedAt(j, std::numeric_limits<double>::infinity());
     }
   }
+}
+
+// A sensor last heard at `last_heard_ns`, long before the notice: dead from the start of an
+// episode it was silent throughout (which it then leaves complete, as any later one), else
+// failed after it was last heard in it.
+void FusionCenterCore::applySilentFailure(OpenEpisode& open, int sensor,
+                                          std::int64_t last_heard_ns) {
+  const std::int64_t start_ns = open.clock.wallAt(0.0);
+  if (open.last_heard_ns[static_cast<std::size_t>(sensor)] == 0 && last_heard_ns <= start_ns) {
+    open.fusion->sensorFailedBefore(sensor);
+    return;
+  }
+  open.fusion->sensorFellSilentAt(sensor, open.clock.emulatedAt(std::max(last_heard_ns, start_ns)));
+}
+
+void FusionCenterCore::heard(std::uint32_t sensor, std::int64_t now) {
+  std::int64_t& last = heard_ns_[static_cast<int>(sensor)];
+  last = std::max(last, now);
 }
 
 CostBracket FusionCenterCore::bracketOf(const ScheduleVersion& v) {
@@ -303,6 +338,7 @@ void FusionCenterCore::route(OpenEpisode& open, FusedMeasurement m, WriterId wri
   measurement_claims_.claim(sensor, writer);  // accepted: well-formed, of this run
   const auto j = static_cast<std::size_t>(sensor);
   open.last_heard_ns[j] = now;
+  heard(static_cast<std::uint32_t>(sensor), now);
   open.last_arrival_ns = std::max(open.last_arrival_ns, received_ns);
   if (published_ns > 0 && received_ns > published_ns) {
     open.held_back_s[j] = std::max(open.held_back_s[j], awakeSince(published_ns, received_ns));
@@ -336,6 +372,7 @@ void FusionCenterCore::applyTally(OpenEpisode& open, const EpisodeTally& t, std:
   open.tallies[j] = t;
   open.fusion->setTally(static_cast<int>(t.sensor), t.count);
   open.last_heard_ns[j] = now;
+  heard(t.sensor, now);
   open.last_tally_ns = std::max(open.last_tally_ns, t.wall_time_ns);
   open.last_arrival_ns = std::max(open.last_arrival_ns, now);
   if (t.wall_time_ns > 0 && now > t.wall_time_ns) {
@@ -365,6 +402,7 @@ void FusionCenterCore::onStatus(const SensorStatus& s, std::int64_t now) {
   process.id = s.process_id;
   process.state = s.state;
   process.status_writer = s.writer;
+  heard(s.sensor, now);
   auto open = open_.find(s.episode);
   if (open == open_.end() || !hasScenario() ||
       s.sensor >= static_cast<std::uint32_t>(scenario().sensorCount())) {

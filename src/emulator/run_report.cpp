@@ -1,9 +1,15 @@
 #include "sensornet/emulator/run_report.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -589,18 +595,38 @@ bool endsInTornLine(const std::filesystem::path& path) {
 
 EpisodeLog::EpisodeLog(const std::filesystem::path& path, Mode mode) : path_(path) {
   const bool torn = mode == Mode::Append && endsInTornLine(path);
-  out_.open(path, mode == Mode::Append ? std::ios::app : std::ios::trunc);
-  if (!out_) throw std::runtime_error("cannot write the episode log " + path.string());
-  if (torn) {
-    out_ << '\n';  // the torn line stays a line of its own, which readEpisodeLog skips
-    out_.flush();
+  fd_ = ::open(path.c_str(),
+               O_WRONLY | O_CREAT | O_CLOEXEC | (mode == Mode::Append ? O_APPEND : O_TRUNC), 0644);
+  if (fd_ < 0) {
+    throw std::runtime_error("cannot write the episode log " + path.string() + ": " +
+                             std::strerror(errno));
   }
+  if (torn) writeWhole("\n");  // the torn line stays a line of its own, which readEpisodeLog skips
 }
 
-void EpisodeLog::append(const json& entry) {
-  out_ << entry.dump() << '\n';
-  out_.flush();
-  if (!out_) throw std::runtime_error("cannot append to the episode log " + path_.string());
+EpisodeLog::~EpisodeLog() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void EpisodeLog::append(const json& entry) { writeWhole(entry.dump() + '\n'); }
+
+void EpisodeLog::writeWhole(const std::string& line) {
+  struct stat before {};
+  const bool sized = ::fstat(fd_, &before) == 0;
+  std::size_t done = 0;
+  while (done < line.size()) {
+    const ssize_t n = ::write(fd_, line.data() + done, line.size() - done);
+    if (n > 0) {
+      done += static_cast<std::size_t>(n);
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    const int error = n < 0 ? errno : ENOSPC;
+    // What went in of the line is cut off again: a reader never sees half an entry.
+    if (sized && done > 0) (void)::ftruncate(fd_, before.st_size);
+    throw std::runtime_error("cannot append to the episode log " + path_.string() + ": " +
+                             std::strerror(error));
+  }
 }
 
 std::size_t forEachLoggedEpisode(const std::filesystem::path& path,

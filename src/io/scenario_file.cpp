@@ -4,12 +4,15 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -353,6 +356,13 @@ nlohmann::json scheduleToJson(const RateSchedule& schedule) {
           {"rates", std::move(rows)}};
 }
 
+namespace {
+
+// A write refused for want of room, not because of the path.
+bool outOfSpace(int error) { return error == ENOSPC || error == EDQUOT || error == EFBIG; }
+
+}  // namespace
+
 void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what) {
   writeJsonFile(path, what, [&doc](std::ostream& out) { out << doc.dump(2) << '\n'; });
 }
@@ -369,10 +379,24 @@ void writeJsonFile(const std::string& path, const std::string& what,
   }
   // Write beside the target and rename, so a reader never sees half a file.
   const std::string temporary = path + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    write(out);
-    if (!out) throw InputError(path, "", "a writable path for the " + what);
+  std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+  if (!out) {
+    const int error = errno;
+    if (!outOfSpace(error)) throw InputError(path, "", "a writable path for the " + what);
+    throw std::runtime_error("cannot write the " + what + " " + path + ": " + std::strerror(error));
+  }
+  errno = 0;
+  write(out);
+  out.flush();
+  int error = out ? 0 : (errno != 0 ? errno : EIO);
+  out.close();
+  if (error == 0 && out.fail()) error = errno != 0 ? errno : EIO;
+  if (error != 0) {
+    // The path was fine (the temporary was made): the disk or a limit refused the bytes. Not
+    // bad input; and no half-written temporary stays behind.
+    std::remove(temporary.c_str());
+    throw std::runtime_error("cannot write the " + what + " " + path + ": " +
+                             std::strerror(error));
   }
   if (std::rename(temporary.c_str(), path.c_str()) != 0) {
     std::remove(temporary.c_str());

@@ -203,6 +203,9 @@ class EpisodeFusion {
   // `sensor` died at emulated time at_s of this episode (at_s >= T: after its end, before its
   // tally came); the earliest time given counts.
   void sensorFailedAt(int sensor, double at_s);
+  // `sensor` died, last heard at emulated time last_heard_s of this episode: the notice came
+  // too late to date the death ("sensor 3 failed after 0.58 s (last heard then)").
+  void sensorFellSilentAt(int sensor, double last_heard_s);
   // `sensor` was dead before this episode began.
   void sensorFailedBefore(int sensor);
   [[nodiscard]] bool failed(int sensor) const;
@@ -261,6 +264,7 @@ class EpisodeFusion {
   std::vector<std::uint64_t> sent_at_least_;  // status and highest seq + 1
   std::vector<std::optional<double>> failed_at_;  // died during the episode, at this time
   std::vector<bool> failed_before_;               // dead before the episode
+  std::vector<bool> failed_silent_;  // failed_at_ is when it was last heard, not the notice's
   RejectionCounts rejected_;
   bool replay_ = false;
 };

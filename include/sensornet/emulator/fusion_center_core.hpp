@@ -62,6 +62,12 @@ struct FusionCenterConfig {
 // it could not fuse (the coordinator then starts the next one, which must lose nothing).
 inline constexpr double kResumeMatchWaitS = 5.0;
 
+// A failure notice that comes this long (wall seconds this process ran) after the sensor was
+// last heard came late: a live sensor is heard at least every second (its SensorStatus), and a
+// death reaches the notice within a fraction of one unless the launcher was stalled. The death
+// is then dated by the silence, not by the notice.
+inline constexpr double kLateFailureNoticeS = 2.0;
+
 // The wire topics whose writers claim sensors.
 enum class SensorTopic { Measurement, Tally, Status };
 
@@ -202,7 +208,9 @@ class FusionCenterCore {
   void countOutside(RejectionReason reason, std::uint64_t count = 1);
 
   void startEpisode(const EpisodeStart& start, std::int64_t now);
-  static void applyFailure(std::uint32_t number, OpenEpisode& open, const SensorFailure& failure);
+  void applyFailure(std::uint32_t number, OpenEpisode& open, const SensorFailure& failure);
+  void applySilentFailure(OpenEpisode& open, int sensor, std::int64_t last_heard_ns);
+  void heard(std::uint32_t sensor, std::int64_t now);
   CostBracket bracketOf(const ScheduleVersion& v);
   CostBracket deliveredBracketOf(const ScheduleVersion& v, std::uint32_t episode);
   [[nodiscard]] bool duplicatesLink(int sensor) const;
@@ -254,6 +262,11 @@ class FusionCenterCore {
   std::map<std::uint32_t, std::vector<MeasurementArrival>> early_;
   std::map<std::uint32_t, std::vector<EpisodeTally>> early_tallies_;
   std::vector<SensorFailure> failures_;  // the coordinator's notices, in order
+  std::map<int, std::int64_t> heard_ns_;  // per sensor: when anything of it last arrived
+  // Failed sensors whose notice came late (the launcher, which tells the coordinator, was
+  // stalled): long after they fell silent, or after the end of an episode whose count they
+  // still owed. When they were last heard dates the death better than the notice.
+  std::map<int, std::int64_t> silent_from_ns_;
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
   std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses

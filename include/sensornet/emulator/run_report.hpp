@@ -209,8 +209,11 @@ inline constexpr double kLatencyQuantileRelativeError = 5.76e-4;  // 10^(1/4000)
 // appended).
 [[nodiscard]] std::filesystem::path episodeLogPath(const std::filesystem::path& report_path);
 
-// Appends one JSON document per line and flushes it, so that a crash of the process loses no
-// line it appended. Throws std::runtime_error when the file cannot be opened or written.
+// Appends one JSON document per line, each line in one write(2) to the file itself, so that a
+// crash of the process loses no line it appended and tears none. A line the file cannot take
+// whole (a full disk, a file size limit) is cut off again, so the log never ends in half an
+// entry. Throws std::runtime_error naming the file and the system's reason when it cannot be
+// opened or a line cannot be written.
 class EpisodeLog {
  public:
   enum class Mode {
@@ -218,11 +221,16 @@ class EpisodeLog {
     Append     // a restarted fusion center: after what is there (a torn last line stays alone)
   };
   explicit EpisodeLog(const std::filesystem::path& path, Mode mode = Mode::Truncate);
+  ~EpisodeLog();
+  EpisodeLog(const EpisodeLog&) = delete;
+  EpisodeLog& operator=(const EpisodeLog&) = delete;
   void append(const nlohmann::json& entry);
 
  private:
+  void writeWhole(const std::string& line);
+
   std::filesystem::path path_;
-  std::ofstream out_;
+  int fd_ = -1;
 };
 
 // The entries of an episode log, in order; a torn last line (a crash mid-write) is skipped.

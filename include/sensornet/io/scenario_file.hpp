@@ -31,7 +31,9 @@ namespace sensornet {
 [[nodiscard]] RateSchedule loadScheduleFile(const std::string& path, const Scenario& scenario);
 [[nodiscard]] nlohmann::json scheduleToJson(const RateSchedule& schedule);
 // Writes `doc` (indented) to path atomically: a temporary file beside it, then a rename.
-// Throws InputError naming the path when it cannot be written. `what` names the file's role.
+// Throws InputError naming the path when it cannot be written there (a missing folder, no
+// permission); std::runtime_error with the system's reason when the disk or a file size limit
+// refuses the bytes (no temporary file is left). `what` names the file's role.
 void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what);
 // The same, with the text written by `write` (a document too large to hold: streamed).
 void writeJsonFile(const std::string& path, const std::string& what,

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <string>
@@ -281,6 +282,72 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   runUntil(endOf(1) + 100 * kMs);
   ASSERT_EQ(reports_.size(), 2u);
   EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
+}
+
+// Issue 31, finding 4: the launcher, stalled, told of a death late. Sensor 1 died 2.5 s into
+// episode 0 (nothing of it after that: no measurement, tally or status); the notice came in
+// episode 1 at 0.3 s. Episode 0 is incomplete because it died there, after it was last heard
+// (not "after the episode's end"); episode 1, which it was dead throughout, is complete.
+TEST_F(FusionCenterCoreTest, ADeathNoticedLateIsDatedByTheSensorsSilence) {
+  starts_[1] = endOf(0) + 2 * kMs;  // back to back
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::erase_if(all, [](const auto& m) {
+    return m.measurement.sensor == 1 && m.measurement.time_s > 2.5;
+  });
+  double last_heard_s = 0.0;  // the emulated time its last measurement was received
+  for (const auto& m : all) {
+    if (m.measurement.sensor == 1) last_heard_s = m.measurement.time_s + 1e-3;
+  }
+  ASSERT_GT(last_heard_s, 1.0) << "sensor 1 sends after 1 s";
+  deliver(all);
+  runUntil(endOf(0) + 1 * kMs);
+  deliverTallies(sent, 0, {0, 2, 3});
+  start(1);
+  auto next = measurements(1);
+  std::erase_if(next, [](const auto& m) { return m.measurement.sensor == 1; });
+  auto before = next;
+  std::erase_if(before, [](const auto& m) { return m.measurement.time_s > 0.3; });
+  deliver(before);
+  runUntil(startOf(1) + 300 * kMs);
+  core_->onSensorFailure({1, 0.3, {1}, "sensor 1's process exited"}, now_);
+  std::erase_if(next, [](const auto& m) { return m.measurement.time_s <= 0.3; });
+  deliver(next);
+  runUntil(endOf(1) + 10 * kMs);
+  auto sent_next = sentBy(before);
+  for (std::size_t j = 0; j < 4; ++j) sent_next[j] += sentBy(next)[j];
+  deliverTallies(sent_next, 1, {0, 2, 3});
+  runUntil(endOf(1) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 2u);
+  char at[32];
+  std::snprintf(at, sizeof at, "%.6g", last_heard_s);
+  EXPECT_FALSE(reports_[0].result.complete);
+  EXPECT_EQ(reports_[0].result.incomplete_reason,
+            "sensor 1 failed after " + std::string(at) + " s (last heard then)");
+  EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
+  EXPECT_EQ(reports_[1].result.failed_sensors, std::vector<int>{1});
+}
+
+// A notice that comes at once dates the death itself, as before.
+TEST_F(FusionCenterCoreTest, ADeathNoticedAtOnceIsDatedByTheNotice) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::erase_if(all, [](const auto& m) { return m.measurement.time_s > 1.0; });
+  deliver(all);
+  runUntil(startOf(0) + 1050 * kMs);
+  core_->onSensorFailure({0, 1.05, {1}, "sensor 1's process exited"}, now_);
+  auto rest = measurements(0);
+  std::erase_if(rest, [](const auto& m) {
+    return m.measurement.time_s <= 1.0 || m.measurement.sensor == 1;
+  });
+  deliver(rest);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 2, 3});
+  runUntil(endOf(0) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.incomplete_reason, "sensor 1 failed at 1.05 s");
 }
 
 // Defect (a): a link cut for 3 s mid-episode delays two sensors' measurements and tallies; the

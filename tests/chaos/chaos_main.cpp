@@ -1,0 +1,489 @@
+// chaos: randomized fault schedules against whole `sensornet launch` runs, and the invariants
+// that must hold after each (tests/chaos/README.md).
+//
+//   chaos --seed 42                     # one trial, replayed from its seed
+//   chaos --trials 50 --first-seed 100  # a sweep: seeds 100..149
+//   chaos --seeds 3,17,29               # the fixed set CTest runs
+//
+// Each trial prints one line: its seed, the run and its faults, and OK or every violated
+// invariant. The exit status is 0 when no trial violated anything, 1 otherwise, 2 on bad usage.
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "fault_schedule.hpp"
+#include "invariants.hpp"
+#include "support/background_process.hpp"
+
+namespace sensornet::chaos {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+constexpr auto kPoll = std::chrono::milliseconds(10);
+// After the launcher ended, its children may take this long to go (README: after kill -9 of the
+// launcher they outlive it by 2-4 s; the parent-death signal, then their own shutdown).
+constexpr double kLeftoverGraceS = 12.0;
+// Episodes of the clean runs the costs are compared with (every trial has at most 9).
+constexpr int kCleanEpisodes = 9;
+
+struct Options {
+  std::vector<std::uint64_t> seeds;
+  std::string launcher = SENSORNET_LAUNCHER;
+  fs::path source_dir = SENSORNET_SOURCE_DIR;
+  fs::path work;   // trial folders; default: a fresh folder in /tmp
+  fs::path cache;  // clean runs' costs; default: <work>/clean
+  bool keep = false;
+  bool list = false;  // print the trials the seeds draw, run nothing
+};
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::int64_t realtimeNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string cmdlineOf(pid_t pid) {
+  std::string cmdline = readText("/proc/" + std::to_string(pid) + "/cmdline");
+  for (char& c : cmdline) c = c == '\0' ? ' ' : c;
+  return cmdline;
+}
+
+// The run's process of `target` (for a sensor agent: the one hosting sensor `agent`).
+std::optional<pid_t> processOf(const std::string& run_id, Target target, int agent) {
+  static const std::map<Target, std::string> kProgram = {{Target::Coordinator, "coordinator"},
+                                                         {Target::FusionCenter, "fusion_center"},
+                                                         {Target::SensorAgent, "sensor_agent"},
+                                                         {Target::Launcher, "sensornet"}};
+  for (const pid_t pid : testing::processesMentioning(run_id)) {
+    std::istringstream words(cmdlineOf(pid));
+    std::vector<std::string> argv;
+    for (std::string w; words >> w;) argv.push_back(w);
+    if (argv.empty() || fs::path(argv[0]).filename() != kProgram.at(target)) continue;
+    if (!testing::processExists(pid)) continue;
+    if (target != Target::SensorAgent) return pid;
+    const auto flag = std::find(argv.begin(), argv.end(), "--sensors");
+    if (flag != argv.end() && flag + 1 != argv.end() && *(flag + 1) == std::to_string(agent)) {
+      return pid;
+    }
+  }
+  return std::nullopt;
+}
+
+std::size_t logLineCount(const fs::path& log) {
+  const std::string text = readText(log);
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+// The coordinator's journal: the episode announced last and its start (realtime ns).
+std::optional<std::pair<int, std::int64_t>> announced(const fs::path& journal) {
+  const json j = json::parse(readText(journal), nullptr, false);
+  if (!j.is_object() || !j.contains("announced") || !j["announced"].is_object()) return std::nullopt;
+  const json& a = j["announced"];
+  if (!a["episode"].is_number_integer() || !a["start_wall_ns"].is_number_integer()) return std::nullopt;
+  return std::make_pair(a["episode"].get<int>(), a["start_wall_ns"].get<std::int64_t>());
+}
+
+std::string scenarioPath(const Options& o, const Trial& t, const fs::path& dir) {
+  switch (t.scenario) {
+    case ScenarioKind::Default: return (o.source_dir / "scenarios/default.yaml").string();
+    case ScenarioKind::Lossy: return (o.source_dir / "scenarios/lossy.yaml").string();
+    case ScenarioKind::Small: {
+      const fs::path path = dir / "small.yaml";
+      std::ofstream(path) << smallScenarioYaml(t);
+      return path.string();
+    }
+  }
+  return {};
+}
+
+std::vector<std::string> launchArgs(const Options& o, const std::string& scenario, int episodes,
+                                    double time_scale, const std::string& policy,
+                                    std::uint64_t seed, const std::string& run_id,
+                                    const fs::path& dir) {
+  char scale[32];
+  std::snprintf(scale, sizeof scale, "%g", time_scale);
+  return {o.launcher,      "launch",       scenario,
+          "--episodes",    std::to_string(episodes),
+          "--time-scale",  scale,
+          "--seed",        std::to_string(seed),
+          "--on-sensor-failure", policy,
+          "--run-id",      run_id,
+          "--report",      (dir / "report.json").string(),
+          "--log-dir",     (dir / "logs").string(),
+          "--no-html"};
+}
+
+// Kills whatever of the run still runs, after the grace; returns their command lines.
+std::vector<std::string> reapLeftovers(const std::string& run_id) {
+  const auto t0 = Clock::now();
+  std::vector<pid_t> left;
+  do {
+    left = testing::processesMentioning(run_id);
+    left.erase(std::remove_if(left.begin(), left.end(),
+                              [](pid_t p) { return !testing::processExists(p); }),
+               left.end());
+    if (left.empty()) return {};
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  } while (secondsSince(t0) < kLeftoverGraceS);
+  std::vector<std::string> lines;
+  for (const pid_t pid : left) {
+    lines.push_back(cmdlineOf(pid).substr(0, 120));
+    ::kill(pid, SIGCONT);
+    ::kill(pid, SIGKILL);
+  }
+  return lines;
+}
+
+std::string uniqueRunId(std::uint64_t seed, const char* what) {
+  char id[64];
+  std::snprintf(id, sizeof id, "chaos-%d-%s-%llx", static_cast<int>(::getpid()), what,
+                static_cast<unsigned long long>(seed));
+  return id;
+}
+
+// The clean run's realized costs per episode (null where incomplete), cached per scenario and
+// run seed: costs depend on neither the episode count nor the time scale.
+std::vector<std::optional<double>> cleanCosts(const Options& o, const Trial& t) {
+  const std::string key = std::string(nameOf(t.scenario)) +
+                          (t.scenario == ScenarioKind::Small ? std::to_string(t.small_scenario_seed) : "") +
+                          "-seed" + std::to_string(t.run_seed);
+  const fs::path cached = o.cache / (key + ".json");
+  json costs = json::parse(readText(cached), nullptr, false);
+  if (!costs.is_array()) {
+    const fs::path dir = o.cache / key;
+    fs::create_directories(dir);
+    const std::string run_id = uniqueRunId(t.run_seed, ("clean-" + key).c_str());
+    testing::BackgroundProcess run(
+        launchArgs(o, scenarioPath(o, t, dir), kCleanEpisodes, 3.0, "replan", t.run_seed, run_id, dir),
+        (dir / "launch.log").string());
+    if (!run.waitForExit(std::chrono::seconds(240))) (void)run.stop();
+    (void)reapLeftovers(run_id);
+    const json report = json::parse(readText(dir / "report.json"), nullptr, false);
+    costs = json::array();
+    if (report.is_object() && report["per_episode"].is_array()) {
+      for (const json& e : report["per_episode"]) {
+        const auto k = e.value("episode", std::size_t{0});
+        if (costs.size() <= k) costs.insert(costs.end(), k + 1 - costs.size(), nullptr);
+        costs[k] = e.value("complete", false) ? e["realized_cost"] : json(nullptr);
+      }
+    }
+    std::ofstream(cached) << costs.dump() << '\n';
+  }
+  std::vector<std::optional<double>> out;
+  for (const json& c : costs) out.push_back(c.is_number() ? std::optional(c.get<double>()) : std::nullopt);
+  return out;
+}
+
+struct PendingCont {
+  pid_t pid;
+  Clock::time_point at;
+};
+
+// Runs the trial's launch, strikes its faults when their moments come, and collects what the
+// invariants are checked on.
+TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
+  TrialRecord r;
+  r.trial = t;
+  r.clean_costs = cleanCosts(o, t);
+  fs::create_directories(dir);
+  const std::string run_id = uniqueRunId(t.seed, "t");
+  const fs::path log = dir / "report.jsonl";
+  const fs::path journal = dir / "logs" / "coordinator-state.json";
+  for (const PlannedFault& p : t.faults) {
+    InjectedFault f;
+    f.planned = p;
+    r.faults.push_back(std::move(f));
+  }
+
+  const auto t0 = Clock::now();
+  testing::BackgroundProcess launcher(
+      launchArgs(o, scenarioPath(o, t, dir), t.episodes, t.time_scale, t.policy, t.run_seed, run_id, dir),
+      (dir / "launch.log").string());
+  double stops = 0.0;
+  for (const PlannedFault& p : t.faults) stops += p.stop_s;
+  const double limit_s = 90.0 + 3.0 * t.episodes * t.episodeWallS() + stops;
+
+  std::map<Target, Clock::time_point> first_seen = {{Target::Launcher, t0}};
+  std::map<int, std::int64_t> starts;  // episode -> announced start (realtime ns)
+  std::vector<PendingCont> conts;
+  std::optional<int> exit_code;
+  std::vector<bool> dead_agents(static_cast<std::size_t>(t.sensors), false);
+  while (!exit_code && secondsSince(t0) < limit_s) {
+    exit_code = launcher.waitForExit(std::chrono::milliseconds(0));
+    if (exit_code) break;
+    for (const Target target : {Target::Coordinator, Target::FusionCenter, Target::SensorAgent}) {
+      if (first_seen.count(target) == 0) {
+        for (int a = 0; a < t.sensors; ++a) {
+          if (processOf(run_id, target, a)) {
+            first_seen[target] = Clock::now();
+            break;
+          }
+          if (target != Target::SensorAgent) break;
+        }
+      }
+    }
+    if (const auto a = announced(journal)) {
+      if (starts.count(a->first) == 0) {
+        // An episode announced while an earlier one's announcement went unseen: back to back.
+        for (int k = a->first - 1; k >= 0 && starts.count(k) == 0; --k) {
+          starts[k] = a->second - static_cast<std::int64_t>((a->first - k) * (t.episodeWallS() + 0.002) * 1e9);
+        }
+        starts[a->first] = a->second;
+      }
+    }
+    for (InjectedFault& f : r.faults) {
+      if (f.injected || !f.note.empty()) continue;
+      const PlannedFault& p = f.planned;
+      bool due = false;
+      if (p.anchor == Anchor::Launch) {
+        const auto seen = first_seen.find(p.target);
+        due = seen != first_seen.end() &&
+              std::chrono::duration<double>(Clock::now() - seen->second).count() >= p.offset_s;
+      } else {
+        const auto start = starts.find(p.episode);
+        due = start != starts.end() &&
+              realtimeNs() >= start->second + static_cast<std::int64_t>(p.offset_s * 1e9);
+      }
+      if (!due) continue;
+      std::optional<pid_t> pid;
+      if (p.target == Target::Launcher) {
+        pid = launcher.pid();
+      } else if (p.target == Target::SensorAgent) {
+        for (int i = 0; i < t.sensors && !pid; ++i) {  // the planned agent, else the next alive
+          const int a = (p.agent + i) % t.sensors;
+          if (p.action == Action::Kill && dead_agents[static_cast<std::size_t>(a)]) continue;
+          pid = processOf(run_id, p.target, a);
+          if (pid) f.agent = a;
+        }
+      } else {
+        pid = processOf(run_id, p.target, 0);
+      }
+      if (!pid) {
+        f.note = "no such process";
+        continue;
+      }
+      f.at_s = secondsSince(t0);
+      f.logged_before = logLineCount(log);
+      const int signal = p.action == Action::Stop        ? SIGSTOP
+                         : p.action == Action::Interrupt ? SIGINT
+                         : p.action == Action::Terminate ? SIGTERM
+                                                         : SIGKILL;
+      if (::kill(*pid, signal) != 0) {
+        f.note = "kill failed";
+        continue;
+      }
+      f.injected = true;
+      f.note = "pid " + std::to_string(*pid);
+      if (p.action == Action::Stop) {
+        conts.push_back({*pid, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.stop_s * 1000))});
+      }
+      if (p.target == Target::SensorAgent && p.action == Action::Kill) {
+        dead_agents[static_cast<std::size_t>(f.agent)] = true;
+      }
+    }
+    for (auto it = conts.begin(); it != conts.end();) {
+      if (Clock::now() >= it->at) {
+        ::kill(it->pid, SIGCONT);
+        it = conts.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    std::this_thread::sleep_for(kPoll);
+  }
+  for (const PendingCont& c : conts) ::kill(c.pid, SIGCONT);  // nothing stays stopped
+  if (!exit_code) {
+    r.ended = false;
+    ::kill(launcher.pid(), SIGCONT);
+    exit_code = launcher.stop(std::chrono::milliseconds(10000));
+  }
+  r.exit_code = *exit_code;
+  for (InjectedFault& f : r.faults) {
+    if (!f.injected && f.note.empty()) f.note = "the run had ended";
+  }
+  r.leftovers = reapLeftovers(run_id);
+  r.report_exists = fs::exists(dir / "report.json");
+  json report = json::parse(readText(dir / "report.json"), nullptr, false);
+  if (report.is_object()) r.report = std::move(report);
+  r.episode_log = readText(log);
+  return r;
+}
+
+std::string outcomeLine(const TrialRecord& r, const std::vector<std::string>& violations) {
+  std::string line = "seed " + std::to_string(r.trial.seed) + " [" + describe(r.trial) + "]";
+  std::string notes;
+  for (const InjectedFault& f : r.faults) {
+    char at[48];
+    std::snprintf(at, sizeof at, "at %.2f s", f.at_s);
+    notes += (notes.empty() ? "" : ", ") +
+             (f.injected ? std::string(at) + (f.planned.target == Target::SensorAgent
+                                                   ? " (sensor_agent-" + std::to_string(f.agent) + ")"
+                                                   : std::string())
+                         : "not injected: " + f.note);
+  }
+  line += " {" + notes + "} -> exit " + std::to_string(r.exit_code);
+  if (r.report) line += " " + r.report->value("status", std::string("?"));
+  if (violations.empty()) return line + ": OK";
+  line += ": VIOLATED";
+  for (const std::string& v : violations) line += " | " + v;
+  return line;
+}
+
+int usage(const std::string& why) {
+  std::cerr << "chaos: " << why << "\n"
+            << "usage: chaos (--seed S | --seeds S1,S2,... | --trials N [--first-seed S])\n"
+            << "             [--launcher PATH] [--source-dir DIR] [--work DIR] [--cache DIR] [--keep] [--list]\n";
+  return 2;
+}
+
+std::optional<std::uint64_t> parseSeed(const std::string& text) {
+  if (text.empty() || text.front() == '-') return std::nullopt;
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long v = std::strtoull(text.c_str(), &end, 0);
+  if (errno != 0 || *end != '\0') return std::nullopt;
+  return v;
+}
+
+}  // namespace
+}  // namespace sensornet::chaos
+
+int main(int argc, char** argv) {
+  using namespace sensornet::chaos;
+  Options o;
+  std::optional<std::uint64_t> trials;
+  std::uint64_t first = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
+    if (arg == "--help" || arg == "-h") {
+      (void)usage("randomized fault schedules against sensornet launch (tests/chaos/README.md)");
+      return 0;
+    } else if (arg == "--seed" || arg == "--seeds") {
+      std::istringstream list(value());
+      for (std::string s; std::getline(list, s, ',');) {
+        const auto seed = parseSeed(s);
+        if (!seed) return usage(arg + ": expected seeds (decimal or 0x hex), got '" + s + "'");
+        o.seeds.push_back(*seed);
+      }
+      if (o.seeds.empty()) return usage(arg + ": expected a seed");
+    } else if (arg == "--trials" || arg == "--first-seed") {
+      const auto n = parseSeed(value());
+      if (!n) return usage(arg + ": expected a non-negative integer");
+      if (arg == "--trials") {
+        trials = *n;
+      } else {
+        first = *n;
+      }
+    } else if (arg == "--launcher") {
+      o.launcher = value();
+    } else if (arg == "--source-dir") {
+      o.source_dir = value();
+    } else if (arg == "--work") {
+      o.work = value();
+    } else if (arg == "--cache") {
+      o.cache = value();
+    } else if (arg == "--keep") {
+      o.keep = true;
+    } else if (arg == "--list") {
+      o.list = true;
+    } else {
+      return usage("unknown option " + arg);
+    }
+  }
+  if (trials) {
+    for (std::uint64_t k = 0; k < *trials; ++k) o.seeds.push_back(first + k);
+  }
+  if (o.seeds.empty()) return usage("no trial: give --seed, --seeds or --trials");
+  if (o.list) {
+    for (const std::uint64_t seed : o.seeds) {
+      std::cout << "seed " << seed << " [" << describe(drawTrial(seed)) << "]\n";
+    }
+    return 0;
+  }
+  namespace fs = std::filesystem;
+  const bool own_work = o.work.empty();
+  if (own_work) {
+    char pattern[] = "/tmp/sensornet-chaos-XXXXXX";
+    if (::mkdtemp(pattern) == nullptr) return usage("cannot make a folder in /tmp");
+    o.work = pattern;
+  }
+  if (o.cache.empty()) o.cache = o.work / "clean";
+  fs::create_directories(o.cache);
+  // The launcher's scratch folder and current-run record go in the work folder, never the user's.
+  ::setenv("XDG_RUNTIME_DIR", o.work.c_str(), 1);
+  ::setenv("SENSORNET_SCRATCH_DIR", (o.work / "scratch").c_str(), 1);
+  ::unsetenv("SENSORNET_CYCLONE_CONFIG");
+  // A shell starts background jobs with SIGINT ignored, and the launcher would inherit that:
+  // its signals must be the defaults a user's terminal gives it.
+  for (const int signal : {SIGINT, SIGTERM}) ::signal(signal, SIG_DFL);
+
+  int violated = 0;
+  std::size_t injected = 0;
+  std::map<std::string, int> kinds;
+  for (const std::uint64_t seed : o.seeds) {
+    const Trial trial = drawTrial(seed);
+    const fs::path dir = o.work / ("trial-" + std::to_string(seed));
+    std::error_code ignored;
+    fs::remove_all(dir, ignored);
+    const auto began = Clock::now();
+    const TrialRecord record = runTrial(o, trial, dir);
+    const std::vector<std::string> violations = checkInvariants(record);
+    char took[32];
+    std::snprintf(took, sizeof took, " (%.0f s)", secondsSince(began));
+    std::cout << outcomeLine(record, violations) << took << std::endl;
+    for (const InjectedFault& f : record.faults) {
+      if (!f.injected) continue;
+      ++injected;
+      ++kinds[std::string(nameOf(f.planned.action)) + " " + nameOf(f.planned.target)];
+    }
+    if (!violations.empty()) {
+      ++violated;
+      std::cout << "  kept: " << dir.string() << std::endl;
+    } else if (!o.keep) {
+      fs::remove_all(dir, ignored);
+    }
+  }
+  std::cout << o.seeds.size() << " trial(s), " << injected << " fault(s) injected (";
+  bool first_kind = true;
+  for (const auto& [kind, n] : kinds) {
+    std::cout << (first_kind ? "" : ", ") << n << " " << kind;
+    first_kind = false;
+  }
+  std::cout << "), " << violated << " with violations" << std::endl;
+  if (own_work && violated == 0 && !o.keep) {
+    std::error_code ignored;
+    fs::remove_all(o.work, ignored);  // the clean runs and the scratch folder too
+  }
+  return violated == 0 ? 0 : 1;
+}

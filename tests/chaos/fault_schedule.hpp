@@ -1,0 +1,76 @@
+#pragma once
+// What one chaos trial does, drawn from its seed alone: the scenario, the run's options and one
+// to three faults with the moments they strike. The same seed always gives the same trial, so
+// a trial that broke an invariant replays from the seed it printed (tests/chaos/README.md).
+//
+//   const Trial trial = drawTrial(0x2a);
+//   std::cout << describe(trial);   // "default, 6 episodes at x2, --on-sensor-failure stop, ..."
+//
+// A fault's moment is relative to the run's progress, not to the wall clock of the launch
+// alone: "0.4 s into episode 3" waits for episode 3's announced start (the coordinator's
+// journal), so that a loaded machine that starts slowly still gets the fault where it was meant.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sensornet::chaos {
+
+// The processes of a run, as the launcher starts them.
+enum class Target { Launcher, Coordinator, FusionCenter, SensorAgent };
+
+enum class Action {
+  Stop,       // SIGSTOP, then SIGCONT after stop_s
+  Kill,       // SIGKILL
+  Interrupt,  // SIGINT (the launcher only)
+  Terminate,  // SIGTERM (the launcher only)
+};
+
+// Where a fault's moment is counted from.
+enum class Anchor {
+  Launch,        // the launcher's start: "in the first half second"
+  EpisodeStart,  // the announced start of `episode`
+};
+
+struct PlannedFault {
+  Action action = Action::Stop;
+  Target target = Target::SensorAgent;
+  int agent = 0;  // SensorAgent: which sensor agent (its first sensor)
+  Anchor anchor = Anchor::EpisodeStart;
+  int episode = 0;
+  double offset_s = 0.0;  // wall seconds after the anchor
+  double stop_s = 0.0;    // Stop: wall seconds until SIGCONT
+};
+
+enum class ScenarioKind { Default, Lossy, Small };
+
+struct Trial {
+  std::uint64_t seed = 0;
+  ScenarioKind scenario = ScenarioKind::Default;
+  std::uint64_t small_scenario_seed = 1;  // Small: the random plant's seed
+  int sensors = 6;                        // of the scenario (one sensor agent each)
+  double horizon_s = 3.0;
+  int episodes = 6;
+  double time_scale = 2.0;
+  std::string policy = "replan";  // --on-sensor-failure
+  std::uint64_t run_seed = 1;     // --seed of the launch
+  std::vector<PlannedFault> faults;
+
+  [[nodiscard]] double episodeWallS() const { return horizon_s / time_scale; }
+};
+
+[[nodiscard]] Trial drawTrial(std::uint64_t seed);
+
+[[nodiscard]] const char* nameOf(Target target);
+[[nodiscard]] const char* nameOf(Action action);
+[[nodiscard]] const char* nameOf(ScenarioKind kind);
+
+// "kill fusion_center 0.42 s into episode 3", "stop sensor_agent-2 for 3.1 s 0.2 s after launch"
+[[nodiscard]] std::string describe(const PlannedFault& fault);
+// The run's options and every fault, on one line.
+[[nodiscard]] std::string describe(const Trial& trial);
+
+// The scenario file's text for ScenarioKind::Small (a random plant of the paper's protocol).
+[[nodiscard]] std::string smallScenarioYaml(const Trial& trial);
+
+}  // namespace sensornet::chaos

@@ -1,0 +1,387 @@
+#include "invariants.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "sensornet/emulator/fault_causes.hpp"
+
+namespace sensornet::chaos {
+namespace {
+
+using nlohmann::json;
+
+constexpr double kCostRelTolerance = 1e-9;
+// A stop longer than this may exceed the stall limits (10 s absorbed, 12 s stall limit): what
+// follows it is not held to "nothing lost".
+constexpr double kAbsorbedStopS = 9.0;
+// Two run-ending faults this close together may each be the one the launcher saw first.
+constexpr double kTerminalRaceS = 3.0;
+
+std::string num(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
+}
+
+bool near(double a, double b, double rel) {
+  return std::abs(a - b) <= rel * std::max({std::abs(a), std::abs(b), 1e-12});
+}
+
+enum class Terminal { None, Interrupted, LauncherKilled, Failed };
+
+Terminal terminalOf(const InjectedFault& f, const std::string& policy) {
+  if (!f.injected) return Terminal::None;
+  const PlannedFault& p = f.planned;
+  if (p.target == Target::Launcher) {
+    if (p.action == Action::Interrupt || p.action == Action::Terminate) return Terminal::Interrupted;
+    if (p.action == Action::Kill) return Terminal::LauncherKilled;
+  }
+  if (p.target == Target::SensorAgent && p.action == Action::Kill && policy == "stop") {
+    return Terminal::Failed;
+  }
+  return Terminal::None;
+}
+
+// Injected faults in the order they struck.
+std::vector<const InjectedFault*> struck(const TrialRecord& r) {
+  std::vector<const InjectedFault*> out;
+  for (const InjectedFault& f : r.faults) {
+    if (f.injected) out.push_back(&f);
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const InjectedFault* a, const InjectedFault* b) { return a->at_s < b->at_s; });
+  return out;
+}
+
+// When the first run-ending fault struck (infinity: none did).
+double firstTerminalAt(const TrialRecord& r) {
+  for (const InjectedFault* f : struck(r)) {
+    if (terminalOf(*f, r.trial.policy) != Terminal::None) return f->at_s;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+bool injectedAny(const TrialRecord& r, Target target, Action action) {
+  return std::any_of(r.faults.begin(), r.faults.end(), [&](const InjectedFault& f) {
+    return f.injected && f.planned.target == target && f.planned.action == action;
+  });
+}
+
+std::set<int> killedSensors(const TrialRecord& r) {
+  std::set<int> sensors;
+  for (const InjectedFault& f : r.faults) {
+    if (f.injected && f.planned.target == Target::SensorAgent && f.planned.action == Action::Kill) {
+      sensors.insert(f.agent);
+    }
+  }
+  return sensors;
+}
+
+bool longStop(const TrialRecord& r) {
+  return std::any_of(r.faults.begin(), r.faults.end(), [](const InjectedFault& f) {
+    return f.injected && f.planned.action == Action::Stop && f.planned.stop_s > kAbsorbedStopS;
+  });
+}
+
+// The whole lines of the episode log; a line that is not a JSON object is a violation.
+std::vector<json> logLines(const std::string& text, std::vector<std::string>& violations) {
+  std::vector<json> lines;
+  std::size_t start = 0;
+  std::size_t number = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    const bool torn = end == std::string::npos;
+    if (torn) end = text.size();
+    ++number;
+    const std::string line = text.substr(start, end - start);
+    json parsed = json::parse(line, nullptr, false);
+    if (torn || !parsed.is_object()) {
+      violations.push_back("episode log: line " + std::to_string(number) + " is not a whole JSON " +
+                           "object (" + std::to_string(line.size()) + " bytes" +
+                           (torn ? ", no newline" : "") + ")");
+    } else {
+      lines.push_back(std::move(parsed));
+    }
+    start = end + 1;
+  }
+  return lines;
+}
+
+std::uint64_t at(const json& list, std::size_t j) {
+  return list.is_array() && j < list.size() && list[j].is_number_unsigned() ? list[j].get<std::uint64_t>()
+                                                                             : 0;
+}
+
+void checkAccounting(const json& per_episode, std::vector<std::string>& v) {
+  for (const json& e : per_episode) {
+    const json& sent = e.value("sent", json());
+    for (std::size_t j = 0; sent.is_array() && j < sent.size(); ++j) {
+      const std::uint64_t s = at(sent, j), rec = at(e["received"], j), lost = at(e["lost"], j),
+                          dropped = at(e["dropped_by_network"], j);
+      if (s != rec + lost + dropped) {
+        v.push_back("accounting: episode " + e["episode"].dump() + " sensor " + std::to_string(j) +
+                    ": sent " + std::to_string(s) + " != received " + std::to_string(rec) +
+                    " + lost " + std::to_string(lost) + " + dropped " + std::to_string(dropped));
+      }
+    }
+  }
+}
+
+void checkSummary(const json& report, std::vector<std::string>& v) {
+  const json& per_episode = report["per_episode"];
+  const json& s = report["summary"];
+  std::vector<double> costs;
+  std::uint64_t sent = 0, received = 0, lost = 0;
+  std::size_t incomplete = 0;
+  for (const json& e : per_episode) {
+    if (e.value("complete", false) && e["realized_cost"].is_number()) {
+      costs.push_back(e["realized_cost"].get<double>());
+    } else {
+      ++incomplete;
+    }
+    for (std::size_t j = 0; e["sent"].is_array() && j < e["sent"].size(); ++j) {
+      sent += at(e["sent"], j);
+      received += at(e["received"], j);
+      lost += at(e["lost"], j);
+    }
+  }
+  const auto expectCount = [&](const char* key, std::uint64_t want) {
+    if (!s.contains(key) || !s[key].is_number_unsigned() || s[key].get<std::uint64_t>() != want) {
+      v.push_back(std::string("summary: ") + key + " " + (s.contains(key) ? s[key].dump() : "missing") +
+                  ", recomputed " + std::to_string(want));
+    }
+  };
+  expectCount("episodes_complete", costs.size());
+  expectCount("episodes_incomplete", incomplete);
+  expectCount("sent", sent);
+  expectCount("received", received);
+  expectCount("lost", lost);
+  if (costs.empty()) {
+    if (!s["mean"].is_null()) v.push_back("summary: mean " + s["mean"].dump() + " without a complete episode");
+    return;
+  }
+  double mean = 0.0;
+  for (const double c : costs) mean += c;
+  mean /= static_cast<double>(costs.size());
+  if (!s["mean"].is_number() || !near(s["mean"].get<double>(), mean, kCostRelTolerance)) {
+    v.push_back("summary: mean " + s["mean"].dump() + ", recomputed " + num(mean));
+  }
+  if (costs.size() >= 2) {
+    double ss = 0.0;
+    for (const double c : costs) ss += (c - mean) * (c - mean);
+    const double sd = std::sqrt(ss / static_cast<double>(costs.size() - 1));
+    if (!s["std"].is_number() || !near(s["std"].get<double>(), sd, 1e-7)) {
+      v.push_back("summary: std " + s["std"].dump() + ", recomputed " + num(sd));
+    }
+  }
+}
+
+void checkLogAgainstReport(const std::vector<json>& lines, const json& per_episode,
+                           std::vector<std::string>& v) {
+  std::map<std::int64_t, const json*> logged;
+  for (const json& line : lines) {
+    const std::int64_t k = line.value("episode", std::int64_t{-1});
+    if (!logged.emplace(k, &line).second) {
+      v.push_back("episode log: episode " + std::to_string(k) + " logged twice");
+    }
+  }
+  std::set<std::int64_t> reported;
+  for (const json& e : per_episode) {
+    const std::int64_t k = e.value("episode", std::int64_t{-1});
+    if (!reported.insert(k).second) {
+      v.push_back("report: episode " + std::to_string(k) + " twice in per_episode");
+    }
+    const auto it = logged.find(k);
+    if (it == logged.end()) {
+      v.push_back("episode log: episode " + std::to_string(k) + " of per_episode not logged");
+    } else if (*it->second != e) {
+      v.push_back("episode log: episode " + std::to_string(k) + " differs from per_episode");
+    }
+  }
+  for (const auto& [k, line] : logged) {
+    if (reported.count(k) == 0) {
+      v.push_back("episode log: episode " + std::to_string(k) + " logged but not in per_episode");
+    }
+  }
+}
+
+// The complete episodes the faults cannot change equal the clean run's (README: the same seed
+// gives the same realized costs; stalls and restarts change nothing; a death changes what
+// follows it).
+void checkCosts(const TrialRecord& r, const json& per_episode, std::vector<std::string>& v) {
+  std::size_t limit = std::numeric_limits<std::size_t>::max();
+  for (const InjectedFault& f : r.faults) {
+    if (f.injected && f.planned.target == Target::SensorAgent && f.planned.action == Action::Kill) {
+      limit = std::min(limit, f.logged_before);
+    }
+  }
+  for (const json& e : per_episode) {
+    if (!e.value("complete", false) || !e["realized_cost"].is_number()) continue;
+    const auto k = e.value("episode", std::size_t{0});
+    if (k >= limit || k >= r.clean_costs.size() || !r.clean_costs[k]) continue;
+    const double cost = e["realized_cost"].get<double>();
+    if (!near(cost, *r.clean_costs[k], kCostRelTolerance)) {
+      v.push_back("cost: episode " + std::to_string(k) + " realized " + num(cost) +
+                  ", clean run " + num(*r.clean_costs[k]));
+    }
+  }
+  if (limit == std::numeric_limits<std::size_t>::max() && r.report &&
+      (*r.report)["schedule_versions"].is_array() && (*r.report)["schedule_versions"].size() != 1) {
+    v.push_back("schedule: " + std::to_string((*r.report)["schedule_versions"].size()) +
+                " versions without a sensor death");
+  }
+}
+
+// Each part of an incomplete reason names what made the episode incomplete; each must follow
+// from something injected.
+bool explained(const TrialRecord& r, const std::string& reason, double first_terminal_at) {
+  if (reason == "fusion_center_restarted") {
+    return injectedAny(r, Target::FusionCenter, Action::Kill);
+  }
+  if (reason.rfind("cut short", 0) == 0) return first_terminal_at < 1e300;
+  if (longStop(r)) return true;
+  const std::set<int> killed = killedSensors(r);
+  std::istringstream parts(reason);
+  std::string part;
+  while (std::getline(parts, part, ';')) {
+    while (!part.empty() && part.front() == ' ') part.erase(part.begin());
+    int sensor = -1;
+    if (std::sscanf(part.c_str(), "sensor %d", &sensor) != 1 || killed.count(sensor) == 0) return false;
+  }
+  return true;
+}
+
+void checkIncomplete(const TrialRecord& r, const json& per_episode, std::vector<std::string>& v) {
+  const double first_terminal_at = firstTerminalAt(r);
+  if (first_terminal_at < 1e300 && r.exit_code == 128 + 9) return;  // everything cut
+  for (const json& e : per_episode) {
+    if (e.value("complete", false)) continue;
+    const std::string reason = e["incomplete_reason"].is_string() ? e["incomplete_reason"].get<std::string>() : "";
+    if (!explained(r, reason, first_terminal_at)) {
+      v.push_back("incomplete: episode " + e["episode"].dump() + " (" + reason +
+                  ") follows from no injected fault");
+    }
+  }
+}
+
+void checkDeathsListed(const TrialRecord& r, const json& report, std::vector<std::string>& v) {
+  const double first_terminal_at = firstTerminalAt(r);
+  std::map<std::string, int> killed;  // process name prefix -> injected kills before the end
+  for (const InjectedFault& f : r.faults) {
+    if (!f.injected || f.planned.action != Action::Kill || f.planned.target == Target::Launcher ||
+        f.at_s >= first_terminal_at) {
+      continue;
+    }
+    const std::string name = f.planned.target == Target::SensorAgent
+                                 ? "sensor_agent-" + std::to_string(f.agent)
+                                 : nameOf(f.planned.target);
+    ++killed[name];
+  }
+  for (const auto& [name, count] : killed) {
+    int listed = 0;
+    for (const json& fault : report["faults"]) {
+      if (fault.value("kind", "") == "process_killed" && fault.value("process", "") == name) ++listed;
+    }
+    if (listed < count) {
+      v.push_back("faults: " + std::to_string(count) + " kill(s) of " + name + ", " +
+                  std::to_string(listed) + " process_killed entries");
+    }
+  }
+}
+
+}  // namespace
+
+ExpectedOutcome expectedOutcome(const TrialRecord& r) {
+  ExpectedOutcome out;
+  const std::vector<const InjectedFault*> order = struck(r);
+  double first = std::numeric_limits<double>::infinity();
+  std::set<Terminal> terminals;
+  for (const InjectedFault* f : order) {
+    const Terminal t = terminalOf(*f, r.trial.policy);
+    if (t == Terminal::None) continue;
+    if (first == std::numeric_limits<double>::infinity()) first = f->at_s;
+    if (f->at_s <= first + kTerminalRaceS) terminals.insert(t);
+  }
+  if (!terminals.empty()) {
+    if (terminals.count(Terminal::LauncherKilled) > 0) {
+      out.exit_codes.push_back(128 + 9);
+      out.why = "the launcher was killed";
+      if (terminals.size() == 1) return out;
+    }
+    out.exit_codes.push_back(1);
+    if (terminals.count(Terminal::Interrupted) > 0) out.statuses.push_back("interrupted");
+    if (terminals.count(Terminal::Failed) > 0) out.statuses.push_back("failed");
+    out.why += out.why.empty() ? "" : " or ";
+    out.why += terminals.count(Terminal::Failed) > 0 ? "a sensor died under stop" : "a signal";
+    if (terminals.count(Terminal::LauncherKilled) > 0) out.statuses.clear();
+    return out;
+  }
+  const bool death = std::any_of(order.begin(), order.end(), [](const InjectedFault* f) {
+    return f->planned.action == Action::Kill;
+  });
+  if (death) {
+    out.exit_codes = {3};
+    out.statuses = {"degraded"};
+    out.why = "a death the run survives";
+  } else {
+    out.exit_codes = {0, 3};
+    out.statuses = {"completed", "degraded"};
+    out.why = "stalls only";
+  }
+  return out;
+}
+
+std::vector<std::string> checkInvariants(const TrialRecord& r) {
+  std::vector<std::string> v;
+  if (!r.ended) v.push_back("the launcher did not end within the trial's limit");
+  const ExpectedOutcome want = expectedOutcome(r);
+  const bool launcher_killed = r.exit_code == 128 + 9;
+  if (std::find(want.exit_codes.begin(), want.exit_codes.end(), r.exit_code) == want.exit_codes.end()) {
+    std::string codes;
+    for (const int c : want.exit_codes) codes += (codes.empty() ? "" : " or ") + std::to_string(c);
+    v.push_back("exit code " + std::to_string(r.exit_code) + ", expected " + codes + " (" + want.why + ")");
+  }
+  for (const std::string& leftover : r.leftovers) v.push_back("left running: " + leftover);
+
+  std::vector<json> lines = logLines(r.episode_log, v);
+  if (!r.report) {
+    if (!launcher_killed || r.report_exists) {
+      v.push_back(r.report_exists ? "report: not a JSON object" : "report: missing");
+    }
+    return v;
+  }
+  const json& report = *r.report;
+  const std::string status = report.value("status", "");
+  if (!launcher_killed) {
+    if (!want.statuses.empty() &&
+        std::find(want.statuses.begin(), want.statuses.end(), status) == want.statuses.end()) {
+      v.push_back("status " + status + " (" + want.why + ")");
+    }
+    const int table = status == "completed" ? 0 : status == "degraded" ? 3 : 1;
+    if (r.exit_code != table) {
+      v.push_back("exit code " + std::to_string(r.exit_code) + " with status " + status);
+    }
+    if (status != "completed" && emulator::causeCount(report["faults"]) == 0) {
+      v.push_back("cause: status " + status + " with no fault that is not a consequence");
+    }
+    checkDeathsListed(r, report, v);
+  }
+  const json& per_episode = report["per_episode"];
+  if (!per_episode.is_array()) {
+    v.push_back("report: no per_episode");
+    return v;
+  }
+  checkAccounting(per_episode, v);
+  checkSummary(report, v);
+  checkLogAgainstReport(lines, per_episode, v);
+  checkCosts(r, per_episode, v);
+  checkIncomplete(r, per_episode, v);
+  return v;
+}
+
+}  // namespace sensornet::chaos

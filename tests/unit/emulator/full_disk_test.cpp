@@ -1,0 +1,136 @@
+// A disk that fills while the fusion center writes (issue 31, finding 3): the episode log never
+// ends in half an entry, and a report that does not fit is a failure named with its reason, not
+// "bad input", with no temporary file left behind. A file that cannot grow past a size limit
+// (RLIMIT_FSIZE, with SIGXFSZ ignored: write(2) then takes what fits and refuses the rest with
+// EFBIG) stands in for the full disk, as a full tmpfs takes what fits and then says ENOSPC.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/io/scenario_file.hpp"
+
+namespace sensornet::emulator {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// While it lives, no file this process writes grows past `bytes`.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    ::getrlimit(RLIMIT_FSIZE, &saved_);
+    previous_ = ::signal(SIGXFSZ, SIG_IGN);
+    rlimit limited = saved_;
+    limited.rlim_cur = bytes;
+    ::setrlimit(RLIMIT_FSIZE, &limited);
+  }
+  ~FileSizeLimit() {
+    ::setrlimit(RLIMIT_FSIZE, &saved_);
+    ::signal(SIGXFSZ, previous_);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  rlimit saved_{};
+  sighandler_t previous_ = SIG_DFL;
+};
+
+class FullDisk : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/sensornet-full-disk-XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static std::string readAll(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+
+  fs::path dir_;
+};
+
+json entryOf(int episode) {
+  return {{"episode", episode}, {"complete", true}, {"padding", std::string(300, 'x')}};
+}
+
+TEST_F(FullDisk, EpisodeLogNeverEndsInHalfAnEntry) {
+  const fs::path path = dir_ / "report.jsonl";
+  constexpr rlim_t kLimit = 1000;  // room for 2 whole entries of 343 bytes and part of a third
+  std::string error;
+  int appended = 0;
+  {
+    const FileSizeLimit limit(kLimit);
+    EpisodeLog log(path);
+    try {
+      for (; appended < 10; ++appended) log.append(entryOf(appended));
+    } catch (const std::runtime_error& e) {
+      error = e.what();
+    }
+  }
+  ASSERT_EQ(appended, 2) << "each entry is " << entryOf(0).dump().size() + 1 << " bytes";
+  EXPECT_NE(error.find(path.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("File too large"), std::string::npos) << error;
+  // Every line whole: the third entry's first bytes were cut off again.
+  const std::string text = readAll(path);
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n') << "the log ends in half an entry: ..." << text.substr(text.size() - 20);
+  std::istringstream lines(text);
+  int count = 0;
+  for (std::string line; std::getline(lines, line); ++count) {
+    EXPECT_TRUE(json::parse(line, nullptr, false).is_object()) << "line " << count + 1;
+  }
+  EXPECT_EQ(count, 2);
+  EXPECT_EQ(text.size(), 2 * (entryOf(0).dump().size() + 1));
+}
+
+TEST_F(FullDisk, AReportThatDoesNotFitFailsWithTheReasonAndLeavesNoTemporary) {
+  const fs::path path = dir_ / "report.json";
+  std::ofstream(path) << "{\"earlier\": true}\n";
+  const json report = {{"status", "completed"}, {"padding", std::string(5000, 'x')}};
+  bool bad_input = false;
+  std::string error;
+  {
+    const FileSizeLimit limit(1000);
+    try {
+      writeJsonFile(path.string(), report, "run report");
+    } catch (const InputError& e) {
+      bad_input = true;
+      error = e.what();
+    } catch (const std::runtime_error& e) {
+      error = e.what();
+    }
+  }
+  EXPECT_FALSE(bad_input) << "a full disk is not bad input: " << error;
+  EXPECT_NE(error.find(path.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("File too large"), std::string::npos) << error;
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path(), path) << "left behind: " << entry.path();
+  }
+  EXPECT_EQ(readAll(path), "{\"earlier\": true}\n");  // the earlier file is as it was
+}
+
+TEST_F(FullDisk, AFolderThatCannotBeWrittenIsStillBadInput) {
+  EXPECT_THROW(writeJsonFile((dir_ / "missing" / "report.json").string(), json::object(),
+                             "run report"),
+               InputError);
+}
+
+}  // namespace
+}  // namespace sensornet::emulator
