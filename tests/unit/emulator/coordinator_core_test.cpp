@@ -376,6 +376,35 @@ TEST_F(CoordinatorPolicy, ASensorReportedDeadTwiceIsNothingNew) {
             "sensor(s) 1 had failed before: nothing new");
 }
 
+// `sensornet replan --include` (issue 24): an excluded sensor comes back into the plan; a dead
+// one cannot, and the reply says why.
+TEST_F(CoordinatorPolicy, IncludeBringsAnExcludedSensorBackButNotADeadOne) {
+  config_.on_sensor_failure = FailurePolicy::Continue;
+  const auto excludedIn = [](const CoordinatorActions& a) {
+    const std::vector<WriteJournal> journals = only<WriteJournal>(a);
+    return journals.empty() ? std::set<int>{-1} : journals.back().journal.settings.excluded;
+  };
+  (void)startRunning();
+  ASSERT_EQ(excludedIn(command(CommandKind::ExcludeSensors, 18, {1, 2})), (std::set<int>{1, 2}));
+  const CoordinatorActions back = command(CommandKind::IncludeSensors, 19, {1});
+  const std::vector<PublishVersion> versions = only<PublishVersion>(back);
+  ASSERT_FALSE(versions.empty());
+  EXPECT_GT(versions.back().version.schedule.rates().col(1).minCoeff(), 0.0);
+  EXPECT_EQ(versions.back().version.schedule.rates().col(2).norm(), 0.0) << "2 stays excluded";
+  ASSERT_EQ(only<SendReply>(back).size(), 1u);
+  EXPECT_TRUE(only<SendReply>(back)[0].answer.accepted);
+  EXPECT_EQ(excludedIn(back), std::set<int>{2});
+
+  (void)command(CommandKind::SensorsFailed, 20, {2});
+  const CoordinatorActions dead = command(CommandKind::IncludeSensors, 21, {2});
+  EXPECT_TRUE(only<PublishVersion>(dead).empty());
+  const std::vector<SendReply> refused = only<SendReply>(dead);
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_FALSE(refused[0].answer.accepted);
+  EXPECT_NE(refused[0].answer.reason.find("sensor 2 failed (its process died)"), std::string::npos)
+      << refused[0].answer.reason;
+}
+
 // ---- the switch moment ---------------------------------------------------------------------
 
 using CoordinatorSwitchMoment = CoordinatorCoreTest;
