@@ -169,10 +169,10 @@ int runPlan(const PlanOptions& options) {
   std::fprintf(summary, "bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n",
                plan.bracket.info, plan.bracket.cov);
   if (scenario.network) {
-    std::fprintf(summary, "delivered  J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g (%s)\n",
-                 delivered.info, delivered.cov,
-                 options.network_aware ? "planned for the network"
-                                       : "the network was not planned for");
+    std::fprintf(
+        summary, "delivered  J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g (%s)\n", delivered.info,
+        delivered.cov,
+        options.network_aware ? "planned for the network" : "the network was not planned for");
   }
   std::fprintf(summary, "written    %s\n",
                to_stdout ? "to standard output" : options.out_path.c_str());
@@ -191,11 +191,12 @@ Subcommand addPlanCommand(CLI::App& app) {
       "J(P_info) <= E[J] <= J(P_cov). Example:\n  coordinator plan --scenario "
       "scenarios/default.yaml --surrogate info --out plan.json --json");
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
-  wordOption<PlanSurrogate>(cmd->add_option("--surrogate", options->surrogate,
-                  "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
-                  "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
-                  "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
-                  "(objective = mean +- 95% half-width on fresh episodes; 55 s by default)"));
+  wordOption<PlanSurrogate>(
+      cmd->add_option("--surrogate", options->surrogate,
+                      "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
+                      "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
+                      "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
+                      "(objective = mean +- 95% half-width on fresh episodes; 55 s by default)"));
   cmd->add_option("--out", options->out_path,
                   "schedule file to write (JSON, written atomically; missing folders are made), "
                   "or - for standard output (then the summary goes to standard error)")

@@ -418,13 +418,14 @@ Subcommand addServeCommand(CLI::App& app) {
                   "episode is announced while the current one runs)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
-  wordOption<emulator::FailurePolicy>(cmd->add_option("--on-sensor-failure", options->core.on_sensor_failure,
-                  "when the launcher reports that sensors died: replan = re-plan the rest of "
-                  "the horizon among the survivors (rate zero for the dead from a switch tick "
-                  "on, a full-horizon version from the next episode), continue = keep the "
-                  "schedule, stop = end the run as failed (the report says so; the coordinator "
-                  "itself exits 0). Either way the dead sensors are announced and nobody waits "
-                  "for them"));
+  wordOption<emulator::FailurePolicy>(
+      cmd->add_option("--on-sensor-failure", options->core.on_sensor_failure,
+                      "when the launcher reports that sensors died: replan = re-plan the rest of "
+                      "the horizon among the survivors (rate zero for the dead from a switch tick "
+                      "on, a full-horizon version from the next episode), continue = keep the "
+                      "schedule, stop = end the run as failed (the report says so; the coordinator "
+                      "itself exits 0). Either way the dead sensors are announced and nobody waits "
+                      "for them"));
   cmd->add_flag("--network-aware", options->core.network_aware,
                 "plan the initial schedule and every re-plan for the rates the scenario's "
                 "network: section delivers (loss thins them, outages of every episode zero "

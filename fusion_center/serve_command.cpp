@@ -30,6 +30,7 @@
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
+#include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 // The fusion center's wiring: DDS endpoints, codecs from wire types to the events of
@@ -525,7 +526,9 @@ Subcommand addServeCommand(CLI::App& app) {
   return {cmd, [options] {
             (void)options->run.domainConfig();
             // A folder the report cannot go in is bad input now, not after the run.
-            if (!options->report_path.empty()) makeParentFolders(options->report_path, "--report");
+            if (!options->report_path.empty()) {
+              makeParentFolders(options->report_path, "--report");
+            }
             emulator::installStopSignals();
             FusionCenter center(*options);
             return center.run();

@@ -476,7 +476,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
       "--time-scale 10 --report report.json");
   cmd->footer(kLaunchFooter);
   cmd->add_option("scenario", options->scenario_path, "scenario file (YAML)")->required();
-  wordOption(cmd->add_option("--episodes", options->episodes, "episodes to run")
+  cmd->add_option("--episodes", options->episodes, "episodes to run")
       ->check(integerRange(emulator::kMinEpisodes, emulator::kMaxEpisodes))
       ->capture_default_str();
   cmd->add_option("--time-scale", options->time_scale,
@@ -498,10 +498,11 @@ Subcommand addLaunchCommand(CLI::App& app) {
                       " processes, else the fewest equal blocks that stay within that many")
       ->check(sensorsPerProcessValue())
       ->capture_default_str();
-  wordOption(cmd->add_option("--surrogate", options->surrogate,
-                  "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
-                  "or mc (E[J] itself by Monte Carlo, up to a minute). Default cov: its realized "
-                  "cost beat uniform and info on the paper's sweeps (bench/README.md)"),
+  wordOption(cmd->add_option(
+                 "--surrogate", options->surrogate,
+                 "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
+                 "or mc (E[J] itself by Monte Carlo, up to a minute). Default cov: its realized "
+                 "cost beat uniform and info on the paper's sweeps (bench/README.md)"),
              wordTexts<PlanSurrogate>());
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");
@@ -526,26 +527,29 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")
       ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
-  wordOption(cmd->add_option("--on-sensor-failure", options->on_sensor_failure,
-                  "what the run does when a sensor agent dies (killed, crashed, or a scripted "
-                  "crash of the scenario's faults:): replan = the coordinator re-plans the rest "
-                  "of the horizon among the survivors (the dead sensors get rate zero from the "
-                  "switch on) and the run ends degraded; continue = keep the schedule, so the "
-                  "bracket shows the damage (degraded); stop = end the run as failed"),
+  wordOption(cmd->add_option(
+                 "--on-sensor-failure", options->on_sensor_failure,
+                 "what the run does when a sensor agent dies (killed, crashed, or a scripted "
+                 "crash of the scenario's faults:): replan = the coordinator re-plans the rest "
+                 "of the horizon among the survivors (the dead sensors get rate zero from the "
+                 "switch on) and the run ends degraded; continue = keep the schedule, so the "
+                 "bracket shows the damage (degraded); stop = end the run as failed"),
              wordTexts<emulator::FailurePolicy>());
-  wordOption(cmd->add_option("--network-aware", options->network_aware,
-                  "plan for the rates the scenario's emulated network delivers (loss thins them, "
-                  "outages zero them): yes, no, or auto = yes when the scenario has a network: "
-                  "section"),
+  wordOption(cmd->add_option(
+                 "--network-aware", options->network_aware,
+                 "plan for the rates the scenario's emulated network delivers (loss thins them, "
+                 "outages zero them): yes, no, or auto = yes when the scenario has a network: "
+                 "section"),
              {"auto", "yes", "no"});
-  wordOption(cmd->add_option("--arrivals", options->arrivals,
-                  "how every sensor's instants follow from its rates: poisson (drawn afresh "
-                  "each episode) or timetable (deterministic, where the sensor's integrated "
-                  "rate reaches k - 1/2, the same every episode; across a re-plan the count "
-                  "continues on the rates in force); default: the scenario's arrivals:, else "
-                  "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
-                  "the schedule, not the run's cost"),
-             wordTexts<ArrivalMode>());
+  wordOption(
+      cmd->add_option("--arrivals", options->arrivals,
+                      "how every sensor's instants follow from its rates: poisson (drawn afresh "
+                      "each episode) or timetable (deterministic, where the sensor's integrated "
+                      "rate reaches k - 1/2, the same every episode; across a re-plan the count "
+                      "continues on the rates in force); default: the scenario's arrivals:, else "
+                      "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
+                      "the schedule, not the run's cost"),
+      wordTexts<ArrivalMode>());
   cmd->add_option("--require", options->require,
                   "make the run a CI gate: comma-separated criteria checked against the report "
                   "after the run, each printed as pass or FAIL with the value measured; any "

@@ -55,7 +55,8 @@ int runReport(const ReportOptions& options) {
   if (options.json) {
     nlohmann::json csv = nlohmann::json::array();
     for (const fs::path& file : tables) csv.push_back(file.string());
-    const nlohmann::json html = options.html.empty() ? nlohmann::json(nullptr) : options.html;
+    const nlohmann::json html =
+        options.html.empty() ? nlohmann::json(nullptr) : nlohmann::json(options.html);
     printJson({{"report", options.report}, {"html", html}, {"csv", csv}});
   }
   return kExitOk;

@@ -306,7 +306,9 @@ TEST_F(Runs, RmNeverRemovesALiveRunAndRefusesAnUnknownId) {
   lock_fd_ = -1;
   const ProcessResult after = runs({"--json"});
   for (const json& run : json::parse(after.out).at("runs")) {
-    if (run.at("run_id") == "run-live") EXPECT_EQ(run.at("state"), "unknown");
+    if (run.at("run_id") == "run-live") {
+      EXPECT_EQ(run.at("state"), "unknown");
+    }
   }
 }
 

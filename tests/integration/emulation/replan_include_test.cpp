@@ -97,7 +97,9 @@ TEST_F(ReplanInclude, AnExcludedSensorComesBackAndADeadOneCannot) {
   for (const json& v : doc.at("schedule_versions")) {
     const auto number = v.at("version").get<std::uint32_t>();
     const bool full_horizon = v.at("effective_time_s").get<double>() == 0.0;
-    if (number == 1) EXPECT_GT(largestRate(v, 1), 0.0) << "sensor 1 was in the plan at first";
+    if (number == 1) {
+      EXPECT_GT(largestRate(v, 1), 0.0) << "sensor 1 was in the plan at first";
+    }
     if (number + 1 == included_from) {
       EXPECT_TRUE(full_horizon) << v.dump();
       EXPECT_EQ(largestRate(v, 1), 0.0) << "excluded: rate zero";
