@@ -390,7 +390,7 @@ int runLaunch(LaunchOptions options) {
 
   std::fprintf(stderr,
                "run id: %s; change it live with: sensornet replan --run-id %s --surrogate info "
-               "(or --exclude, --budget, --schedule); see it with: sensornet status\n",
+               "(or --exclude, --include, --budget, --schedule); see it with: sensornet status\n",
                plan.run_id.c_str(), plan.run_id.c_str());
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   try {
