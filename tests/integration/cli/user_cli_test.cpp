@@ -13,6 +13,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -71,7 +72,7 @@ TEST_F(UserCli, EveryWordOptionShowsItsWordsInHelp) {
     const ProcessResult r = runProcess(argv);
     ASSERT_EQ(r.exit_code, 0) << argv[0] << " " << argv[1] << ": " << r.err;
     // What CLI11 shows by itself: "ENUM:value in {continue->1,replan->0,stop->2}", "TEXT:{a,b}".
-    EXPECT_EQ(r.out.find("->"), std::string::npos) << argv[1] << ":\n" << r.out;
+    EXPECT_FALSE(std::regex_search(r.out, std::regex("[a-z]->[0-9]"))) << argv[1] << ":\n" << r.out;
     EXPECT_EQ(r.out.find("ENUM"), std::string::npos) << argv[1] << ":\n" << r.out;
     EXPECT_EQ(r.out.find(":{"), std::string::npos) << argv[1] << ":\n" << r.out;
   }
