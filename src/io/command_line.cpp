@@ -167,7 +167,14 @@ std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv) {
                  unexpectedText(app).c_str());
     return kExitBadInput;
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(), e.what());
+    // A mistyped option also leaves its right spelling missing ("--scenaro x": --scenario is
+    // required): the typo is the news.
+    const std::vector<std::string> extras = app.remaining(true);
+    const bool typo = std::any_of(extras.begin(), extras.end(), [](const std::string& extra) {
+      return extra.size() > 2 && extra.rfind("--", 0) == 0;
+    });
+    std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(),
+                 typo ? unexpectedText(app).c_str() : e.what());
     return kExitBadInput;
   }
   return std::nullopt;

@@ -64,6 +64,21 @@ TEST(CommandLine, AnUnknownOptionWithAValueIsNamedWithoutCLI11sText) {
   EXPECT_EQ(err, "prog: error: unknown option --html (did you mean --no-html?) (see --help)\n");
 }
 
+TEST(CommandLine, AMistypedRequiredOptionIsNamedRatherThanMissing) {
+  // CLI11 says "--scenario is required" and leaves the typo unsaid.
+  CLI::App app{"test program", "prog"};
+  std::string scenario;
+  app.add_option("--scenario", scenario)->required();
+  std::vector<std::string> args = {"prog", "--scenaro", "a.yaml"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  testing::internal::CaptureStderr();
+  const auto code = parseCommandLine(app, static_cast<int>(argv.size()), argv.data());
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(code, kExitBadInput);
+  EXPECT_EQ(err, "prog: error: unknown option --scenaro (did you mean --scenario?) (see --help)\n");
+}
+
 TEST(CommandLine, AStrayArgumentIsNamed) {
   Program p;
   testing::internal::CaptureStderr();
