@@ -59,13 +59,16 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
   return d[a.size()][b.size()];
 }
 
-// The long option names of `app` and of the subcommands the user chose.
+// The long option names of `app`, of its option groups and of the subcommands the user chose.
 std::vector<std::string> optionNames(const CLI::App& app) {
   std::vector<std::string> names;
   for (const CLI::Option* option : app.get_options()) {
     for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
   }
-  for (const CLI::App* sub : app.get_subcommands()) {
+  const auto chosen = [](const CLI::App* sub) {
+    return sub->parsed() || dynamic_cast<const CLI::Option_group*>(sub) != nullptr;
+  };
+  for (const CLI::App* sub : app.get_subcommands(chosen)) {
     const std::vector<std::string> more = optionNames(*sub);
     names.insert(names.end(), more.begin(), more.end());
   }

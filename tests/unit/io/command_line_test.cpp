@@ -79,6 +79,23 @@ TEST(CommandLine, AMistypedRequiredOptionIsNamedRatherThanMissing) {
   EXPECT_EQ(err, "prog: error: unknown option --scenaro (did you mean --scenario?) (see --help)\n");
 }
 
+TEST(CommandLine, OptionsOfAnOptionGroupAreNearToo) {
+  // sensornet replan's changes are an option group: --inlcude must find --include.
+  CLI::App app{"test program", "prog"};
+  std::vector<int> include;
+  CLI::Option_group* change = app.add_option_group("change", "what to change");
+  change->add_option("--include", include);
+  change->require_option(1);
+  std::vector<std::string> args = {"prog", "--inlcude", "1"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  testing::internal::CaptureStderr();
+  const auto code = parseCommandLine(app, static_cast<int>(argv.size()), argv.data());
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(code, kExitBadInput);
+  EXPECT_EQ(err, "prog: error: unknown option --inlcude (did you mean --include?) (see --help)\n");
+}
+
 TEST(CommandLine, AStrayArgumentIsNamed) {
   Program p;
   testing::internal::CaptureStderr();
