@@ -3,16 +3,21 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <cstdio>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/network.hpp"
 #include "sensornet/core/planner.hpp"
+#include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/word_option.hpp"
 
 namespace sensornet::coordinator {
 namespace {
@@ -44,8 +49,19 @@ nlohmann::json toJson(const CostBracket& bracket) {
   return {{"info", bracket.info}, {"cov", bracket.cov}};
 }
 
+// --out -: the schedule file's text goes to standard output, and nothing else does.
+constexpr const char* kStandardOutput = "-";
+
 int runPlan(const PlanOptions& options) {
+  const bool to_stdout = options.out_path == kStandardOutput;
+  if (to_stdout && options.json) {
+    throw InputError("command line", "--json",
+                     "no --json with --out - (the schedule file takes standard output; the "
+                     "summary goes to standard error)");
+  }
   const Scenario scenario = loadScenarioFile(options.scenario_path);
+  // A folder the schedule cannot go in is bad input now, not after the solve.
+  if (!to_stdout) makeParentFolders(options.out_path, "--out");
   PlanRequest request;
   request.surrogate = options.surrogate;
   request.method = options.method;
@@ -102,7 +118,14 @@ int runPlan(const PlanOptions& options) {
     record["objective_half_width"] = plan.objective_half_width;
     record["episodes"] = plan.episodes;
   }
-  writeScheduleFile(options.out_path, plan.schedule, record);
+  if (to_stdout) {
+    nlohmann::json doc = scheduleToJson(plan.schedule);
+    for (const auto& [key, value] : record.items()) doc[key] = value;
+    std::cout << doc.dump(2) << std::endl;
+    if (!std::cout) throw std::runtime_error("cannot write the schedule to standard output");
+  } else {
+    writeScheduleFile(options.out_path, plan.schedule, record);
+  }
   const bool solved = plan.status == "optimal" || plan.status == "acceptable" ||
                       plan.status == "not_optimized" || plan.status == "improved" ||
                       plan.status == "kept_start";
@@ -127,28 +150,32 @@ int runPlan(const PlanOptions& options) {
     printJson(doc);
     return kExitOk;
   }
-  std::printf("scenario   %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
-              options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
-              scenario.horizon_s, scenario.intervals);
+  // With --out - the summary goes to standard error: standard output holds the schedule only.
+  FILE* const summary = to_stdout ? stderr : stdout;
+  std::fprintf(summary, "scenario   %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
+               options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
+               scenario.horizon_s, scenario.intervals);
   if (mc) {
-    std::printf("surrogate  mc: E[J] = %.9g +- %.3g (95%%, fresh episodes), status %s, %d "
-                "iterations, %lld episodes in %.3f s\n",
-                plan.objective, plan.objective_half_width, plan.status.c_str(), plan.iterations,
-                plan.episodes, plan.solve_seconds);
+    std::fprintf(summary,
+                 "surrogate  mc: E[J] = %.9g +- %.3g (95%%, fresh episodes), status %s, %d "
+                 "iterations, %lld episodes in %.3f s\n",
+                 plan.objective, plan.objective_half_width, plan.status.c_str(), plan.iterations,
+                 plan.episodes, plan.solve_seconds);
   } else {
-    std::printf("surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s\n",
-                surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
-                plan.solve_seconds);
+    std::fprintf(summary, "surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s\n",
+                 surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
+                 plan.solve_seconds);
   }
-  std::printf("bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n", plan.bracket.info,
-              plan.bracket.cov);
+  std::fprintf(summary, "bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n",
+               plan.bracket.info, plan.bracket.cov);
   if (scenario.network) {
-    std::printf("delivered  J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g (%s)\n", delivered.info,
-                delivered.cov,
-                options.network_aware ? "planned for the network"
-                                      : "the network was not planned for");
+    std::fprintf(
+        summary, "delivered  J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g (%s)\n", delivered.info,
+        delivered.cov,
+        options.network_aware ? "planned for the network" : "the network was not planned for");
   }
-  std::printf("written    %s\n", options.out_path.c_str());
+  std::fprintf(summary, "written    %s\n",
+               to_stdout ? "to standard output" : options.out_path.c_str());
   return kExitOk;
 }
 
@@ -164,28 +191,24 @@ Subcommand addPlanCommand(CLI::App& app) {
       "J(P_info) <= E[J] <= J(P_cov). Example:\n  coordinator plan --scenario "
       "scenarios/default.yaml --surrogate info --out plan.json --json");
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
-  const std::map<std::string, PlanSurrogate> surrogates = wordMap<PlanSurrogate>();
-  cmd->add_option("--surrogate", options->surrogate,
-                  "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
-                  "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
-                  "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
-                  "(objective = mean +- 95% half-width on fresh episodes; 55 s by default)")
-      ->transform(CLI::CheckedTransformer(surrogates, CLI::ignore_case))
-      ->option_text("info|cov|uniform|mc [cov]");
-  cmd->add_option("--out", options->out_path, "schedule file to write (JSON, written atomically)")
+  wordOption<PlanSurrogate>(
+      cmd->add_option("--surrogate", options->surrogate,
+                      "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
+                      "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
+                      "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
+                      "(objective = mean +- 95% half-width on fresh episodes; 55 s by default)"));
+  cmd->add_option("--out", options->out_path,
+                  "schedule file to write (JSON, written atomically; missing folders are made), "
+                  "or - for standard output (then the summary goes to standard error)")
       ->required();
   cmd->add_option("--warm-start", options->warm_start_path,
                   "schedule file to start the optimizer from (default: the uniform schedule)");
   cmd->add_option("--exclude", options->excluded,
                   "sensor indices (0-based) taken out of service: rate 0 throughout")
       ->delimiter(',');
-  const std::map<std::string, PlanMethod> methods = {{"pqn", PlanMethod::ProjectedGradient},
-                                                     {"ipopt", PlanMethod::Ipopt}};
-  cmd->add_option("--method", options->method,
-                  "optimizer: pqn (projected quasi-Newton, default) or ipopt (interior point, "
-                  "L-BFGS Hessian)")
-      ->transform(CLI::CheckedTransformer(methods, CLI::ignore_case))
-      ->option_text("pqn|ipopt [pqn]");
+  wordOption<PlanMethod>(cmd->add_option("--method", options->method,
+                                         "optimizer: pqn (projected quasi-Newton, default) or "
+                                         "ipopt (interior point, L-BFGS Hessian)"));
   cmd->add_option("--tolerance", options->tolerance,
                   "stop when the scale-free projected-gradient residual is below this")
       ->capture_default_str()

@@ -22,8 +22,9 @@
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
+#include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
-#include "word_option.hpp"
+#include "sensornet/io/word_option.hpp"
 
 namespace sensornet::coordinator {
 namespace {
@@ -71,6 +72,7 @@ emulator::CommandKind kindOf(sensornet_CommandKind kind) {
     case sensornet_COMMAND_STATUS: return K::Status;
     case sensornet_COMMAND_SHUTDOWN: return K::Shutdown;
     case sensornet_COMMAND_SENSORS_FAILED: return K::SensorsFailed;
+    case sensornet_COMMAND_INCLUDE_SENSORS: return K::IncludeSensors;
   }
   return K::Unknown;
 }
@@ -353,6 +355,7 @@ int runServe(ServeOptions options) {
     run.scenario.arrivals = parseArrivalMode(options.arrivals, "--arrivals", "arrivals");
   }
   (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning
+  if (!options.state_path.empty()) makeParentFolders(options.state_path, "--state");
   if (options.core.network_aware && !run.scenario.network) {
     throw InputError(options.scenario_path, "network",
                      "a network: section (--network-aware plans for the rates it delivers)");
@@ -386,11 +389,10 @@ Subcommand addServeCommand(CLI::App& app) {
   emulator::addRunOptions(*cmd, options->run);
   options->run.security_role = dds::SecurityRole::Coordinator;
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
-  cmd->add_option("--surrogate", options->surrogate,
-                  "how to plan the initial schedule: info, cov, uniform or mc (the expected "
-                  "realized cost by Monte Carlo; up to a minute)")
-      ->transform(wordOption<PlanSurrogate>())
-      ->option_text(wordOptionText(PlanSurrogate::Covariance));
+  wordOption<PlanSurrogate>(
+      cmd->add_option("--surrogate", options->surrogate,
+                      "how to plan the initial schedule: info, cov, uniform or mc (the expected "
+                      "realized cost by Monte Carlo; up to a minute)"));
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning");
   cmd->add_option("--episodes", options->core.episodes, "episodes to run")
@@ -416,27 +418,27 @@ Subcommand addServeCommand(CLI::App& app) {
                   "episode is announced while the current one runs)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--on-sensor-failure", options->core.on_sensor_failure,
-                  "when the launcher reports that sensors died: replan = re-plan the rest of "
-                  "the horizon among the survivors (rate zero for the dead from a switch tick "
-                  "on, a full-horizon version from the next episode), continue = keep the "
-                  "schedule, stop = end the run as failed (the report says so; the coordinator "
-                  "itself exits 0). Either way the dead sensors are announced and nobody waits "
-                  "for them")
-      ->transform(wordOption<emulator::FailurePolicy>())
-      ->option_text(wordOptionText(emulator::FailurePolicy::Replan));
+  wordOption<emulator::FailurePolicy>(
+      cmd->add_option("--on-sensor-failure", options->core.on_sensor_failure,
+                      "when the launcher reports that sensors died: replan = re-plan the rest of "
+                      "the horizon among the survivors (rate zero for the dead from a switch tick "
+                      "on, a full-horizon version from the next episode), continue = keep the "
+                      "schedule, stop = end the run as failed (the report says so; the coordinator "
+                      "itself exits 0). Either way the dead sensors are announced and nobody waits "
+                      "for them"));
   cmd->add_flag("--network-aware", options->core.network_aware,
                 "plan the initial schedule and every re-plan for the rates the scenario's "
                 "network: section delivers (loss thins them, outages of every episode zero "
                 "them), with C lambda <= b on the planned rates; needs a network: section");
-  cmd->add_option("--arrivals", options->arrivals,
-                  "poisson or timetable: how every sensor's instants follow from its rates "
-                  "(timetable: deterministic, where the integrated rate is k - 1/2); overrides "
-                  "the scenario's arrivals: and is announced with the scenario")
-      ->check(CLI::IsMember({"poisson", "timetable"}));
+  wordOption(cmd->add_option("--arrivals", options->arrivals,
+                             "how every sensor's instants follow from its rates (timetable: "
+                             "deterministic, where the integrated rate is k - 1/2); overrides "
+                             "the scenario's arrivals: and is announced with the scenario"),
+             wordTexts<ArrivalMode>());
   CLI::Option* state =
       cmd->add_option("--state", options->state_path,
-                      "keep a journal of the run in FILE (JSON, replaced atomically after every "
+                      "keep a journal of the run in FILE (JSON, missing folders made; replaced "
+                      "atomically after every "
                       "change, before the change goes out): settings, schedule versions, "
                       "episodes reported and announced, commands answered");
   cmd->add_flag("--resume", options->resume,

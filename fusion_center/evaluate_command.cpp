@@ -11,6 +11,7 @@
 #include "sensornet/core/monte_carlo.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/word_option.hpp"
 
 namespace sensornet::fusion_center {
 namespace {
@@ -144,12 +145,12 @@ Subcommand addEvaluateCommand(CLI::App& app) {
   cmd->add_option("--threads", options->threads, "worker threads (0: one per core)")
       ->capture_default_str()
       ->check(integerRange(0, 1024));
-  cmd->add_option("--arrivals", options->arrivals,
-                  "poisson or timetable (deterministic instants where the integrated rate is "
-                  "k - 1/2); default: the scenario's `arrivals:`. The Monte Carlo mean is always "
-                  "that of Poisson arrivals; with timetable the timetable's cost is printed "
-                  "beside it")
-      ->check(CLI::IsMember({"poisson", "timetable"}));
+  wordOption(cmd->add_option("--arrivals", options->arrivals,
+                             "timetable: deterministic instants where the integrated rate is "
+                             "k - 1/2; default: the scenario's `arrivals:`. The Monte Carlo mean "
+                             "is always that of Poisson arrivals; with timetable the "
+                             "timetable's cost is printed beside it"),
+             wordTexts<ArrivalMode>());
   cmd->add_flag("--no-plant", options->no_plant,
                 "skip simulating the true state (faster; no NEES or squared error)");
   cmd->add_flag("--json", options->json,

@@ -30,6 +30,7 @@
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
+#include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 // The fusion center's wiring: DDS endpoints, codecs from wire types to the events of
@@ -499,8 +500,8 @@ Subcommand addServeCommand(CLI::App& app) {
   emulator::addRunOptions(*cmd, options->run);
   options->run.security_role = dds::SecurityRole::FusionCenter;
   cmd->add_option("--report", options->report_path,
-                  "final report (JSON) written when the run shuts down; the episode log goes "
-                  "beside it");
+                  "final report (JSON) written when the run shuts down (missing folders are made "
+                  "at start); the episode log goes beside it");
   cmd->add_option("--lag", options->lag_s,
                   "wall seconds a measurement may take to arrive before it is fused (a later "
                   "one is still fused in order: the episode is re-fused at its end)")
@@ -525,6 +526,10 @@ Subcommand addServeCommand(CLI::App& app) {
                 "process and is not in the log is recorded incomplete (fusion_center_restarted)");
   return {cmd, [options] {
             (void)options->run.domainConfig();
+            // A folder the report cannot go in is bad input now, not after the run.
+            if (!options->report_path.empty()) {
+              makeParentFolders(options->report_path, "--report");
+            }
             emulator::installStopSignals();
             FusionCenter center(*options);
             return center.run();

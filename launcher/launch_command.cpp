@@ -27,6 +27,8 @@
 #include "run_lock.hpp"
 #include "run_outcome.hpp"
 #include "run_supervisor.hpp"
+#include "runs_command.hpp"
+#include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/dds/security.hpp"
@@ -34,7 +36,9 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
+#include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/word_option.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -261,20 +265,15 @@ void checkReportPaths(const LaunchPlan& plan) {
   checkOutputFile(emulator::episodeLogPath(plan.report_path), option + " (its episode log)");
 }
 
-// The log folder: made if missing (private when it is the default one, in the scratch folder).
+// The log folder: made if missing (private when it is the default one, in the scratch folder;
+// else as every output folder is made, io/output_path.hpp).
 void makeLogDirectory(const LaunchPlan& plan) {
   if (plan.default_log_dir) {
     ensurePrivateDirectory(userScratchDirectory());
     ensurePrivateDirectory(plan.log_dir);
     return;
   }
-  std::error_code error;
-  fs::create_directories(plan.log_dir, error);
-  if (error || !fs::is_directory(plan.log_dir)) {
-    throw InputError("--log-dir " + plan.log_dir.string(), "",
-                     "a folder that exists or can be created" +
-                         (error ? ": " + error.message() : std::string()));
-  }
+  makeFolders(plan.log_dir, "--log-dir");
 }
 
 // Claims the run id before anything starts: a second launch of a live run is refused here,
@@ -380,7 +379,10 @@ int runLaunch(LaunchOptions options) {
   }
   LaunchPlan plan = planLaunch(options, scenario, programs, domain, hosts ? &*hosts : nullptr);
   if (placement) placeOnHosts(plan, *hosts, *placement);
-  if (!plan.default_report) checkReportPaths(plan);
+  if (!plan.default_report) {
+    makeParentFolders(plan.report_path, "--report");
+    checkReportPaths(plan);
+  }
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
@@ -396,9 +398,15 @@ int runLaunch(LaunchOptions options) {
                                  : " --security " + options.run.security_dir);
   std::fprintf(stderr,
                "run id: %s; change it live with: sensornet replan%s --surrogate info (or "
-               "--exclude, --budget, --schedule); see it with: sensornet status%s\n",
+               "--exclude, --include, --budget, --schedule); see it with: sensornet status%s\n",
                plan.run_id.c_str(), reach.c_str(), reach.c_str());
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
+  try {
+    writeRunRecord(plan.log_dir, {plan.run_id, fs::absolute(options.scenario_path),
+                                  options.episodes, plan.report_path, ::getpid(), utcNow()});
+  } catch (const std::exception& e) {
+    spdlog::warn("cannot record the run in {}: {}", plan.log_dir.string(), e.what());
+  }
   installInterruptHandlers();
   ProcessGroup group;
   for (const ChildSpec& child : plan.children) {
@@ -491,19 +499,19 @@ Subcommand addLaunchCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--report", options->report_path,
                   "where the fusion center writes the final report (JSON): a regular file or a "
-                  "new one in an existing writable folder; default <log-dir>/report.json");
+                  "new one (missing folders are made); default <log-dir>/report.json");
   cmd->add_option("--sensors-per-process", options->sensors_per_process,
                   "sensors hosted by each sensor_agent process; auto: one each up to " +
                       std::to_string(kAutoSensorProcesses) +
                       " processes, else the fewest equal blocks that stay within that many")
       ->check(sensorsPerProcessValue())
       ->capture_default_str();
-  cmd->add_option("--surrogate", options->surrogate,
-                  "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
-                  "or mc (E[J] itself by Monte Carlo, up to a minute). Default cov: its realized "
-                  "cost beat uniform and info on the paper's sweeps (bench/README.md)")
-      ->check(CLI::IsMember(wordTexts<PlanSurrogate>()))
-      ->capture_default_str();
+  wordOption(cmd->add_option(
+                 "--surrogate", options->surrogate,
+                 "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
+                 "or mc (E[J] itself by Monte Carlo, up to a minute). Default cov: its realized "
+                 "cost beat uniform and info on the paper's sweeps (bench/README.md)"),
+             wordTexts<PlanSurrogate>());
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
@@ -521,33 +529,35 @@ Subcommand addLaunchCommand(CLI::App& app) {
           "sensornet/ID and its domain id a hash of ID. A launch whose id is in use on this "
           "host (a live run, or a launch holding its log folder) is refused with exit 2");
   cmd->add_option("--log-dir", options->log_dir,
-                  "where each process's log goes (default /tmp/sensornet-<uid>/<run id>/)");
+                  "where each process's log goes, made if missing (default "
+                  "/tmp/sensornet-<uid>/<run id>/)");
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")
       ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--on-sensor-failure", options->on_sensor_failure,
-                  "what the run does when a sensor agent dies (killed, crashed, or a scripted "
-                  "crash of the scenario's faults:): replan = the coordinator re-plans the rest "
-                  "of the horizon among the survivors (the dead sensors get rate zero from the "
-                  "switch on) and the run ends degraded; continue = keep the schedule, so the "
-                  "bracket shows the damage (degraded); stop = end the run as failed")
-      ->check(CLI::IsMember(wordTexts<emulator::FailurePolicy>()))
-      ->capture_default_str();
-  cmd->add_option("--network-aware", options->network_aware,
-                  "plan for the rates the scenario's emulated network delivers (loss thins them, "
-                  "outages zero them): yes, no, or auto = yes when the scenario has a network: "
-                  "section")
-      ->check(CLI::IsMember({"auto", "yes", "no"}))
-      ->capture_default_str();
-  cmd->add_option("--arrivals", options->arrivals,
-                  "how every sensor's instants follow from its rates: poisson (drawn afresh "
-                  "each episode) or timetable (deterministic, where the sensor's integrated "
-                  "rate reaches k - 1/2, the same every episode; across a re-plan the count "
-                  "continues on the rates in force); default: the scenario's arrivals:, else "
-                  "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
-                  "the schedule, not the run's cost")
-      ->check(CLI::IsMember({"poisson", "timetable"}));
+  wordOption(cmd->add_option(
+                 "--on-sensor-failure", options->on_sensor_failure,
+                 "what the run does when a sensor agent dies (killed, crashed, or a scripted "
+                 "crash of the scenario's faults:): replan = the coordinator re-plans the rest "
+                 "of the horizon among the survivors (the dead sensors get rate zero from the "
+                 "switch on) and the run ends degraded; continue = keep the schedule, so the "
+                 "bracket shows the damage (degraded); stop = end the run as failed"),
+             wordTexts<emulator::FailurePolicy>());
+  wordOption(cmd->add_option(
+                 "--network-aware", options->network_aware,
+                 "plan for the rates the scenario's emulated network delivers (loss thins them, "
+                 "outages zero them): yes, no, or auto = yes when the scenario has a network: "
+                 "section"),
+             {"auto", "yes", "no"});
+  wordOption(
+      cmd->add_option("--arrivals", options->arrivals,
+                      "how every sensor's instants follow from its rates: poisson (drawn afresh "
+                      "each episode) or timetable (deterministic, where the sensor's integrated "
+                      "rate reaches k - 1/2, the same every episode; across a re-plan the count "
+                      "continues on the rates in force); default: the scenario's arrivals:, else "
+                      "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
+                      "the schedule, not the run's cost"),
+      wordTexts<ArrivalMode>());
   cmd->add_option("--require", options->require,
                   "make the run a CI gate: comma-separated criteria checked against the report "
                   "after the run, each printed as pass or FAIL with the value measured; any "

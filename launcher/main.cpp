@@ -5,6 +5,7 @@
 //   sensornet watch [...]             follow it live (a terminal view, or lines for a log)
 //   sensornet report REPORT [...]     the page (HTML) and CSV tables of a finished run
 //   sensornet pki init DIR            the files of a secured run (--security DIR)
+//   sensornet runs [...]              the runs in the scratch folder; remove finished ones
 
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "pki_command.hpp"
 #include "replan_command.hpp"
 #include "report_command.hpp"
+#include "runs_command.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "status_command.hpp"
 #include "watch_command.hpp"
@@ -23,13 +25,14 @@ int main(int argc, char** argv) {
         "sensornet: a multi-process emulator of sensor networks for continuous-discrete Kalman "
         "filtering over Cyclone DDS. Start a run with `sensornet launch scenarios/default.yaml`; "
         "while it runs, `sensornet replan` changes its schedule and `sensornet status` shows its "
-        "sensors."};
+        "sensors; `sensornet runs` lists the runs kept in the scratch folder."};
     app.name("sensornet");
     app.require_subcommand(1);
     const std::vector<sensornet::Subcommand> subcommands = {
         sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
         sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
-        sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app)};
+        sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app),
+        sensornet::launcher::addRunsCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

@@ -20,6 +20,8 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/security.hpp"
+#include "sensornet/io/output_path.hpp"
+#include "sensornet/io/word_option.hpp"
 
 extern char** environ;
 
@@ -36,6 +38,7 @@ struct PkiOptions {
   int days = 365;
   std::string key = "ec";
   int rsa_bits = 2048;
+  bool json = false;
 };
 
 // Who writes and who reads which topic (each program's writers and readers).
@@ -216,8 +219,7 @@ void checkOwnedFolder(const fs::path& dir) {
   struct stat st {};
   if (::lstat(dir.c_str(), &st) != 0) {
     if (errno != ENOENT) throw InputError(dir.string(), "", "a folder: " + std::string(std::strerror(errno)));
-    std::error_code error;
-    fs::create_directories(dir.parent_path(), error);
+    makeParentFolders(dir, "pki init");
     if (::mkdir(dir.c_str(), 0700) != 0) {
       throw InputError(dir.string(), "", "a folder that can be made: " + std::string(std::strerror(errno)));
     }
@@ -316,6 +318,19 @@ class PkiMaker {
   }
 
   void printSummary() const {
+    if (options_.json) {
+      nlohmann::json roles = nlohmann::json::object();
+      for (const SecurityRole role : dds::kSecurityRoles) {
+        const std::string name(dds::securityRoleName(role));
+        roles[name] = (dir_ / name).string();
+      }
+      printJson({{"dir", dir_.string()},
+                 {"roles", roles},
+                 {"ca_key", (ca_dir_ / "ca.key").string()},
+                 {"days", options_.days},
+                 {"key", options_.key}});
+      return;
+    }
     std::printf(
         "security files in %s: per role (%s) a folder with identity.pem, key.pem, "
         "permissions.p7s, ca.pem and governance.p7s: what one process of that role receives, "
@@ -490,12 +505,13 @@ Subcommand addPkiCommand(CLI::App& app) {
   init->add_option("--days", options->days, "validity of certificates and permissions (days)")
       ->capture_default_str()
       ->check(CLI::Range(1, 36500));
-  init->add_option("--key", options->key, "key type: ec (prime256v1) or rsa")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"ec", "rsa"}));
-  init->add_option("--rsa-bits", options->rsa_bits, "RSA key size with --key rsa")
-      ->capture_default_str()
-      ->check(CLI::IsMember({2048, 3072, 4096}));
+  wordOption(init->add_option("--key", options->key, "key type: ec (prime256v1) or rsa"),
+             {"ec", "rsa"});
+  wordOption(init->add_option("--rsa-bits", options->rsa_bits, "RSA key size with --key rsa"),
+             {"2048", "3072", "4096"});
+  init->add_flag("--json", options->json,
+                 "print {\"dir\", \"roles\": {role: folder}, \"ca_key\", \"days\", \"key\"} as "
+                 "one JSON line instead of the sentence");
   return {init, [options] { return PkiMaker(*options).make(); }};
 }
 

@@ -16,6 +16,7 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/word_option.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -26,6 +27,7 @@ struct ReplanOptions {
   emulator::RunOptions run;
   std::string surrogate;
   std::vector<std::uint32_t> exclude;
+  std::vector<std::uint32_t> include;
   std::vector<double> budget;
   std::string schedule_path;
   double timeout_s = 10.0;
@@ -40,6 +42,9 @@ CommandRequest buildRequest(const ReplanOptions& options) {
   } else if (!options.exclude.empty()) {
     request.kind = sensornet_COMMAND_EXCLUDE_SENSORS;
     request.sensor_ids = options.exclude;
+  } else if (!options.include.empty()) {
+    request.kind = sensornet_COMMAND_INCLUDE_SENSORS;
+    request.sensor_ids = options.include;
   } else if (!options.budget.empty()) {
     request.kind = sensornet_COMMAND_SET_BUDGET;
     request.budget = options.budget;
@@ -122,15 +127,23 @@ Subcommand addReplanCommand(CLI::App& app) {
       "adopts at its effective time. Give exactly one change. Prints \"accepted: version V\" "
       "(exit 0) or \"refused: reason\" (exit 1). Examples:\n"
       "  sensornet replan --surrogate cov\n  sensornet replan --exclude 2,5\n"
+      "  sensornet replan --include 5\n"
       "  sensornet replan --budget 8,4\n  sensornet replan --run-id run-42 --schedule plan.json");
   CLI::Option_group* change = cmd->add_option_group("change", "what to change (exactly one)");
+  wordOption(change->add_option("--surrogate", options->surrogate,
+                                "re-plan with this surrogate: info (eq. 11), cov (eq. 15), "
+                                "uniform (no optimization: the budget spread evenly) or mc (E[J] "
+                                "itself by Monte Carlo; takes up to the coordinator's plan time "
+                                "limit)"),
+             wordTexts<PlanSurrogate>());
   change
-      ->add_option("--surrogate", options->surrogate,
-                   "re-plan with this surrogate: info (eq. 11), cov (eq. 15), uniform (no "
-                   "optimization: the budget spread evenly) or mc (E[J] itself by Monte Carlo; "
-                   "takes up to the coordinator's plan time limit)")
-      ->check(CLI::IsMember(wordTexts<PlanSurrogate>()));
-  change->add_option("--exclude", options->exclude, "re-plan with these sensor ids at rate zero")
+      ->add_option("--exclude", options->exclude,
+                   "re-plan with these sensor ids at rate zero (added to those excluded before)")
+      ->delimiter(',');
+  change
+      ->add_option("--include", options->include,
+                   "re-plan with these excluded sensor ids back in service (refused for a "
+                   "sensor whose process died, or one in service)")
       ->delimiter(',');
   change
       ->add_option("--budget", options->budget,

@@ -2,10 +2,12 @@
 
 #include <exception>
 #include <memory>
+#include <vector>
 
 #include "output_file.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/report_page.hpp"
+#include "sensornet/io/output_path.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -16,10 +18,12 @@ struct ReportOptions {
   std::string report;
   std::string html;
   std::string csv_dir;
+  bool json = false;
 };
 
 // Replaces `path` with `text`; an InputError naming the path when it cannot.
 void writeOutput(const fs::path& path, const std::string& text, const std::string& option) {
+  makeParentFolders(path, option);
   checkOutputFile(path, option);
   try {
     replaceFileAtomically(path, text);
@@ -28,14 +32,12 @@ void writeOutput(const fs::path& path, const std::string& text, const std::strin
   }
 }
 
-void writeCsv(const fs::path& dir, const emulator::ReportTables& tables) {
-  if (!fs::is_directory(dir)) {
-    std::error_code error;
-    fs::create_directories(dir, error);
-    if (error) throw InputError("--csv " + dir.string(), "", "a folder that can be created (" + error.message() + ")");
-  }
+// Returns the files written.
+std::vector<fs::path> writeCsv(const fs::path& dir, const emulator::ReportTables& tables) {
+  makeFolders(dir, "--csv");
   writeOutput(dir / "episodes.csv", tables.episodes, "--csv");
   writeOutput(dir / "sensors.csv", tables.sensors, "--csv");
+  return {dir / "episodes.csv", dir / "sensors.csv"};
 }
 
 int runReport(const ReportOptions& options) {
@@ -46,7 +48,17 @@ int runReport(const ReportOptions& options) {
   if (!options.html.empty()) {
     writeOutput(options.html, emulator::reportPage(report, options.report), "--html");
   }
-  if (!options.csv_dir.empty()) writeCsv(options.csv_dir, emulator::reportTables(report, options.report));
+  std::vector<fs::path> tables;
+  if (!options.csv_dir.empty()) {
+    tables = writeCsv(options.csv_dir, emulator::reportTables(report, options.report));
+  }
+  if (options.json) {
+    nlohmann::json csv = nlohmann::json::array();
+    for (const fs::path& file : tables) csv.push_back(file.string());
+    const nlohmann::json html =
+        options.html.empty() ? nlohmann::json(nullptr) : nlohmann::json(options.html);
+    printJson({{"report", options.report}, {"html", html}, {"csv", csv}});
+  }
   return kExitOk;
 }
 
@@ -80,9 +92,12 @@ Subcommand addReportCommand(CLI::App& app) {
       "beside every report already. Example:\n  sensornet report runs/a/report.json --html "
       "runs/a/report.html --csv runs/a/tables");
   cmd->add_option("REPORT", options->report, "the run report (JSON) of a finished run")->required();
-  cmd->add_option("--html", options->html, "write the page here");
+  cmd->add_option("--html", options->html, "write the page here (missing folders are made)");
   cmd->add_option("--csv", options->csv_dir,
                   "write episodes.csv and sensors.csv into this folder (made if missing)");
+  cmd->add_flag("--json", options->json,
+                "print {\"report\", \"html\", \"csv\": [files]} as one JSON line once written "
+                "(without it nothing is printed)");
   return {cmd, [options] { return runReport(*options); }};
 }
 

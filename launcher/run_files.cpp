@@ -64,25 +64,6 @@ fs::path currentRunFile() {
 
 fs::path defaultLogDirectory(const std::string& run_id) { return userScratchDirectory() / run_id; }
 
-std::optional<std::string> privateDirectoryProblem(const fs::path& dir) {
-  struct stat info {};
-  if (::lstat(dir.c_str(), &info) != 0) {
-    return std::string("it cannot be looked at (") + std::strerror(errno) + ")";
-  }
-  if (S_ISLNK(info.st_mode)) return std::string("it is a symbolic link");
-  if (!S_ISDIR(info.st_mode)) return std::string("it is not a directory");
-  if (info.st_uid != ::geteuid()) {
-    return "it is owned by uid " + std::to_string(info.st_uid) + ", not by you (uid " +
-           std::to_string(::geteuid()) + ")";
-  }
-  if ((info.st_mode & (S_IWGRP | S_IWOTH)) != 0) {
-    char mode[8];
-    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(info.st_mode & 07777));
-    return std::string("others may write to it (mode ") + mode + ")";
-  }
-  return std::nullopt;
-}
-
 void ensurePrivateDirectory(const fs::path& dir) {
   if (::mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST) {
     throw InputError(dir.string(), "",

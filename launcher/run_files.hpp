@@ -21,6 +21,8 @@
 #include <optional>
 #include <string>
 
+#include "sensornet/io/output_path.hpp"
+
 namespace sensornet::launcher {
 
 // The environment variable that moves the scratch folder (tests point it into their own).
@@ -38,9 +40,8 @@ struct CurrentRun {
 // <scratch>/<run id> (not created: see ensurePrivateDirectory).
 [[nodiscard]] std::filesystem::path defaultLogDirectory(const std::string& run_id);
 
-// Why `dir` is not a private directory of this user (a real directory, not a symbolic link,
-// owned by the effective user, not writable by group or others), or nullopt if it is one.
-[[nodiscard]] std::optional<std::string> privateDirectoryProblem(const std::filesystem::path& dir);
+// Why `dir` is not a private directory of this user (io/output_path.hpp).
+using sensornet::privateDirectoryProblem;
 // Creates `dir` with mode 0700 if it does not exist (its parent must), then checks that it is
 // private; throws InputError naming the directory and what is wrong otherwise.
 void ensurePrivateDirectory(const std::filesystem::path& dir);

@@ -407,6 +407,8 @@ CoordinatorCore::Answer CoordinatorCore::execute(const CommandEvent& c, std::int
                                                   c.command_id));
     case CommandKind::ExcludeSensors:
       return replanned(replanner_.exclude(c.sensor_ids, book_, moment(now_ns), c.command_id));
+    case CommandKind::IncludeSensors:
+      return replanned(replanner_.include(c.sensor_ids, book_, moment(now_ns), c.command_id));
     case CommandKind::SetBudget:
       return replanned(replanner_.setBudget(c.budget, book_, moment(now_ns), c.command_id));
     case CommandKind::ScheduleFile:

@@ -158,6 +158,24 @@ Replan Replanner::exclude(std::span<const std::uint32_t> sensors, const Schedule
   return plan(std::move(settings), book, now, command_id);
 }
 
+Replan Replanner::include(std::span<const std::uint32_t> sensors, const ScheduleBook& book,
+                          const RunMoment& now, std::uint64_t command_id) const {
+  ReplanSettings settings = settings_;
+  for (const int j : checkedSensorIds(sensors, scenario_.sensorCount(), command_id)) {
+    const std::string sensor = "sensor " + std::to_string(j);
+    if (settings.failed.count(j) != 0) {
+      throw InputError(sourceOf(command_id), "sensor_ids",
+                       "sensors excluded by command, but " + sensor +
+                           " failed (its process died): a dead sensor cannot be brought back");
+    }
+    if (settings.excluded.erase(j) == 0) {
+      throw InputError(sourceOf(command_id), "sensor_ids",
+                       "sensors excluded by command, but " + sensor + " is in service");
+    }
+  }
+  return plan(std::move(settings), book, now, command_id);
+}
+
 Replan Replanner::setBudget(std::span<const double> budget, const ScheduleBook& book,
                             const RunMoment& now, std::uint64_t command_id) const {
   const std::string source = sourceOf(command_id);

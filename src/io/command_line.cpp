@@ -59,13 +59,16 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
   return d[a.size()][b.size()];
 }
 
-// The long option names of `app` and of the subcommands the user chose.
+// The long option names of `app`, of its option groups and of the subcommands the user chose.
 std::vector<std::string> optionNames(const CLI::App& app) {
   std::vector<std::string> names;
   for (const CLI::Option* option : app.get_options()) {
     for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
   }
-  for (const CLI::App* sub : app.get_subcommands()) {
+  const auto chosen = [](const CLI::App* sub) {
+    return sub->parsed() || dynamic_cast<const CLI::Option_group*>(sub) != nullptr;
+  };
+  for (const CLI::App* sub : app.get_subcommands(chosen)) {
     const std::vector<std::string> more = optionNames(*sub);
     names.insert(names.end(), more.begin(), more.end());
   }
@@ -78,16 +81,55 @@ std::optional<std::string> nearestOption(const CLI::App& app, const std::string&
   const std::string word = typed.substr(0, typed.find('='));
   if (word.rfind("--", 0) != 0) return std::nullopt;
   std::optional<std::string> best;
+  const std::vector<std::string> names = optionNames(app);
   std::size_t best_distance = std::max<std::size_t>(1, (word.size() - 2) / 4) + 1;
-  for (const std::string& name : optionNames(app)) {
+  for (const std::string& name : names) {
     const std::size_t distance = editDistance(word, name);
     if (distance < best_distance) {
       best = name;
       best_distance = distance;
     }
   }
+  if (best) return best;
+  // Else an option that holds the typed word or is held in it (--html: --no-html; --report-file:
+  // --report), the one of nearest length; only for words long enough to mean something.
+  const std::string body = word.substr(2);
+  if (body.size() < 4) return std::nullopt;
+  std::size_t best_gap = std::numeric_limits<std::size_t>::max();
+  for (const std::string& name : names) {
+    const std::string other = name.substr(2);
+    const bool related = other.size() >= 4 && (other.find(body) != std::string::npos ||
+                                               body.find(other) != std::string::npos);
+    const std::size_t gap = other.size() > body.size() ? other.size() - body.size()
+                                                       : body.size() - other.size();
+    if (related && gap < best_gap) {
+      best = name;
+      best_gap = gap;
+    }
+  }
   return best;
 }
+
+namespace {
+
+// What CLI11 could not place, as one clause: the first unknown option and the option nearest
+// to it ("unknown option --html (did you mean --no-html?)"), else the stray arguments. The
+// words after an unknown option are its value, not worth naming.
+std::string unexpectedText(const CLI::App& app) {
+  const std::vector<std::string> extras = app.remaining(true);
+  for (const std::string& extra : extras) {
+    if (extra.size() < 2 || extra[0] != '-') continue;
+    const std::string option = extra.substr(0, extra.find('='));
+    std::string text = "unknown option " + option;
+    if (const auto nearest = nearestOption(app, extra)) text += " (did you mean " + *nearest + "?)";
+    return text;
+  }
+  std::string words;
+  for (const std::string& extra : extras) words += (words.empty() ? "'" : " '") + extra + "'";
+  return (extras.size() > 1 ? "unexpected arguments " : "unexpected argument ") + words;
+}
+
+}  // namespace
 
 const char* sensornetVersion() { return SENSORNET_VERSION; }
 
@@ -122,20 +164,20 @@ std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
-  } catch (const CLI::ExtrasError& e) {
-    // A mistyped option: name the nearest one the program knows.
-    std::string hint;
-    for (const std::string& extra : app.remaining(true)) {
-      if (const auto nearest = nearestOption(app, extra)) {
-        hint = " (did you mean " + *nearest + " instead of " + extra.substr(0, extra.find('=')) + "?)";
-        break;
-      }
-    }
-    std::fprintf(stderr, "%s: error: %s%s (see --help)\n", app.get_name().c_str(), e.what(),
-                 hint.c_str());
+  } catch (const CLI::ExtrasError&) {
+    // A mistyped option: name it and the nearest one the program knows.
+    std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(),
+                 unexpectedText(app).c_str());
     return kExitBadInput;
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(), e.what());
+    // A mistyped option also leaves its right spelling missing ("--scenaro x": --scenario is
+    // required): the typo is the news.
+    const std::vector<std::string> extras = app.remaining(true);
+    const bool typo = std::any_of(extras.begin(), extras.end(), [](const std::string& extra) {
+      return extra.size() > 2 && extra.rfind("--", 0) == 0;
+    });
+    std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(),
+                 typo ? unexpectedText(app).c_str() : e.what());
     return kExitBadInput;
   }
   return std::nullopt;

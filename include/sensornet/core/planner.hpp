@@ -66,6 +66,12 @@ struct Words<PlanSurrogate> {
 // bench/README.md for why), or IPOPT with a limited-memory Hessian.
 enum class PlanMethod { ProjectedGradient, Ipopt };
 
+template <>
+struct Words<PlanMethod> {
+  static constexpr std::array<WordOf<PlanMethod>, 2> kTable{
+      {{PlanMethod::ProjectedGradient, "pqn"}, {PlanMethod::Ipopt, "ipopt"}}};
+};
+
 struct PlanProgress {
   int iteration = 0;
   double objective = 0.0;       // the discretized surrogate cost at the current iterate

@@ -107,7 +107,7 @@ struct FusionStateEvent {
 };
 
 enum class CommandKind { Replan, ExcludeSensors, SetBudget, ScheduleFile, Status, Shutdown,
-                         SensorsFailed, Unknown };
+                         SensorsFailed, IncludeSensors, Unknown };
 
 struct CommandEvent {
   std::string run_id;
@@ -115,7 +115,7 @@ struct CommandEvent {
   CommandKind kind = CommandKind::Unknown;
   std::string issuer;
   std::string surrogate;                 // Replan
-  std::vector<std::uint32_t> sensor_ids;  // ExcludeSensors, SensorsFailed
+  std::vector<std::uint32_t> sensor_ids;  // ExcludeSensors, IncludeSensors, SensorsFailed
   std::vector<double> budget;            // SetBudget
   std::string schedule_json;             // ScheduleFile
   std::string detail;                    // SensorsFailed: what happened

@@ -128,6 +128,10 @@ class Replanner {
                                        const RunMoment& now, std::uint64_t command_id) const;
   [[nodiscard]] Replan exclude(std::span<const std::uint32_t> sensors, const ScheduleBook& book,
                                const RunMoment& now, std::uint64_t command_id) const;
+  // Brings excluded sensors back into the plan; refused for a sensor that failed (its process
+  // is dead) or that is in service.
+  [[nodiscard]] Replan include(std::span<const std::uint32_t> sensors, const ScheduleBook& book,
+                               const RunMoment& now, std::uint64_t command_id) const;
   // b must have one finite value > 0 per row of C, and the scenario with it must pass
   // validateScenario.
   [[nodiscard]] Replan setBudget(std::span<const double> budget, const ScheduleBook& book,

@@ -137,11 +137,15 @@ TEST_F(LauncherTrust, ReportInAFolderWhereNoFileCanBeCreatedIsRefusedBeforeStart
   // everyone, like a read-only mount.
   expectRefusedAtOnce(launchArgs(1, "10", "/proc/sensornet-trust.json", dir_ / "logs"),
                       "/proc/sensornet-trust.json", "no file can be created");
-  // A folder that does not exist is not made up either.
-  const fs::path missing = dir_ / "missing" / "report.json";
+  // A missing folder is made (replan_include_test.cpp), but never where someone else could swap
+  // it: not in a folder anyone may write to that is not sticky.
+  const fs::path open = dir_ / "open";
+  fs::create_directory(open);
+  fs::permissions(open, fs::perms::all, fs::perm_options::replace);  // 0777
+  const fs::path missing = open / "missing" / "report.json";
   expectRefusedAtOnce(launchArgs(1, "10", missing, dir_ / "logs"), missing.string(),
-                      "does not exist");
-  EXPECT_FALSE(fs::exists(dir_ / "missing"));
+                      "may be written by anyone and is not sticky");
+  EXPECT_FALSE(fs::exists(open / "missing"));
 }
 
 TEST_F(LauncherTrust, ScratchFolderThatIsALinkIsRefused) {

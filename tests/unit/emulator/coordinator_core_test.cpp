@@ -376,6 +376,44 @@ TEST_F(CoordinatorPolicy, ASensorReportedDeadTwiceIsNothingNew) {
             "sensor(s) 1 had failed before: nothing new");
 }
 
+// `sensornet replan --include` (issue 24): an excluded sensor comes back into the plan; a dead
+// one cannot, and the reply says why.
+TEST_F(CoordinatorPolicy, IncludeBringsAnExcludedSensorBackButNotADeadOne) {
+  config_.on_sensor_failure = FailurePolicy::Continue;
+  const auto excludedIn = [](const CoordinatorActions& a) {
+    const std::vector<WriteJournal> journals = only<WriteJournal>(a);
+    return journals.empty() ? std::set<int>{-1} : journals.back().journal.settings.excluded;
+  };
+  // The sensor version 1 measures most (the information plan leaves some idle), and another.
+  const Eigen::MatrixXd v1 = freshJournal().versions[0].schedule.rates();
+  Eigen::Index busiest = 0;
+  (void)v1.colwise().sum().maxCoeff(&busiest);
+  const auto back_in = static_cast<std::uint32_t>(busiest);
+  const std::uint32_t other = back_in == 2 ? 1 : 2;
+  (void)startRunning();
+  ASSERT_EQ(excludedIn(command(CommandKind::ExcludeSensors, 18, {back_in, other})),
+            (std::set<int>{static_cast<int>(back_in), static_cast<int>(other)}));
+  const CoordinatorActions back = command(CommandKind::IncludeSensors, 19, {back_in});
+  const std::vector<PublishVersion> versions = only<PublishVersion>(back);
+  ASSERT_FALSE(versions.empty());
+  EXPECT_GT(versions.back().version.schedule.rates().col(back_in).norm(), 0.0) << "back in";
+  EXPECT_EQ(versions.back().version.schedule.rates().col(other).norm(), 0.0) << "stays excluded";
+  ASSERT_EQ(only<SendReply>(back).size(), 1u);
+  EXPECT_TRUE(only<SendReply>(back)[0].answer.accepted) << only<SendReply>(back)[0].answer.reason;
+  EXPECT_EQ(excludedIn(back), std::set<int>{static_cast<int>(other)});
+
+  (void)command(CommandKind::SensorsFailed, 20, {other});
+  const CoordinatorActions dead = command(CommandKind::IncludeSensors, 21, {other});
+  EXPECT_TRUE(only<PublishVersion>(dead).empty());
+  const std::vector<SendReply> refused = only<SendReply>(dead);
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_FALSE(refused[0].answer.accepted);
+  EXPECT_NE(refused[0].answer.reason.find("sensor " + std::to_string(other) +
+                                           " failed (its process died)"),
+            std::string::npos)
+      << refused[0].answer.reason;
+}
+
 // ---- the switch moment ---------------------------------------------------------------------
 
 using CoordinatorSwitchMoment = CoordinatorCoreTest;

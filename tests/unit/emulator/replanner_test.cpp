@@ -338,6 +338,57 @@ TEST_F(Replanning, FailedSensorsAreRecordedAndPlannedWithout) {
   EXPECT_THROW((void)r.replanAsIs(book_, running(1.0), 4), InputError);
 }
 
+// `replan --exclude` only adds to the excluded set; --include takes sensors out of it again
+// (issue 24). The plan with the sensor back reaches the cost of the plan that never excluded it
+// (version 1, planned here from the uniform start), which excluding it had raised.
+TEST_F(Replanning, IncludeBringsAnExcludedSensorBackIntoThePlan) {
+  Replanner r = replanner();
+  const RunMoment between{};  // episode 0 not started: one version from episode 0
+  // The sensor version 1 measures most (the information plan leaves some idle).
+  Eigen::Index busiest = 0;
+  (void)book_.latest().schedule.rates().colwise().sum().maxCoeff(&busiest);
+  const std::vector<std::uint32_t> one = {static_cast<std::uint32_t>(busiest)};
+  const Replan out = r.exclude(one, book_, between, 1);
+  for (const ScheduleVersion& v : out.versions) book_.add(v);
+  r.adopt(out);
+  ASSERT_EQ(r.settings().excluded, std::set<int>{static_cast<int>(busiest)});
+  ASSERT_EQ(book_.latest().schedule.rates().col(busiest).norm(), 0.0);
+
+  const Replan back = r.include(one, book_, between, 2);
+  ASSERT_EQ(back.versions.size(), 1u);
+  const RateSchedule& schedule = back.versions[0].schedule;
+  EXPECT_GT(schedule.rates().col(busiest).norm(), 0.0) << "the sensor is measured again";
+  EXPECT_TRUE(back.settings.excluded.empty());
+  const double never_excluded = costOf(scenario_, book_.versions().front().schedule,
+                                       SurrogateForm::Information);
+  const double excluded = costOf(scenario_, out.versions[0].schedule, SurrogateForm::Information);
+  const double included = costOf(scenario_, schedule, SurrogateForm::Information);
+  EXPECT_GT(excluded, never_excluded * (1 + 1e-6));
+  EXPECT_NEAR(included, never_excluded, 1e-6 * never_excluded);
+  r.adopt(back);
+  EXPECT_THROW((void)r.include(one, book_, between, 3), InputError) << "in service already";
+}
+
+TEST_F(Replanning, IncludeRefusesADeadSensorAndChangesNothing) {
+  Replanner r = replanner();
+  const std::vector<std::uint32_t> two = {2};
+  const Replan out = r.exclude(two, book_, RunMoment{}, 1);
+  for (const ScheduleVersion& v : out.versions) book_.add(v);
+  r.adopt(out);
+  r.noteFailed(two, 2);  // then its process died
+  const ReplanSettings before = r.settings();
+  try {
+    (void)r.include(two, book_, RunMoment{}, 3);
+    ADD_FAILURE() << "a dead sensor was brought back";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("sensor 2 failed (its process died)"), std::string::npos)
+        << e.what();
+  }
+  const std::vector<std::uint32_t> unknown = {9};
+  EXPECT_THROW((void)r.include(unknown, book_, RunMoment{}, 4), InputError);
+  EXPECT_EQ(r.settings(), before);
+}
+
 // The failure policy on the default scenario (issue 24): sensor 1 dies, and the full-horizon cov
 // plan from the schedule in force stopped at 500 iterations (kkt 1.3e-3) while the same plan from
 // the planner's own start is optimal. The re-plan must publish a certified plan without sensor 1.
