@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <variant>
@@ -30,6 +31,7 @@ namespace sensornet::coordinator {
 namespace {
 
 using namespace std::chrono_literals;
+namespace fs = std::filesystem;
 using emulator::CoordinatorAction;
 using emulator::CoordinatorCore;
 using emulator::wallNowNs;
@@ -361,8 +363,20 @@ int runServe(ServeOptions options) {
                      "a network: section (--network-aware plans for the rates it delivers)");
   }
   options.core.run_id = options.run.run_id;
+  // The journal is written before anything is published: with --resume, none means the last
+  // coordinator died before it announced anything, and the run starts afresh (chaos seed 69).
+  std::error_code error;
+  const bool journaled = !options.state_path.empty() && fs::exists(options.state_path, error);
+  if (options.resume && !journaled) {
+    spdlog::info("no journal at {}: the coordinator before this one announced nothing; starting "
+                 "the run afresh",
+                 options.state_path);
+  }
   const emulator::CoordinatorJournal journal =
-      options.resume ? resumedJournal(options, run) : freshJournal(options, run);
+      options.resume && journaled ? resumedJournal(options, run) : freshJournal(options, run);
+  if (!options.state_path.empty() && !(options.resume && journaled)) {
+    emulator::saveJournal(options.state_path, journal);
+  }
   emulator::installStopSignals();
   CoordinatorNode node(options, std::move(run), journal);
   return node.run();

@@ -358,6 +358,10 @@ void explainFailure(const RunFailure& failure, const LaunchPlan& plan, const Pro
 }
 
 int runLaunch(LaunchOptions options) {
+  // First of all: a Ctrl-C in the first instants (or SIGINT inherited as ignored, as a shell's
+  // background job has it) is the run's interruption, seen by the supervisor at its first look,
+  // never a launcher killed with 130 and no report (issue 31, chaos seed 45).
+  installInterruptHandlers();
   // Bad input fails here, before anything starts.
   const Scenario scenario = loadScenarioFile(options.scenario_path);
   if (!options.schedule_path.empty()) (void)loadScheduleFile(options.schedule_path, scenario);
@@ -407,7 +411,6 @@ int runLaunch(LaunchOptions options) {
   } catch (const std::exception& e) {
     spdlog::warn("cannot record the run in {}: {}", plan.log_dir.string(), e.what());
   }
-  installInterruptHandlers();
   ProcessGroup group;
   for (const ChildSpec& child : plan.children) {
     const pid_t pid = group.start(child);

@@ -230,8 +230,16 @@ void checkCosts(const TrialRecord& r, const json& per_episode, std::vector<std::
                   ", clean run " + num(*r.clean_costs[k]));
     }
   }
+  // One version without a death; none only when no episode ran (a run stopped before the
+  // coordinator's schedule reached the fusion center).
+  const auto ran = [&r] {
+    const json& episodes = (*r.report)["per_episode"];
+    return episodes.is_array() && !episodes.empty();
+  };
+  const auto versions = [&r] { return (*r.report)["schedule_versions"].size(); };
   if (limit == std::numeric_limits<std::size_t>::max() && r.report &&
-      (*r.report)["schedule_versions"].is_array() && (*r.report)["schedule_versions"].size() != 1) {
+      (*r.report)["schedule_versions"].is_array() &&
+      (versions() > 1 || (versions() == 0 && ran()))) {
     v.push_back("schedule: " + std::to_string((*r.report)["schedule_versions"].size()) +
                 " versions without a sensor death");
   }
