@@ -86,9 +86,10 @@ std::vector<Action> Supervisor::onBadExit(const ChildExit& exit, const RunPositi
 
 std::vector<Action> Supervisor::onSensorAgentDeath(const ChildExit& exit, const RunPosition& at) {
   const std::vector<int>* sensors = sensorsOf(exit.name);
-  // Before the first episode a sensor agent that ends is a launch that failed (a bad program, a
-  // bad option): the run stops.
-  if (sensors == nullptr || sensors->empty() || !at.episode) {
+  // Before the first episode a sensor agent that ends on its own is a launch that failed (a bad
+  // program, a bad option): the run stops. One killed then is a death like any other, which the
+  // failure policy answers (chaos seeds 15, 46, 54, 59).
+  if (sensors == nullptr || sensors->empty() || (!at.episode && exit.signal == 0)) {
     return fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0, at},
                 exitFault(exit, at));
   }

@@ -281,6 +281,24 @@ TEST(Supervisor, SensorAgentEndingBeforeTheFirstEpisodeFailsTheLaunch) {
   EXPECT_EQ(verdictOf(s).status, RunStatus::Failed);
 }
 
+// Killed before the first episode (kill -9 from outside, not a bad program): the failure policy
+// answers it as any death, and the run that survives it is degraded, not failed.
+TEST(Supervisor, SensorAgentKilledBeforeTheFirstEpisodeIsADeathThePolicyAnswers) {
+  Supervisor s(twoAgents(FailurePolicy::Replan), kStart);
+  const auto actions = s.onChildExit(killed("sensor_agent-3-5"), {}, kStart);
+  ASSERT_EQ(count<NotifySensorsFailed>(actions), 1);
+  EXPECT_EQ(first<NotifySensorsFailed>(actions)->sensors, (std::vector<int>{3, 4, 5}));
+  EXPECT_EQ(count<StopRun>(actions), 0);
+  s.onReply("sensor_agent-3-5", {true, 2, "policy replan"});
+  (void)s.onChildExit(exited(kCoordinator, 0), {}, kStart);
+  (void)s.onChildExit(exited(kFusionCenter, 0), {}, kStart);
+  (void)s.onChildExit(exited("sensor_agent-0-2", 0), {}, kStart);
+  EXPECT_TRUE(s.done());
+  ASSERT_EQ(s.faults().size(), 1u);
+  EXPECT_TRUE(s.faults()[0].survived);
+  EXPECT_EQ(verdictOf(s, "degraded").status, RunStatus::Degraded);
+}
+
 TEST(Supervisor, ScriptedCrashIsNamedAsScripted) {
   SupervisorConfig config = twoAgents();
   config.scripted_crash_sensors = {4};
