@@ -847,7 +847,10 @@ double fusionCpuPerMeasurementUs(const OverloadRun& o) {
 std::string makeBenchPki() {
   const fs::path dir = fs::temp_directory_path() / runId("pki", 0);
   const sensornet::testing::ProcessResult r =
-      sensornet::testing::runProcess({kLauncher, "pki", "init", dir.string(), "--force"}, 120s);
+      sensornet::testing::runProcess({kLauncher, "pki", "init", dir.string(), "--force",
+                                      "--sensors", "6", "--sensor-block", "0-5",
+                                      "--sensor-block", "0-2", "--sensor-block", "3-5"},
+                                     120s);
   if (r.exit_code != 0) {
     std::printf("security: sensornet pki init failed: %s\n", r.err.c_str());
     return {};

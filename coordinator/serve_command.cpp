@@ -22,6 +22,8 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+#include "sensornet/emulator/sensor_speakers.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
@@ -79,8 +81,9 @@ emulator::CommandKind kindOf(sensornet_CommandKind kind) {
   return K::Unknown;
 }
 
-emulator::CommandEvent commandOf(const sensornet_Command& c) {
+emulator::CommandEvent commandOf(const sensornet_Command& c, emulator::CommandSender sender) {
   emulator::CommandEvent e;
+  e.sender = sender;
   e.run_id = std::string(dds::viewString(c.run_id));
   e.command_id = c.command_id;
   e.kind = kindOf(c.kind);
@@ -138,17 +141,29 @@ class CoordinatorNode {
         schedule_writer_(participant_, schedule_topic_),
         control_writer_(participant_, control_topic_),
         reply_writer_(participant_, reply_topic_),
-        command_reader_(participant_, command_topic_),
-        status_reader_(participant_, status_topic_),
+        // Commands by right (run_partitions.hpp): the partition a Command came in names who
+        // sent it, and in a secured run only the launcher may write in the launcher's.
+        launcher_commands_(participant_, command_topic_,
+                           dds::endpointQosIn<sensornet_Command>(emulator::commandPartition(
+                               participant_.partition(), emulator::CommandSender::Launcher))),
+        operator_commands_(participant_, command_topic_,
+                           dds::endpointQosIn<sensornet_Command>(emulator::commandPartition(
+                               participant_.partition(), emulator::CommandSender::Operator))),
+        status_reader_(participant_, status_topic_,
+                       dds::readerQosMatching<sensornet_SensorStatus>(
+                           emulator::sensorPartitionPattern(participant_.partition()))),
+        speakers_(participant_.partition()),
         report_reader_(participant_, report_topic_),
         state_reader_(participant_, state_topic_),
         waitset_(participant_),
-        command_ready_(command_reader_),
+        launcher_command_ready_(launcher_commands_),
+        operator_command_ready_(operator_commands_),
         status_ready_(status_reader_),
         report_ready_(report_reader_) {
-    waitset_.attach(command_ready_, 1);
+    waitset_.attach(launcher_command_ready_, 1);
     waitset_.attach(status_ready_, 2);
     waitset_.attach(report_ready_, 3);
+    waitset_.attach(operator_command_ready_, 4);
   }
 
   int run() {
@@ -173,9 +188,11 @@ class CoordinatorNode {
     for (auto& received : status_reader_.take(64).samples) {
       const sensornet_SensorStatus& s = *received.sample;
       if (const auto state = stateOf(s.state)) {
-        carryOut(core_.onSensorStatus({static_cast<int>(s.sensor_id), *state, s.schedule_version,
-                                       std::string(dds::viewString(s.detail))},
-                                      wallNowNs()));
+        const int sensor = static_cast<int>(s.sensor_id);
+        carryOut(core_.onSensorStatus(
+            {sensor, *state, s.schedule_version, std::string(dds::viewString(s.detail)),
+             speakers_.speaksFor(status_reader_, received.info.publication, sensor)},
+            wallNowNs()));
       } else {
         spdlog::warn("ignored a status of sensor {} with state {}", s.sensor_id,
                      static_cast<int>(s.state));
@@ -189,8 +206,13 @@ class CoordinatorNode {
     }
     core_.onFusionCenterMatched(report_reader_.matchedWriters() > 0 &&
                                 state_reader_.matchedWriters() > 0);
-    for (auto& received : command_reader_.take(8).samples) {
-      carryOut(core_.onCommand(commandOf(*received.sample), wallNowNs()));
+    for (auto& received : launcher_commands_.take(8).samples) {
+      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Launcher),
+                               wallNowNs()));
+    }
+    for (auto& received : operator_commands_.take(8).samples) {
+      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Operator),
+                               wallNowNs()));
     }
   }
 
@@ -278,12 +300,15 @@ class CoordinatorNode {
   dds::Writer<sensornet_Schedule> schedule_writer_;
   dds::Writer<sensornet_EpisodeControl> control_writer_;
   dds::Writer<sensornet_CommandReply> reply_writer_;
-  dds::Reader<sensornet_Command> command_reader_;
+  dds::Reader<sensornet_Command> launcher_commands_;
+  dds::Reader<sensornet_Command> operator_commands_;
   dds::Reader<sensornet_SensorStatus> status_reader_;
+  emulator::SensorSpeakers speakers_;
   dds::Reader<sensornet_Report> report_reader_;
   dds::Reader<sensornet_FusionState> state_reader_;
   dds::WaitSet waitset_;
-  dds::ReadCondition command_ready_;
+  dds::ReadCondition launcher_command_ready_;
+  dds::ReadCondition operator_command_ready_;
   dds::ReadCondition status_ready_;
   dds::ReadCondition report_ready_;
 };
@@ -401,7 +426,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "ready within --ready-timeout, no report came within the report timeout, or a write "
       "failed; 2 = bad input (a file, a flag, a journal of another run).");
   emulator::addRunOptions(*cmd, options->run);
-  options->run.security_role = dds::SecurityRole::Coordinator;
+  options->run.security_identity = dds::SecurityRole::Coordinator;
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
   wordOption<PlanSurrogate>(
       cmd->add_option("--surrogate", options->surrogate,

@@ -7,6 +7,7 @@
 #include <deque>
 #include <iostream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -28,6 +29,8 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+#include "sensornet/emulator/sensor_speakers.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -116,8 +119,20 @@ bool sameGuid(const dds_guid_t& a, const dds_guid_t& b) {
 class ReaderFacts final : public emulator::WriterFacts {
  public:
   ReaderFacts(const dds::detail::ReaderCore& measurements, const dds::detail::ReaderCore& tallies,
-              const dds::detail::ReaderCore& statuses)
-      : measurements_(measurements), tallies_(tallies), statuses_(statuses) {}
+              const dds::detail::ReaderCore& statuses, std::string run_partition)
+      : measurements_(measurements),
+        tallies_(tallies),
+        statuses_(statuses),
+        speakers_(std::move(run_partition)) {}
+
+  // Looked up in the main loop, the first time a writer's sample comes to the core, never in
+  // Cyclone's receive thread (sensor_speakers.hpp). A writer gone before its first sample
+  // reaches the core (a process killed within milliseconds of writing) speaks for no sensor:
+  // its samples are refused, never taken on trust.
+  [[nodiscard]] const std::vector<int>& sensorsOf(emulator::SensorTopic topic,
+                                                  emulator::WriterId w) const override {
+    return speakers_.of(readerOf(topic), w);
+  }
 
   [[nodiscard]] bool live(emulator::SensorTopic topic, emulator::WriterId w) const override {
     switch (topic) {
@@ -126,6 +141,14 @@ class ReaderFacts final : public emulator::WriterFacts {
       case emulator::SensorTopic::Status: return statuses_.matchesWriter(w);
     }
     return false;
+  }
+  [[nodiscard]] const dds::detail::ReaderCore& readerOf(emulator::SensorTopic topic) const {
+    switch (topic) {
+      case emulator::SensorTopic::Measurement: return measurements_;
+      case emulator::SensorTopic::Tally: return tallies_;
+      case emulator::SensorTopic::Status: return statuses_;
+    }
+    return measurements_;
   }
   [[nodiscard]] std::uint32_t matchedMeasurementWriters() const override {
     return measurements_.matchedWriters();
@@ -148,6 +171,7 @@ class ReaderFacts final : public emulator::WriterFacts {
   const dds::detail::ReaderCore& measurements_;
   const dds::detail::ReaderCore& tallies_;
   const dds::detail::ReaderCore& statuses_;
+  mutable emulator::SensorSpeakers speakers_;  // main thread only
 };
 
 emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
@@ -264,15 +288,22 @@ class FusionCenter {
         status_topic_(participant_),
         report_topic_(participant_),
         state_topic_(participant_),
-        measurement_reader_(participant_, measurement_topic_),
-        tally_reader_(participant_, tally_topic_),
-        status_reader_(participant_, status_topic_),
+        // Every sensor process's partition (run_partitions.hpp): the partition a sample came
+        // in names the sensors its writer speaks for.
+        measurement_reader_(participant_, measurement_topic_,
+                            dds::readerQosMatching<sensornet_Measurement>(sensorPartitions())),
+        tally_reader_(participant_, tally_topic_,
+                      dds::readerQosMatching<sensornet_EpisodeTally>(sensorPartitions())),
+        status_reader_(participant_, status_topic_,
+                       dds::readerQosMatching<sensornet_SensorStatus>(sensorPartitions())),
+        reply_topic_(participant_),
+        reply_reader_(participant_, reply_topic_),
         report_writer_(participant_, report_topic_, dds::reportWriterQos()),
         state_writer_(participant_, state_topic_),
         waitset_(participant_),
         tally_ready_(tally_reader_),
         status_ready_(status_reader_),
-        facts_(measurement_reader_, tally_reader_, status_reader_),
+        facts_(measurement_reader_, tally_reader_, status_reader_, participant_.partition()),
         core_(coreConfig(options), facts_, wallNowNs()),
         arrivals_listener_(measurement_reader_, [this] { onMeasurements(); }) {
     inputs_.attachTo(waitset_);
@@ -297,6 +328,7 @@ class FusionCenter {
       end = follow(now);
       readTallies(now);
       readStatuses(now);
+      readReplies(now);
       core_.tick(now);
       carryOut();
     }
@@ -387,6 +419,25 @@ class FusionCenter {
     }
   }
 
+  // The coordinator's replies: a command it refused because its sender had no right to send
+  // it is a fault of the run (run_partitions.hpp, kNotPermitted).
+  void readReplies(std::int64_t now) {
+    for (auto& received : reply_reader_.take(64).samples) {
+      const sensornet_CommandReply& r = *received.sample;
+      const std::string_view reason = dds::viewString(r.reason);
+      if (r.accepted || dds::viewString(r.run_id) != options_.run.run_id ||
+          reason.substr(0, emulator::kNotPermitted.size()) != emulator::kNotPermitted) {
+        continue;
+      }
+      core_.onCommandRefused(r.command_id, std::string(reason.substr(emulator::kNotPermitted.size())),
+                             now);
+    }
+  }
+
+  [[nodiscard]] std::string sensorPartitions() const {
+    return emulator::sensorPartitionPattern(participant_.partition());
+  }
+
   void carryOut() {
     for (emulator::FusionAction& action : core_.takeActions()) {
       std::visit([this](auto& a) { carryOut(a); }, action);
@@ -466,6 +517,8 @@ class FusionCenter {
   dds::Reader<sensornet_Measurement> measurement_reader_;
   dds::Reader<sensornet_EpisodeTally> tally_reader_;
   dds::Reader<sensornet_SensorStatus> status_reader_;
+  dds::Topic<sensornet_CommandReply> reply_topic_;
+  dds::Reader<sensornet_CommandReply> reply_reader_;
   dds::Writer<sensornet_Report> report_writer_;
   dds::Writer<sensornet_FusionState> state_writer_;
   dds::WaitSet waitset_;
@@ -498,7 +551,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "(report.jsonl beside report.json). Example:\n  fusion_center serve --run-id demo "
       "--report report.json");
   emulator::addRunOptions(*cmd, options->run);
-  options->run.security_role = dds::SecurityRole::FusionCenter;
+  options->run.security_identity = dds::SecurityRole::FusionCenter;
   cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down (missing folders are made "
                   "at start); the episode log goes beside it");

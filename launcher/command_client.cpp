@@ -17,12 +17,14 @@ constexpr std::chrono::milliseconds kWaitStep{100};
 }  // namespace
 
 CommandClient::CommandClient(const dds::Participant& participant, std::string run_id,
-                             std::string issuer)
+                             emulator::CommandSender sender, std::string issuer)
     : run_id_(std::move(run_id)),
       issuer_(std::move(issuer)),
       command_topic_(participant),
       reply_topic_(participant),
-      commands_(participant, command_topic_),
+      commands_(participant, command_topic_,
+                dds::endpointQosIn<sensornet_Command>(
+                    emulator::commandPartition(participant.partition(), sender))),
       replies_(participant, reply_topic_),
       has_reply_(replies_),
       waitset_(participant) {

@@ -23,6 +23,7 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/launcher/supervisor.hpp"
 
 namespace sensornet::launcher {
@@ -42,7 +43,10 @@ struct CommandRequest {
 
 class CommandClient {
  public:
-  CommandClient(const dds::Participant& participant, std::string run_id, std::string issuer);
+  // Writes in the Command partition of `sender` (run_partitions.hpp): what the coordinator
+  // knows it by, authenticated in a secured run; `issuer` is free text for its log.
+  CommandClient(const dds::Participant& participant, std::string run_id,
+                emulator::CommandSender sender, std::string issuer);
 
   // True once a coordinator's command reader is matched, within `wait`.
   [[nodiscard]] bool waitForCoordinator(std::chrono::nanoseconds wait) const;

@@ -6,7 +6,8 @@
 namespace sensornet::launcher {
 
 FailureNotices::FailureNotices(const dds::Participant& participant, std::string run_id)
-    : client_(participant, std::move(run_id), "sensornet launch " + std::to_string(::getpid())) {}
+    : client_(participant, std::move(run_id), emulator::CommandSender::Launcher,
+              "sensornet launch " + std::to_string(::getpid())) {}
 
 void FailureNotices::send(const std::string& process, const std::vector<int>& sensors,
                           const std::string& detail) {

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/io/command_line.hpp"
 #include "sensornet/dds/unicast_config.hpp"
 
 namespace sensornet::launcher {
@@ -156,17 +157,17 @@ std::vector<std::vector<int>> sensorBlocks(const emulator::HostsFile* hosts, int
   return blocks;
 }
 
-std::string sensorListSpec(const std::vector<int>& sensors) {
-  std::string spec;
-  for (std::size_t i = 0; i < sensors.size();) {
-    std::size_t end = i + 1;
-    while (end < sensors.size() && sensors[end] == sensors[end - 1] + 1) ++end;
-    if (!spec.empty()) spec += ",";
-    spec += std::to_string(sensors[i]);
-    if (end - i > 1) spec += "-" + std::to_string(sensors[end - 1]);
-    i = end;
-  }
-  return spec;
+CLI::Validator sensorsPerProcessValue() {
+  return CLI::Validator(
+      [count = integerRange(1, kMaxSensorsPerProcess)](std::string& input) -> std::string {
+        return input == "auto" ? std::string() : count(input);
+      },
+      "auto|N");
+}
+
+int sensorsPerProcess(const std::string& given, int sensor_count) {
+  if (given != "auto") return std::stoi(given);  // checked by the option's validator
+  return std::max(1, (sensor_count + kAutoSensorProcesses - 1) / kAutoSensorProcesses);
 }
 
 std::string shellQuoted(const std::string& word) {

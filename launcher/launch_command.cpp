@@ -36,6 +36,7 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
+#include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
@@ -52,12 +53,6 @@ constexpr seconds kStopGrace{3};
 // on loopback takes a few milliseconds; this is the price of every launch, so it stays short.
 constexpr milliseconds kLiveRunProbe{500};
 constexpr std::size_t kLogLinesShown = 15;
-constexpr int kMaxSensorsPerProcess = 1'000'000;
-// --sensors-per-process auto: one sensor per process up to this many sensor processes, else
-// the fewest equal blocks that stay within it. Start-up and the idle load grow with the number
-// of processes, not of sensors; measured on the 2-core machine (bench/README.md, "Start-up at
-// scale"), 60 one-sensor processes are all ready in about 3 s, 100 in about 10 s.
-constexpr int kAutoSensorProcesses = 50;
 
 struct LaunchOptions {
   std::string scenario_path;
@@ -108,22 +103,6 @@ CLI::Validator requirementList() {
       "CRITERIA");
 }
 
-// The sensors of one sensor_agent process: the count given, or for "auto" one each up to
-// kAutoSensorProcesses processes, else ceil(M / kAutoSensorProcesses).
-int sensorsPerProcess(const std::string& given, int sensor_count) {
-  if (given != "auto") return std::stoi(given);  // checked by the option's validator
-  return std::max(1, (sensor_count + kAutoSensorProcesses - 1) / kAutoSensorProcesses);
-}
-
-// --sensors-per-process: "auto" or a whole number in [1, kMaxSensorsPerProcess].
-CLI::Validator sensorsPerProcessValue() {
-  return CLI::Validator(
-      [count = integerRange(1, kMaxSensorsPerProcess)](std::string& input) -> std::string {
-        return input == "auto" ? std::string() : count(input);
-      },
-      "auto|N");
-}
-
 // A run seed as the coordinator takes it: a decimal integer that fits 64 bits unsigned.
 // (CLI11 would read "-1" as 2^64 - 1 and "010" as octal.)
 CLI::Validator seedNumber() {
@@ -161,10 +140,10 @@ std::vector<std::string> runFlags(const LaunchOptions& options, const dds::Domai
 // its own identity, key and permissions (and the CA's certificate and the governance), nothing of
 // another role and never the CA's key (docs/ARCHITECTURE.md, README "DDS Security").
 std::vector<std::string> roleFlags(std::vector<std::string> flags, const LaunchOptions& options,
-                                   dds::SecurityRole role) {
+                                   const dds::SecurityIdentity& identity) {
   if (!options.run.security_dir.empty()) {
     flags.insert(flags.end(),
-                 {"--security", dds::roleFolderOf(options.run.security_dir, role).string()});
+                 {"--security", dds::roleFolderOf(options.run.security_dir, identity).string()});
   }
   return flags;
 }
@@ -195,11 +174,11 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
                                     plan.log_dir));
   const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
   for (const std::vector<int>& sensors : sensorBlocks(hosts, sensor_count, per_process)) {
-    const std::string block = sensorListSpec(sensors);
+    const std::string block = emulator::formatSensorIds(sensors);
     const std::string name = "sensor_agent-" + block;
     plan.children.push_back(
         childSpec(name, {programs.sensor_agent, "--sensors", block},
-                  roleFlags(flags, options, dds::SecurityRole::Sensor), plan.log_dir));
+                  roleFlags(flags, options, {dds::SecurityRole::Sensor, block}), plan.log_dir));
     plan.sensor_agents.push_back(name);
     plan.sensors_of[name] = sensors;
   }
@@ -357,6 +336,21 @@ void explainFailure(const RunFailure& failure, const LaunchPlan& plan, const Pro
   std::fprintf(stderr, "sensornet: logs in %s\n", plan.log_dir.c_str());
 }
 
+// Every role's identity and one per sensor process of `plan`, each checked (security.hpp).
+void checkSecurityFiles(const LaunchOptions& options, const LaunchPlan& plan) {
+  std::vector<std::string> blocks;
+  for (const std::string& name : plan.sensor_agents) {
+    blocks.push_back(emulator::formatSensorIds(plan.sensors_of.at(name)));
+  }
+  std::string make = "sensornet pki init " + options.run.security_dir + " --force --scenario " +
+                     options.scenario_path;
+  if (options.sensors_per_process != "auto") {
+    make += " --sensors-per-process " + options.sensors_per_process;
+  }
+  if (!options.hosts_path.empty()) make += " --hosts " + options.hosts_path;
+  dds::checkSecurityFolder(options.run.security_dir, blocks, make);
+}
+
 int runLaunch(LaunchOptions options) {
   // First of all: a Ctrl-C in the first instants (or SIGINT inherited as ignored, as a shell's
   // background job has it) is the run's interruption, seen by the supervisor at its first look,
@@ -367,8 +361,6 @@ int runLaunch(LaunchOptions options) {
   if (!options.schedule_path.empty()) (void)loadScheduleFile(options.schedule_path, scenario);
   if (options.run.run_id.empty()) options.run.run_id = generateRunId();
   dds::DomainConfig domain = options.run.domainConfig();
-  // Every role's files, so that a bad one is refused here, not when its process starts.
-  if (!options.run.security_dir.empty()) dds::checkSecurityFolder(options.run.security_dir);
   std::optional<emulator::HostsFile> hosts;
   std::optional<HostPlacement> placement;
   if (!options.hosts_path.empty()) {
@@ -382,6 +374,8 @@ int runLaunch(LaunchOptions options) {
                      "a network: section for --network-aware yes (the scenario has none)");
   }
   LaunchPlan plan = planLaunch(options, scenario, programs, domain, hosts ? &*hosts : nullptr);
+  // Every identity's files, so that a bad one is refused here, not when its process starts.
+  if (!options.run.security_dir.empty()) checkSecurityFiles(options, plan);
   if (placement) placeOnHosts(plan, *hosts, *placement);
   if (!plan.default_report) {
     makeParentFolders(plan.report_path, "--report");
@@ -518,7 +512,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->add_option("--schedule", options->schedule_path,
                   "use this schedule file (JSON) instead of planning one");
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
-  options->run.security_role = dds::SecurityRole::Launcher;
+  options->run.security_identity = dds::SecurityRole::Launcher;
   cmd->add_option("--hosts", options->hosts_path,
                   "run across several hosts: a YAML file naming each host's address, the "
                   "command prefix that runs a program there (ip netns exec NS, ssh -tt "

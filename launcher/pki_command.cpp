@@ -12,14 +12,21 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "host_placement.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/xml_text.hpp"
 #include "sensornet/dds/security.hpp"
+#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/emulator/sensor_ids.hpp"
+#include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -34,6 +41,13 @@ using dds::SecurityRole;
 struct PkiOptions {
   std::string dir;
   std::string ca_dir;  // where the CA's key is kept (default DIR/ca)
+  // The sensor processes' identities: those `sensornet launch SCENARIO` starts with the same
+  // --sensors-per-process and --hosts, or without a scenario one per sensor 0..sensors-1.
+  std::string scenario;
+  std::string sensors_per_process = "auto";
+  std::string hosts;
+  int sensors = 16;
+  std::vector<std::string> sensor_blocks;  // --sensor-block, beside those (sensor_agent --sensors)
   bool force = false;
   int days = 365;
   std::string key = "ec";
@@ -41,30 +55,38 @@ struct PkiOptions {
   bool json = false;
 };
 
-// Who writes and who reads which topic (each program's writers and readers).
+using dds::SecurityIdentity;
+
+// Who writes and who reads which topic (each program's writers and readers), and in which
+// partitions it may publish: a sensor process only in its own block's partition, the launcher
+// and an operator each in their own Command partition (emulator/run_partitions.hpp). The run's
+// id is not known here: "*" stands for it.
 struct TopicRights {
   std::vector<const char*> publish;
   std::vector<const char*> subscribe;
+  std::string publish_partition = "sensornet/*";
 };
 
-TopicRights rightsOf(SecurityRole role) {
-  switch (role) {
+TopicRights rightsOf(const SecurityIdentity& identity) {
+  switch (identity.role) {
     case SecurityRole::Coordinator:
       return {{"Scenario", "Schedule", "EpisodeControl", "CommandReply"},
               {"Scenario", "Schedule", "EpisodeControl", "Command", "SensorStatus", "Report",
                "FusionState"}};
     case SecurityRole::Sensor:
       return {{"Measurement", "EpisodeTally", "SensorStatus"},
-              {"Scenario", "Schedule", "EpisodeControl"}};
-    case SecurityRole::FusionCenter:
+              {"Scenario", "Schedule", "EpisodeControl"},
+              "sensornet/*/sensors/" + identity.sensors};
+    case SecurityRole::FusionCenter:  // CommandReply: a command refused by right is a fault
       return {{"Report", "FusionState"},
               {"Scenario", "Schedule", "EpisodeControl", "Measurement", "EpisodeTally",
-               "SensorStatus"}};
+               "SensorStatus", "CommandReply"}};
     case SecurityRole::Operator:
     case SecurityRole::Launcher:  // it sends the sensors' failure notices as Commands
       return {{"Command"},
               {"Scenario", "Schedule", "EpisodeControl", "SensorStatus", "Report", "FusionState",
-               "CommandReply"}};
+               "CommandReply"},
+              "sensornet/*/" + std::string(dds::securityRoleName(identity.role))};
   }
   return {};
 }
@@ -102,8 +124,8 @@ std::string governanceXml() {
 )";
 }
 
-std::string subjectOf(SecurityRole role) {
-  return "CN=" + std::string(dds::securityRoleName(role)) + ",O=sensornet";
+std::string subjectOf(const SecurityIdentity& identity) {
+  return "CN=" + identity.name() + ",O=sensornet";
 }
 
 // 2026-11-30T21:00:00 in UTC, `days` from now.
@@ -117,27 +139,28 @@ std::string utcIn(int days) {
   return text;
 }
 
-std::string topicList(const std::vector<const char*>& topics) {
+std::string topicList(const std::vector<const char*>& topics, const std::string& partition) {
   std::string xml = "<topics>";
   for (const char* t : topics) xml += std::string("<topic>sensornet/") + t + "</topic>";
-  return xml + "</topics><partitions><partition>sensornet/*</partition></partitions>";
+  return xml + "</topics><partitions><partition>" + escapeXml(partition) +
+         "</partition></partitions>";
 }
 
-std::string permissionsXml(SecurityRole role, int days) {
-  const TopicRights rights = rightsOf(role);
+std::string permissionsXml(const SecurityIdentity& identity, int days) {
+  const TopicRights rights = rightsOf(identity);
   return std::string(R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
   <permissions>
     <grant name="sensornet_)") +
-         std::string(dds::securityRoleName(role)) + R"(">
-      <subject_name>)" + subjectOf(role) + R"(</subject_name>
+         escapeXml(identity.name()) + R"(">
+      <subject_name>)" + escapeXml(subjectOf(identity)) + R"(</subject_name>
       <validity><not_before>)" + utcIn(-1) + "</not_before><not_after>" + utcIn(days) +
          R"(</not_after></validity>
       <allow_rule>
         )" + kDomains + R"(
-        <publish>)" + topicList(rights.publish) + R"(</publish>
-        <subscribe>)" + topicList(rights.subscribe) + R"(</subscribe>
+        <publish>)" + topicList(rights.publish, rights.publish_partition) + R"(</publish>
+        <subscribe>)" + topicList(rights.subscribe, "sensornet/*") + R"(</subscribe>
       </allow_rule>
       <default>DENY</default>
     </grant>
@@ -200,14 +223,16 @@ void writeText(const fs::path& path, const std::string& text) {
   ::close(fd);
 }
 
-// What `pki init` makes, by folder: only these names are replaced by --force.
-const std::set<std::string>& madeInRoot() {
+// What `pki init` makes, by folder: only these names are replaced by --force. In DIR: the CA's
+// certificate, the governance, the CA's folder, a folder per role and one per sensor process
+// ("sensor-<ids>").
+bool madeInRoot(const std::string& name) {
   static const std::set<std::string> names = [] {
     std::set<std::string> n = {"ca.pem", "governance.p7s", "ca"};
     for (const SecurityRole role : dds::kSecurityRoles) n.emplace(dds::securityRoleName(role));
     return n;
   }();
-  return names;
+  return names.count(name) > 0 || name.rfind("sensor-", 0) == 0;
 }
 const std::set<std::string> kMadeInRole = {"identity.pem", "key.pem", "permissions.p7s",
                                            "ca.pem", "governance.p7s"};
@@ -242,8 +267,8 @@ void checkOwnedFolder(const fs::path& dir) {
 // folders. Refuses a symbolic link or a folder of another owner where it writes. In DIR
 // (`folders`) other files are left alone; in a role's or the CA's folder, which a process
 // receives whole, anything else is refused. Nothing is removed before everything is checked.
-void collectEarlierFiles(const fs::path& dir, const std::set<std::string>& names, bool folders,
-                         std::vector<fs::path>& files, std::vector<fs::path>& dirs) {
+void collectEarlierFiles(const fs::path& dir, const std::function<bool(const std::string&)>& made,
+                         bool folders, std::vector<fs::path>& files, std::vector<fs::path>& dirs) {
   std::error_code error;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, error)) {
     const fs::path& path = entry.path();
@@ -254,8 +279,8 @@ void collectEarlierFiles(const fs::path& dir, const std::set<std::string>& names
       dirs.push_back(path);  // the staging folder of an init that failed
       continue;
     }
-    if (folders && names.count(name) == 0) continue;  // not ours: left as it is
-    if (names.count(name) == 0 || ::lstat(path.c_str(), &st) != 0 || S_ISLNK(st.st_mode)) {
+    if (folders && !made(name)) continue;  // not ours: left as it is
+    if (!made(name) || ::lstat(path.c_str(), &st) != 0 || S_ISLNK(st.st_mode)) {
       throw InputError(path.string(), "",
                        "only files `pki init` made in " + dir.string() +
                            " (this one it did not make, or it is a symbolic link: --force "
@@ -264,7 +289,9 @@ void collectEarlierFiles(const fs::path& dir, const std::set<std::string>& names
     if (S_ISDIR(st.st_mode)) {
       if (!folders) throw InputError(path.string(), "", "a file `pki init` made, not a folder");
       checkOwnedFolder(path);
-      collectEarlierFiles(path, name == "ca" ? kMadeInCa : kMadeInRole, false, files, dirs);
+      const std::set<std::string>& inside = name == "ca" ? kMadeInCa : kMadeInRole;
+      collectEarlierFiles(path, [&inside](const std::string& n) { return inside.count(n) > 0; },
+                          false, files, dirs);
       dirs.push_back(path);
     } else if (S_ISREG(st.st_mode)) {
       files.push_back(path);
@@ -276,7 +303,7 @@ void collectEarlierFiles(const fs::path& dir, const std::set<std::string>& names
 
 void removeEarlierFiles(const fs::path& dir) {
   std::vector<fs::path> files, dirs;
-  collectEarlierFiles(dir, madeInRoot(), true, files, dirs);
+  collectEarlierFiles(dir, madeInRoot, true, files, dirs);
   for (const fs::path& f : files) ::unlink(f.c_str());
   std::error_code error;
   for (const fs::path& d : dirs) fs::remove_all(d, error);  // emptied above, or our staging
@@ -293,7 +320,8 @@ class PkiMaker {
       : options_(std::move(options)),
         dir_(fs::absolute(options_.dir).lexically_normal()),
         ca_dir_(options_.ca_dir.empty() ? dir_ / "ca"
-                                        : fs::absolute(options_.ca_dir).lexically_normal()) {}
+                                        : fs::absolute(options_.ca_dir).lexically_normal()),
+        identities_(identitiesOf(options_)) {}
 
   int make() {
     prepare();
@@ -313,16 +341,15 @@ class PkiMaker {
     makeCa();
     writeText(stage("governance.xml"), governanceXml());
     sign(stage("governance.xml"), stage("governance.p7s"));
-    for (const SecurityRole role : dds::kSecurityRoles) makeRole(role);
+    for (const SecurityIdentity& identity : identities_) makeRole(identity);
     place();
   }
 
   void printSummary() const {
     if (options_.json) {
       nlohmann::json roles = nlohmann::json::object();
-      for (const SecurityRole role : dds::kSecurityRoles) {
-        const std::string name(dds::securityRoleName(role));
-        roles[name] = (dir_ / name).string();
+      for (const SecurityIdentity& identity : identities_) {
+        roles[identity.name()] = (dir_ / identity.name()).string();
       }
       printJson({{"dir", dir_.string()},
                  {"roles", roles},
@@ -332,13 +359,13 @@ class PkiMaker {
       return;
     }
     std::printf(
-        "security files in %s: per role (%s) a folder with identity.pem, key.pem, "
-        "permissions.p7s, ca.pem and governance.p7s: what one process of that role receives, "
-        "and nothing else; valid %d days. The CA's private key is in %s: it never goes to a "
-        "run's processes (keep it offline with --ca-dir). Use: sensornet launch SCENARIO "
-        "--security %s\n",
-        dir_.c_str(), roleNames().c_str(), options_.days, (ca_dir_ / "ca.key").c_str(),
-        dir_.c_str());
+        "security files in %s: per identity (%s) a folder with identity.pem, key.pem, "
+        "permissions.p7s, ca.pem and governance.p7s: what one process of that identity "
+        "receives, and nothing else; a sensor process's identity speaks for its sensors only. "
+        "Valid %d days. The CA's private key is in %s: it never goes to a run's processes "
+        "(keep it offline with --ca-dir). Use: sensornet launch %s --security %s\n",
+        dir_.c_str(), identityNames().c_str(), options_.days, (ca_dir_ / "ca.key").c_str(),
+        options_.scenario.empty() ? "SCENARIO" : options_.scenario.c_str(), dir_.c_str());
   }
 
   // The folders are the caller's and hold only what an earlier `pki init` made; the files are
@@ -408,8 +435,8 @@ class PkiMaker {
             log_);
   }
 
-  void makeRole(SecurityRole role) const {
-    const std::string name(dds::securityRoleName(role));
+  void makeRole(const SecurityIdentity& identity) const {
+    const std::string name = identity.name();
     const fs::path own = stage(name);
     fs::create_directory(own);
     fs::permissions(own, fs::perms::owner_all);
@@ -422,7 +449,7 @@ class PkiMaker {
              stage("ca.srl").string(), "-days", days(), "-out", (own / "identity.pem").string()},
             log_);
     fs::remove(own / "identity.csr");
-    writeText(own / "permissions.xml", permissionsXml(role, options_.days));
+    writeText(own / "permissions.xml", permissionsXml(identity, options_.days));
     sign(own / "permissions.xml", own / "permissions.p7s");
     fs::remove(own / "permissions.xml");
     fs::copy_file(ca_pem_, own / "ca.pem");
@@ -440,9 +467,8 @@ class PkiMaker {
       fs::copy_file(ca_pem_, dir_ / "ca.pem");
     }
     moveInto(stage("governance.p7s"), dir_ / "governance.p7s");
-    for (const SecurityRole role : dds::kSecurityRoles) {
-      const std::string name(dds::securityRoleName(role));
-      moveInto(stage(name), dir_ / name);
+    for (const SecurityIdentity& identity : identities_) {
+      moveInto(stage(identity.name()), dir_ / identity.name());
     }
     std::error_code error;
     fs::remove_all(staging_, error);
@@ -457,17 +483,49 @@ class PkiMaker {
 
   [[nodiscard]] fs::path stage(const std::string& name) const { return staging_ / name; }
   [[nodiscard]] std::string days() const { return std::to_string(options_.days); }
-  static std::string roleNames() {
-    std::string names;
+  // The roles, then a sensor process's identity per block: those of `sensornet launch
+  // SCENARIO` with the same --sensors-per-process and --hosts, or one per sensor.
+  static std::vector<SecurityIdentity> identitiesOf(const PkiOptions& options) {
+    std::vector<SecurityIdentity> identities;
     for (const SecurityRole role : dds::kSecurityRoles) {
-      names += (names.empty() ? "" : ", ") + std::string(dds::securityRoleName(role));
+      if (role != SecurityRole::Sensor) identities.emplace_back(role);
     }
+    std::vector<std::vector<int>> blocks;
+    if (options.scenario.empty()) {
+      for (int j = 0; j < options.sensors; ++j) blocks.push_back({j});
+    } else {
+      const int sensor_count = loadScenarioFile(options.scenario).sensorCount();
+      std::optional<emulator::HostsFile> hosts;
+      if (!options.hosts.empty()) hosts = emulator::loadHostsFile(options.hosts, sensor_count);
+      blocks = sensorBlocks(hosts ? &*hosts : nullptr, sensor_count,
+                            sensorsPerProcess(options.sensors_per_process, sensor_count));
+    }
+    for (const std::string& spec : options.sensor_blocks) {
+      blocks.push_back(emulator::parseSensorIds(spec, "--sensor-block"));
+    }
+    std::set<std::string> made;
+    for (const std::vector<int>& block : blocks) {
+      const std::string ids = emulator::formatSensorIds(block);
+      if (made.insert(ids).second) identities.emplace_back(SecurityRole::Sensor, ids);
+    }
+    return identities;
+  }
+
+  [[nodiscard]] std::string identityNames() const {
+    std::string names;
+    std::size_t sensors = 0;
+    for (const SecurityIdentity& identity : identities_) {
+      if (identity.role == SecurityRole::Sensor && ++sensors > 3) continue;
+      names += (names.empty() ? "" : ", ") + identity.name();
+    }
+    if (sensors > 3) names += " and " + std::to_string(sensors - 3) + " more sensor processes";
     return names;
   }
 
   PkiOptions options_;
   fs::path dir_;
   fs::path ca_dir_;
+  std::vector<SecurityIdentity> identities_;
   fs::path staging_;
   fs::path log_;
   fs::path ca_key_;
@@ -484,17 +542,21 @@ Subcommand addPkiCommand(CLI::App& app) {
   CLI::App* init = pki->add_subcommand(
       "init",
       "Make, with openssl, a certificate authority, an identity and signed permissions per role "
-      "(coordinator, fusion_center, sensor, operator for replan/status/watch, launcher) and a "
-      "signed governance document for DIR; then run with --security DIR. Each role gets a "
-      "folder DIR/<role> with its identity.pem, key.pem, permissions.p7s and copies of ca.pem "
-      "and governance.p7s: all one process of that role needs, and nothing of another role. "
-      "The CA's private key stays in DIR/ca (or --ca-dir) and never goes to a process. DIR "
-      "must be yours and writable only by you; nothing is written through a symbolic link. "
-      "Only the coordinator "
-      "may write Scenario, Schedule and EpisodeControl, only sensors Measurement, EpisodeTally "
-      "and SensorStatus, only the fusion center Report and FusionState, only the operator and "
-      "the launcher Command. Example:\n  sensornet pki init run-pki && sensornet launch "
-      "scenarios/default.yaml --security run-pki");
+      "(coordinator, fusion_center, operator for replan/status/watch, launcher) and per sensor "
+      "process (sensor-<ids>: the sensors it speaks for), and a signed governance document for "
+      "DIR; then run with --security DIR. Each identity gets a folder DIR/<identity> with its "
+      "identity.pem, key.pem, permissions.p7s and copies of ca.pem and governance.p7s: all one "
+      "process needs, and nothing of another. The CA's private key stays in DIR/ca (or "
+      "--ca-dir) and never goes to a process. DIR must be yours and writable only by you; "
+      "nothing is written through a symbolic link. Only the coordinator may write Scenario, "
+      "Schedule and EpisodeControl; a sensor process only Measurement, EpisodeTally and "
+      "SensorStatus, and only for its own sensors; only the fusion center Report and "
+      "FusionState; the launcher Command (the sensors' failure notices) and an operator "
+      "Command (re-plans), each in its own partition, so the coordinator knows which sent it. "
+      "The sensor processes' identities are those `sensornet launch SCENARIO` starts "
+      "(--scenario, with the same --sensors-per-process and --hosts), or one per sensor "
+      "0..--sensors-1. Example:\n  sensornet pki init run-pki --scenario scenarios/default.yaml "
+      "&& sensornet launch scenarios/default.yaml --security run-pki");
   init->add_option("DIR", options->dir, "folder for the files (made if missing)")->required();
   init->add_flag("--force", options->force,
                  "replace the files an earlier `pki init` made in DIR (nothing else: a file it "
@@ -502,6 +564,24 @@ Subcommand addPkiCommand(CLI::App& app) {
   init->add_option("--ca-dir", options->ca_dir,
                    "keep the CA (ca.key, ca.pem) in this folder instead of DIR/ca, for example "
                    "on a medium you keep offline; if it already holds a CA, sign with that one");
+  init->add_option("--scenario", options->scenario,
+                   "make the identities of the sensor processes `sensornet launch SCENARIO` "
+                   "starts (with the same --sensors-per-process and --hosts)")
+      ->check(CLI::ExistingFile);
+  init->add_option("--sensors-per-process", options->sensors_per_process,
+                   "as for `sensornet launch`, with --scenario: auto or N")
+      ->capture_default_str()
+      ->check(sensorsPerProcessValue());
+  init->add_option("--hosts", options->hosts, "as for `sensornet launch`, with --scenario")
+      ->check(CLI::ExistingFile);
+  init->add_option("--sensors", options->sensors,
+                   "without --scenario: one sensor process identity for each of the sensors "
+                   "0..N-1")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  init->add_option("--sensor-block", options->sensor_blocks,
+                   "also an identity for a sensor process that speaks for these sensors (ids as "
+                   "sensor_agent --sensors takes them: 3, 0-9, 0,2,5-7); repeatable");
   init->add_option("--days", options->days, "validity of certificates and permissions (days)")
       ->capture_default_str()
       ->check(CLI::Range(1, 36500));

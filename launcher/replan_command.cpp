@@ -65,7 +65,8 @@ std::optional<CommandReply> exchange(const dds::DomainConfig& config, const std:
                                      std::uint64_t& command_id, std::string& why) {
   dds::Domain domain(config);
   dds::Participant participant(domain);
-  CommandClient client(participant, run_id, "sensornet replan " + std::to_string(::getpid()));
+  CommandClient client(participant, run_id, emulator::CommandSender::Operator,
+                       "sensornet replan " + std::to_string(::getpid()));
   if (!client.waitForCoordinator(deadline - Clock::now())) {
     why = "no coordinator of run " + run_id + " is listening";
     return std::nullopt;

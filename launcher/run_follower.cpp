@@ -4,6 +4,7 @@
 
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -79,7 +80,10 @@ RunFollower::RunFollower(const dds::DomainConfig& config)
       scenarios_(participant_, scenario_topic_),
       schedules_(participant_, schedule_topic_),
       controls_(participant_, control_topic_),
-      statuses_(participant_, status_topic_),
+      // Every sensor process writes in its own partition (run_partitions.hpp).
+      statuses_(participant_, status_topic_,
+                dds::readerQosMatching<sensornet_SensorStatus>(
+                    emulator::sensorPartitionPattern(participant_.partition()))),
       reports_(participant_, report_topic_),
       has_scenario_(scenarios_),
       has_schedule_(schedules_),

@@ -18,7 +18,6 @@ int main(int argc, char** argv) {
     app.name("sensor_agent");
     sensornet::sensor_agent::AgentOptions options;
     sensornet::emulator::addRunOptions(app, options.run);
-    options.run.security_role = sensornet::dds::SecurityRole::Sensor;
     std::string sensors;
     app.add_option("--sensors", sensors,
                    "the sensor ids (0-based) this process emulates: 3, 0-9 or 0,2,5-7")
@@ -29,6 +28,8 @@ int main(int argc, char** argv) {
         ->check(sensornet::positiveNumber(sensornet::emulator::kMaxWallSeconds));
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     options.sensors = sensornet::emulator::parseSensorIds(sensors, "--sensors");
+    options.run.security_identity = {sensornet::dds::SecurityRole::Sensor,
+                                     sensornet::emulator::formatSensorIds(options.sensors)};
     (void)options.run.domainConfig();  // bad run or domain id: one line, exit 2, before DDS
     return sensornet::sensor_agent::runSensorAgent(options);
   });

@@ -24,6 +24,7 @@
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/network_emulation.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
@@ -72,9 +73,15 @@ class Agent {
         measurement_topic_(participant_),
         tally_topic_(participant_),
         status_topic_(participant_),
-        measurement_writer_(participant_, measurement_topic_),
-        tally_writer_(participant_, tally_topic_),
-        status_writer_(participant_, status_topic_),
+        // In its own block's partition: the identity it speaks for its sensors with
+        // (emulator/run_partitions.hpp).
+        own_partition_(emulator::sensorPartition(participant_.partition(), options.sensors)),
+        measurement_writer_(participant_, measurement_topic_,
+                            dds::endpointQosIn<sensornet_Measurement>(own_partition_)),
+        tally_writer_(participant_, tally_topic_,
+                      dds::endpointQosIn<sensornet_EpisodeTally>(own_partition_)),
+        status_writer_(participant_, status_topic_,
+                       dds::endpointQosIn<sensornet_SensorStatus>(own_partition_)),
         waitset_(participant_) {
     inputs_.attachTo(waitset_);
   }
@@ -420,6 +427,7 @@ class Agent {
   dds::Topic<sensornet_Measurement> measurement_topic_;
   dds::Topic<sensornet_EpisodeTally> tally_topic_;
   dds::Topic<sensornet_SensorStatus> status_topic_;
+  std::string own_partition_;
   dds::Writer<sensornet_Measurement> measurement_writer_;
   dds::Writer<sensornet_EpisodeTally> tally_writer_;
   dds::Writer<sensornet_SensorStatus> status_writer_;

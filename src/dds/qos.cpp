@@ -123,6 +123,11 @@ Qos& Qos::partition(const std::string& name) {
   return *this;
 }
 
+Qos& Qos::partitionPattern(const std::string& pattern) {
+  dds_qset_partition1(mutableQos(), pattern.c_str());
+  return *this;
+}
+
 Qos& Qos::autodisposeUnregistered(bool autodispose) {
   dds_qset_writer_data_lifecycle(mutableQos(), autodispose);
   return *this;

@@ -213,17 +213,22 @@ std::string_view securityRoleName(SecurityRole role) noexcept {
   return "?";
 }
 
-fs::path roleFolderOf(const fs::path& dir, SecurityRole role) {
+std::string SecurityIdentity::name() const {
+  const std::string role_name(securityRoleName(role));
+  return role == SecurityRole::Sensor && !sensors.empty() ? role_name + "-" + sensors : role_name;
+}
+
+fs::path roleFolderOf(const fs::path& dir, const SecurityIdentity& identity) {
   std::error_code error;
   const fs::path base = fs::absolute(dir, error).lexically_normal();
-  const fs::path own = base / securityRoleName(role);
+  const fs::path own = base / identity.name();
   return fs::is_directory(own, error) ? own : base;
 }
 
-SecurityFiles securityFilesOf(const fs::path& dir, SecurityRole role) {
+SecurityFiles securityFilesOf(const fs::path& dir, const SecurityIdentity& identity) {
   std::error_code error;
   const fs::path base = fs::absolute(dir, error).lexically_normal();
-  const fs::path own = roleFolderOf(base, role);
+  const fs::path own = roleFolderOf(base, identity);
   // A folder from before the CA's files were copied into each role's folder keeps them in DIR.
   const auto shared = [&](const char* name) {
     return fs::exists(own / name, error) || own == base ? own / name : base / name;
@@ -247,12 +252,28 @@ void checkSecurityFiles(const SecurityFiles& files) {
   checkPermissionsSubject(verifiedContent(files.permissions, ca.get()), cert.get(), files);
 }
 
-void checkSecurityFolder(const fs::path& dir) {
+void checkSecurityFolder(const fs::path& dir, const std::vector<std::string>& sensor_blocks,
+                         const std::string& make_sensor_identities) {
+  std::vector<SecurityIdentity> identities;
   for (const SecurityRole role : kSecurityRoles) {
-    checkSecurityFiles(securityFilesOf(dir, role));
-    const fs::path own = roleFolderOf(dir, role);
-    std::error_code error;
-    if (own != fs::absolute(dir, error).lexically_normal()) checkNoForeignSecrets(own);
+    if (role != SecurityRole::Sensor) identities.emplace_back(role);
+  }
+  for (const std::string& block : sensor_blocks) identities.emplace_back(SecurityRole::Sensor, block);
+  std::error_code error;
+  const fs::path base = fs::absolute(dir, error).lexically_normal();
+  for (const SecurityIdentity& identity : identities) {
+    const fs::path own = roleFolderOf(base, identity);
+    if (own == base) {
+      throw InputError((base / identity.name()).string(), "",
+                       "the folder of the identity " + identity.name() +
+                           (identity.role == SecurityRole::Sensor
+                                ? " (the sensor process for sensors " + identity.sensors +
+                                      "): make the identities of this launch's sensor "
+                                      "processes with `" + make_sensor_identities + "`"
+                                : std::string(": made by `sensornet pki init`")));
+    }
+    checkSecurityFiles(securityFilesOf(base, identity));
+    checkNoForeignSecrets(own);
   }
 }
 

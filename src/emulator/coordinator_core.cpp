@@ -119,6 +119,15 @@ std::chrono::nanoseconds CoordinatorCore::waitHint() const {
 // ---- events -------------------------------------------------------------------------------
 
 CoordinatorActions CoordinatorCore::onSensorStatus(const SensorStatusEvent& s, std::int64_t) {
+  if (!s.from_its_sensor) {
+    ++rejected_;
+    if (impostors_.insert(s.sensor_id).second) {
+      log(warn, fmt::format("ignored a status for sensor {} from a writer whose identity does not "
+                            "name it (and ignore the next ones)",
+                            s.sensor_id));
+    }
+    return take();
+  }
   if (s.sensor_id < 0 || s.sensor_id >= run_.scenario.sensorCount()) {
     ++rejected_;
     log(warn, fmt::format("ignored the status of sensor {}: the scenario has sensors 0 to {} "
@@ -177,8 +186,10 @@ CoordinatorActions CoordinatorCore::onCommand(const CommandEvent& c, std::int64_
     return take();
   }
   AnsweredCommand reply = answer(c, now_ns);
-  log(info, fmt::format("command {} from '{}': {} ({})", c.command_id, c.issuer,
-                        reply.accepted ? "accepted" : "refused", reply.reason));
+  log(reply.accepted ? info : warn,
+      fmt::format("command {} from the {} ('{}'): {} ({})", c.command_id,
+                  commandSenderName(c.sender), c.issuer,
+                  reply.accepted ? "accepted" : "refused", reply.reason));
   act(SendReply{c.command_id, std::move(reply)});
   stall_watch_.busyUntil(wall_clock_());  // planning a live change is work, not a stall
   return take();
@@ -358,8 +369,25 @@ int CoordinatorCore::readySensorsInService() const {
 // ---- commands -----------------------------------------------------------------------------
 
 // Decides, records (journal first) and publishes what command `c` changes; returns the reply.
+// Commands by right: the launcher reports sensors failed (it supervises their processes), an
+// operator asks for everything else. Empty when `c`'s sender may send it.
+std::string CoordinatorCore::withoutRight(const CommandEvent& c) {
+  const bool failure_notice = c.kind == CommandKind::SensorsFailed;
+  const CommandSender entitled = failure_notice ? CommandSender::Launcher : CommandSender::Operator;
+  if (c.sender == entitled) return {};
+  return fmt::format("only the {} may {}; command {} came from the {}", commandSenderName(entitled),
+                     failure_notice ? "report sensors failed" : "send this command", c.command_id,
+                     commandSenderName(c.sender));
+}
+
 AnsweredCommand CoordinatorCore::answer(const CommandEvent& c, std::int64_t now_ns) {
   AnsweredCommand reply;
+  if (const std::string why = withoutRight(c); !why.empty()) {
+    reply = {false, 0, std::string(kNotPermitted) + why};
+    answered_[c.command_id] = reply;
+    saveState();
+    return reply;
+  }
   try {
     Answer a = execute(c, now_ns);
     reply.accepted = true;

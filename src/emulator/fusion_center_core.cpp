@@ -7,6 +7,7 @@
 
 #include "sensornet/core/network.hpp"
 #include "sensornet/emulator/covariance_trace.hpp"
+#include "sensornet/emulator/sensor_ids.hpp"
 
 namespace sensornet::emulator {
 
@@ -281,19 +282,39 @@ void FusionCenterCore::onMeasurement(MeasurementArrival arrival, std::int64_t no
   route(*open->second, std::move(arrival.measurement), arrival.writer, now);
 }
 
-// Without DDS Security anyone on the host can write into the run's partition: a sample of a
-// second writer claiming a sensor whose first writer lives is kept out (writer_claims.hpp),
-// counted as rejected (foreign_writer) and named once per writer in the faults.
-bool FusionCenterCore::refuseForeign(WriterClaims& claims, SensorTopic topic, std::uint32_t sensor,
-                                     WriterId writer, std::uint32_t episode) {
+// Who may speak for a sensor. First its writer's identity: the partition it writes in names
+// the sensors it speaks for (run_partitions.hpp; in a secured run DDS Security lets an identity
+// write in its own partition only), and a sample for any other sensor is kept out, counted as
+// wrong_identity and named once per writer with the sensors it does speak for. Then, as
+// without security anyone on the host can write in any partition, the one-writer rule: a
+// sample of a second writer claiming a sensor whose first writer lives is kept out
+// (writer_claims.hpp), counted as rejected (foreign_writer) and named once per writer.
+bool FusionCenterCore::refuseWriter(WriterClaims& claims, SensorTopic topic, std::uint32_t sensor,
+                                    WriterId writer, std::uint32_t episode) {
+  static constexpr const char* kTopicNames[] = {"Measurement", "EpisodeTally", "SensorStatus"};
+  const std::string topic_name = kTopicNames[static_cast<int>(topic)];
   const int j = static_cast<int>(sensor);
+  const std::vector<int>& speaks_for = writers_.sensorsOf(topic, writer);
+  if (!std::binary_search(speaks_for.begin(), speaks_for.end(), j)) {
+    countOutside(RejectionReason::WrongIdentity);
+    if (claims.firstRefusalOf(writer)) {
+      const std::string detail =
+          "a " + topic_name + " writer (publication " + std::to_string(writer) +
+          ") whose identity speaks for " +
+          (speaks_for.empty() ? std::string("no sensor")
+                              : "sensors " + formatSensorIds(speaks_for)) +
+          " wrote for sensor " + std::to_string(sensor) + "; its samples are kept out";
+      log(spdlog::level::warn, detail);
+      recordFault(faultEntry(FaultKind::WrongIdentity, kProcess, j, episode, std::nullopt, detail));
+    }
+    return true;
+  }
   const auto live = [this, topic](WriterId w) { return writers_.live(topic, w); };
   if (!claims.isForeign(j, writer, live)) return false;
   countOutside(RejectionReason::ForeignWriter);
   if (claims.firstRefusalOf(writer)) {
-    static constexpr const char* kTopicNames[] = {"Measurement", "EpisodeTally", "SensorStatus"};
     const std::string detail =
-        "a second " + std::string(kTopicNames[static_cast<int>(topic)]) +
+        "a second " + topic_name +
         " writer (publication " + std::to_string(writer) + ") claims sensor " +
         std::to_string(sensor) + " while its first writer (publication " +
         std::to_string(claims.ownerOf(j)) + ") lives; its samples are kept out";
@@ -319,7 +340,7 @@ void FusionCenterCore::route(OpenEpisode& open, FusedMeasurement m, WriterId wri
   // A foreign writer's sample that is malformed anyway is counted under that more telling
   // reason by the fusion.
   if (!malformedMeasurement(scenario(), m) &&
-      refuseForeign(measurement_claims_, SensorTopic::Measurement,
+      refuseWriter(measurement_claims_, SensorTopic::Measurement,
                     static_cast<std::uint32_t>(sensor), writer, open.fusion->episode())) {
     return;
   }
@@ -355,7 +376,7 @@ void FusionCenterCore::onTally(const EpisodeTally& t, std::int64_t now) {
     countOutside(RejectionReason::MalformedTally);
     return;
   }
-  if (refuseForeign(tally_claims_, SensorTopic::Tally, t.sensor, t.writer, t.episode)) return;
+  if (refuseWriter(tally_claims_, SensorTopic::Tally, t.sensor, t.writer, t.episode)) return;
   tally_claims_.claim(static_cast<int>(t.sensor), t.writer);
   if (resumed_ && resumed_->ignores(t.episode)) return;  // no late tally for those
   if (auto open = open_.find(t.episode); open != open_.end()) {
@@ -392,11 +413,20 @@ void FusionCenterCore::lateTally(const EpisodeTally& t) {
                              " after the episode had been closed without them"));
 }
 
+void FusionCenterCore::onCommandRefused(std::uint64_t command_id, const std::string& reason,
+                                        std::int64_t /*now*/) {
+  if (!refused_commands_.insert(command_id).second) return;  // a reply comes again on a resend
+  const std::string detail = "command " + std::to_string(command_id) + " refused: " + reason;
+  log(spdlog::level::warn, detail);
+  recordFault(faultEntry(FaultKind::CommandRefused, "coordinator", std::nullopt, last_started_,
+                         std::nullopt, detail));
+}
+
 // Statuses carry each sensor's running count: a lower bound of what it sent, for a sensor
 // whose tally never comes.
 void FusionCenterCore::onStatus(const SensorStatus& s, std::int64_t now) {
   if (s.run_id != config_.run_id) return;
-  if (refuseForeign(status_claims_, SensorTopic::Status, s.sensor, s.writer, s.episode)) return;
+  if (refuseWriter(status_claims_, SensorTopic::Status, s.sensor, s.writer, s.episode)) return;
   status_claims_.claim(static_cast<int>(s.sensor), s.writer);
   SensorProcess& process = sensor_processes_[s.sensor];
   process.id = s.process_id;

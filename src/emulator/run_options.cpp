@@ -22,13 +22,14 @@ std::string asCycloneConfig(const std::string& text) {
   return "file://" + path.string();
 }
 
-// Turns on DDS Security with the role's files in `dir`, checked first.
-void addSecurity(dds::DomainConfig& config, const std::string& dir, dds::SecurityRole role) {
+// Turns on DDS Security with the identity's files in `dir`, checked first.
+void addSecurity(dds::DomainConfig& config, const std::string& dir,
+                 const dds::SecurityIdentity& identity) {
   std::error_code error;
   if (!std::filesystem::is_directory(dir, error)) {
     throw InputError("--security " + dir, "", "a folder made by `sensornet pki init`");
   }
-  const dds::SecurityFiles files = dds::securityFilesOf(dir, role);
+  const dds::SecurityFiles files = dds::securityFilesOf(dir, identity);
   dds::checkSecurityFiles(files);
   config.security_xml = dds::securityConfigXml(files);
   config.security_hint = dds::securityFailureHint(files);
@@ -49,7 +50,7 @@ dds::DomainConfig RunOptions::domainConfig(dds::DiscoveryRole role) const {
     }
   }
   if (!chosen.empty()) config.cyclone_config = asCycloneConfig(chosen);
-  if (!security_dir.empty()) addSecurity(config, security_dir, security_role);
+  if (!security_dir.empty()) addSecurity(config, security_dir, security_identity);
   return config;
 }
 

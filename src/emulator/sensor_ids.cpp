@@ -48,4 +48,17 @@ std::vector<int> parseSensorIds(std::string_view text, const std::string& source
   return ids;
 }
 
+std::string formatSensorIds(const std::vector<int>& sorted_ids) {
+  std::string spec;
+  for (std::size_t i = 0; i < sorted_ids.size();) {
+    std::size_t end = i + 1;
+    while (end < sorted_ids.size() && sorted_ids[end] == sorted_ids[end - 1] + 1) ++end;
+    if (!spec.empty()) spec += ",";
+    spec += std::to_string(sorted_ids[i]);
+    if (end - i > 1) spec += "-" + std::to_string(sorted_ids[end - 1]);
+    i = end;
+  }
+  return spec;
+}
+
 }  // namespace sensornet::emulator

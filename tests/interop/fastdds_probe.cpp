@@ -151,12 +151,19 @@ int run(const Options& o) {
   DomainParticipant* participant =
       DomainParticipantFactory::get_instance()->create_participant(o.domain_id, participantQos());
   if (participant == nullptr) throw std::runtime_error("cannot create the participant");
+  // The run's partition, every sensor process's (".../sensors/<ids>") and the two Command
+  // partitions; it sends its re-plan as an operator does (docs/ARCHITECTURE.md, "Partitions").
   const std::string partition = "sensornet/" + o.run_id;
+  const std::string sensors = partition + "/sensors/*";
+  const std::string launcher = partition + "/launcher";
+  const std::string operator_partition = partition + "/operator";
   SubscriberQos sub_qos = SUBSCRIBER_QOS_DEFAULT;
-  sub_qos.partition().push_back(partition.c_str());
+  for (const std::string* p : {&partition, &sensors, &launcher, &operator_partition}) {
+    sub_qos.partition().push_back(p->c_str());
+  }
   Subscriber* subscriber = participant->create_subscriber(sub_qos);
   PublisherQos pub_qos = PUBLISHER_QOS_DEFAULT;
-  pub_qos.partition().push_back(partition.c_str());
+  pub_qos.partition().push_back(operator_partition.c_str());
   Publisher* publisher = participant->create_publisher(pub_qos);
 
   TopicReader<sensornet::Scenario, sensornet::ScenarioPubSubType> scenarios(

@@ -50,6 +50,9 @@ class Qos {
   Qos& deadline(std::chrono::nanoseconds period);
   // One partition name (no wildcards) on the publisher/subscriber side.
   Qos& partition(const std::string& name);
+  // A partition pattern ('*', '?') for a reader: it matches the writers of every partition the
+  // pattern matches (emulator/run_partitions.hpp).
+  Qos& partitionPattern(const std::string& pattern);
   // Whether deleting a writer also disposes its instances (Cyclone's default: true). With false,
   // readers see a writer that leaves as "no writers", like one that died.
   Qos& autodisposeUnregistered(bool autodispose);

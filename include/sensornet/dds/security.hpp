@@ -8,15 +8,18 @@
 //                                 (or elsewhere, with `pki init --ca-dir`)
 //   DIR/ca.pem                    identity CA, also the permissions CA (its certificate)
 //   DIR/governance.p7s            governance, signed by the CA (S/MIME)
-//   DIR/<role>/                   what one process of that role receives, and nothing else:
-//     identity.pem                the role's certificate, signed by the CA
+//   DIR/<identity>/               what one process of that identity receives, and nothing else:
+//     identity.pem                its certificate (CN=<identity>), signed by the CA
 //     key.pem                     its private key
-//     permissions.p7s             what the role may publish and subscribe, signed by the CA
+//     permissions.p7s             what it may publish and subscribe, signed by the CA
 //     ca.pem, governance.p7s      copies of the CA certificate and the governance
 //
-// `--security` takes DIR (a process then presents DIR/<role>) or a role's folder itself.
+// An identity is a role (coordinator, fusion_center, operator, launcher) or, for a sensor
+// process, the block of sensors it speaks for: sensor-<ids> ("sensor-3", "sensor-0-4"), whose
+// permissions allow it to publish in that block's partition only (emulator/run_partitions.hpp).
+// `--security` takes DIR (a process then presents DIR/<identity>) or that folder itself.
 //
-//   const SecurityFiles files = securityFilesOf("run-pki", SecurityRole::Sensor);
+//   const SecurityFiles files = securityFilesOf("run-pki", {SecurityRole::Sensor, "0-4"});
 //   checkSecurityFiles(files);  // InputError naming the file: missing, expired, another CA's
 //   config.cyclone_config += "," + securityConfigXml(files);
 //
@@ -28,6 +31,8 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 namespace sensornet::dds {
 
@@ -40,6 +45,17 @@ inline constexpr std::array<SecurityRole, 5> kSecurityRoles = {
 // "coordinator", "fusion_center", "sensor", "operator", "launcher": the role's folder in DIR.
 [[nodiscard]] std::string_view securityRoleName(SecurityRole role) noexcept;
 
+// Who a process is in a secured run: its role and, for a sensor process, the sensors it speaks
+// for, as formatSensorIds writes them ("0-4").
+struct SecurityIdentity {
+  SecurityIdentity(SecurityRole r = SecurityRole::Operator, std::string s = {})  // NOLINT: a role is an identity
+      : role(r), sensors(std::move(s)) {}
+  SecurityRole role;
+  std::string sensors;
+  // The folder name in DIR and the certificate's common name: "coordinator", "sensor-0-4".
+  [[nodiscard]] std::string name() const;
+};
+
 struct SecurityFiles {
   std::filesystem::path ca;
   std::filesystem::path governance;
@@ -48,13 +64,14 @@ struct SecurityFiles {
   std::filesystem::path permissions;
 };
 
-// The folder that holds what a process of `role` presents: DIR/<role> when `dir` is the folder
-// `pki init` made, else `dir` itself (a role's folder handed over alone).
+// The folder that holds what a process of `identity` presents: DIR/<identity> when `dir` is the
+// folder `pki init` made, else `dir` itself (an identity's folder handed over alone).
 [[nodiscard]] std::filesystem::path roleFolderOf(const std::filesystem::path& dir,
-                                                 SecurityRole role);
-// The files of `role` in `dir` (absolute paths; only the folders' layout is looked at): all in
-// its role folder, the CA certificate and governance from DIR when the role folder lacks them.
-[[nodiscard]] SecurityFiles securityFilesOf(const std::filesystem::path& dir, SecurityRole role);
+                                                 const SecurityIdentity& identity);
+// The files of `identity` in `dir` (absolute paths; only the folders' layout is looked at): all
+// in its folder, the CA certificate and governance from DIR when its folder lacks them.
+[[nodiscard]] SecurityFiles securityFilesOf(const std::filesystem::path& dir,
+                                            const SecurityIdentity& identity);
 
 // Throws InputError naming the first file that is missing or unreadable, a certificate (CA or
 // identity) that is expired or not yet valid, an identity not signed by the CA, a private key
@@ -62,9 +79,13 @@ struct SecurityFiles {
 // signature the CA did not make (one byte changed is enough), or permissions for another subject
 // than the certificate's.
 void checkSecurityFiles(const SecurityFiles& files);
-// checkSecurityFiles for every role in `dir`, and checkNoForeignSecrets for each role folder:
-// what the launcher does before it starts anything.
-void checkSecurityFolder(const std::filesystem::path& dir);
+// checkSecurityFiles for every role in `dir` and every sensor block in `sensor_blocks` (the
+// identity of each sensor process a launch starts), and checkNoForeignSecrets for each folder:
+// what the launcher does before it starts anything. A missing sensor identity is named with
+// `make_sensor_identities`, the command that makes them.
+void checkSecurityFolder(const std::filesystem::path& dir,
+                         const std::vector<std::string>& sensor_blocks,
+                         const std::string& make_sensor_identities);
 // Throws InputError naming a file in the folder a process of `role` receives that it must not
 // have: a CA private key (ca.key, or any PEM private key but its own key.pem) or another role's
 // folder.

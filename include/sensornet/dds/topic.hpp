@@ -44,6 +44,22 @@ template <IdlType T>
   }
 }
 
+// The QoS TopicType<T> asks for, in `partition` instead of the participant's.
+template <IdlType T>
+[[nodiscard]] Qos endpointQosIn(const std::string& partition) {
+  Qos qos = defaultEndpointQos<T>();
+  qos.partition(partition);
+  return qos;
+}
+
+// The same for a reader of every partition `pattern` matches.
+template <IdlType T>
+[[nodiscard]] Qos readerQosMatching(const std::string& pattern) {
+  Qos qos = defaultEndpointQos<T>();
+  qos.partitionPattern(pattern);
+  return qos;
+}
+
 template <IdlType T>
 class Topic : public Entity {
  public:

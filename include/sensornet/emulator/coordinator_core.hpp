@@ -39,6 +39,7 @@
 #include <spdlog/common.h>
 
 #include "sensornet/core/emulated_plant.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/coordinator_journal.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/episode_controls.hpp"
@@ -85,6 +86,9 @@ struct SensorStatusEvent {
   SensorState state = SensorState::Starting;
   std::uint32_t schedule_version = 0;
   std::string detail;
+  // The writer's identity (its partition, run_partitions.hpp) names this sensor: a status of
+  // any other writer is ignored (in a secured run, a forged readiness or failure).
+  bool from_its_sensor = true;
 };
 
 struct ReportEvent {
@@ -113,7 +117,10 @@ struct CommandEvent {
   std::string run_id;
   std::uint64_t command_id = 0;
   CommandKind kind = CommandKind::Unknown;
-  std::string issuer;
+  // Who sent it, as the partition it came in says (authenticated in a secured run): the
+  // launcher may report sensors failed, an operator everything else.
+  CommandSender sender = CommandSender::Operator;
+  std::string issuer;  // the sample's free-text field: logged, never trusted
   std::string surrogate;                 // Replan
   std::vector<std::uint32_t> sensor_ids;  // ExcludeSensors, IncludeSensors, SensorsFailed
   std::vector<double> budget;            // SetBudget
@@ -252,6 +259,7 @@ class CoordinatorCore {
   [[nodiscard]] int sensorsInService() const;
   [[nodiscard]] int readySensorsInService() const;
 
+  [[nodiscard]] static std::string withoutRight(const CommandEvent& c);
   AnsweredCommand answer(const CommandEvent& c, std::int64_t now_ns);
   Answer execute(const CommandEvent& c, std::int64_t now_ns);
   Answer onSensorsFailed(const CommandEvent& c, std::int64_t now_ns);
@@ -291,6 +299,7 @@ class CoordinatorCore {
   bool stopping_ = false;                // COMMAND_SHUTDOWN: no more announcements
   std::string abort_detail_;             // the run ends as failed (--on-sensor-failure stop)
   std::uint64_t rejected_ = 0;
+  std::set<int> impostors_;  // sensors a foreign identity's status spoke for (logged once)
   std::optional<int> exit_code_;
   CoordinatorActions actions_;  // what the event being handled asks for, in order
 };

@@ -82,6 +82,10 @@ class WriterFacts {
   // The Measurement reader has matched a writer of the participant (process) whose SensorStatus
   // writer is `status_writer`.
   [[nodiscard]] virtual bool measurementWriterMatchedWith(WriterId status_writer) const = 0;
+  // The sensors the writer `w` of `topic` speaks for, as the partition it writes in says
+  // (run_partitions.hpp; in a secured run its authenticated identity), sorted; empty when it
+  // names none or is not known. Asked for every sample: answered from a cache.
+  [[nodiscard]] virtual const std::vector<int>& sensorsOf(SensorTopic topic, WriterId w) const = 0;
 };
 
 // The announced scenario, decoded.
@@ -171,6 +175,9 @@ class FusionCenterCore {
   void onMeasurement(MeasurementArrival arrival, std::int64_t now);
   void onTally(const EpisodeTally& tally, std::int64_t now);
   void onStatus(const SensorStatus& status, std::int64_t now);
+  // The coordinator refused command `command_id` because its sender had no right to send it
+  // (a CommandReply whose reason begins with kNotPermitted): a fault, once per command.
+  void onCommandRefused(std::uint64_t command_id, const std::string& reason, std::int64_t now);
   // The main loop's turn: its own stalls, fusion up to the watermark, episodes closed or timed out.
   void tick(std::int64_t now);
   // The run ended (`end`) or was stopped by a signal (nullopt): what is open is closed, the
@@ -216,8 +223,8 @@ class FusionCenterCore {
   [[nodiscard]] bool duplicatesLink(int sensor) const;
   bool networkCopyAfterClose(std::uint32_t episode, int sensor);
   void rejectOutside(RejectionReason reason, const std::string& detail);
-  bool refuseForeign(WriterClaims& claims, SensorTopic topic, std::uint32_t sensor, WriterId writer,
-                     std::uint32_t episode);
+  bool refuseWriter(WriterClaims& claims, SensorTopic topic, std::uint32_t sensor, WriterId writer,
+                    std::uint32_t episode);
   void releaseClaims(const std::set<int>& sensors);
   void route(OpenEpisode& open, FusedMeasurement m, WriterId writer, std::int64_t now);
   void applyTally(OpenEpisode& open, const EpisodeTally& t, std::int64_t now);
@@ -279,6 +286,7 @@ class FusionCenterCore {
   std::map<RejectionReason, std::uint64_t> rejected_outside_;  // refused before an episode
   // Which writer speaks for each sensor, per topic (first live writer wins).
   WriterClaims measurement_claims_, tally_claims_, status_claims_;
+  std::set<std::uint64_t> refused_commands_;  // commands refused by right, recorded once each
   nlohmann::json faults_ = nlohmann::json::array();
   nlohmann::json traced_episodes_ = nlohmann::json::array();  // the first episodes' curves
   std::set<std::uint32_t> traced_versions_;  // ... and the versions in force at their start

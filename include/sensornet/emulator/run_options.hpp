@@ -46,7 +46,8 @@ struct RunOptions {
   // --security DIR (`sensornet pki init`): DDS Security with this process's role's files, which
   // are checked (InputError naming a missing, expired or foreign file) by domainConfig().
   std::string security_dir;
-  dds::SecurityRole security_role = dds::SecurityRole::Operator;  // set by each program
+  // Set by each program: its role, and for a sensor agent the sensors it speaks for.
+  dds::SecurityIdentity security_identity = dds::SecurityRole::Operator;
 
   // Throws InputError for a bad run id or domain id. A cyclone_config that names an existing
   // file path (not a URI, not XML) is turned into a file:// URI.

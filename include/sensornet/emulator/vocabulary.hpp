@@ -36,6 +36,8 @@ enum class FaultKind {
   MissingEpisodes,    // the coordinator ran episodes the report does not hold
   Rejected,           // samples refused on the wire (the counts by reason are in `rejected`)
   ForeignWriter,      // a second writer claimed a sensor whose first writer lives
+  WrongIdentity,      // a writer spoke for a sensor its identity (its partition) does not name
+  CommandRefused,     // a Command its sender had no right to send (the coordinator refused it)
   CutShort,           // an episode was open when a signal stopped the run
   RunAborted,         // the coordinator gave up on the run
   // Seen by the launcher (the supervisor of the processes).
@@ -67,6 +69,7 @@ enum class RejectionReason {
   MalformedSchedule,        // a Schedule sample that does not parse
   MalformedEpisodeControl,  // an EpisodeControl sample that does not parse
   BeyondTally,              // a sequence number at or past its sensor's tally: never sent by it
+  WrongIdentity,            // from a writer whose identity (partition) does not name its sensor
 };
 
 // What the coordinator does when the launcher reports that sensors died
@@ -103,7 +106,7 @@ struct Words<emulator::RunStatus> {
 template <>
 struct Words<emulator::FaultKind> {
   using F = emulator::FaultKind;
-  static constexpr std::array<WordOf<F>, 20> kTable{{{F::Stall, "stall"},
+  static constexpr std::array<WordOf<F>, 22> kTable{{{F::Stall, "stall"},
                                                      {F::Lost, "lost"},
                                                      {F::Overload, "overload"},
                                                      {F::SensorLag, "sensor_lag"},
@@ -112,6 +115,8 @@ struct Words<emulator::FaultKind> {
                                                      {F::MissingEpisodes, "missing_episodes"},
                                                      {F::Rejected, "rejected"},
                                                      {F::ForeignWriter, "foreign_writer"},
+                                                     {F::WrongIdentity, "wrong_identity"},
+                                                     {F::CommandRefused, "command_refused"},
                                                      {F::CutShort, "cut_short"},
                                                      {F::RunAborted, "run_aborted"},
                                                      {F::ProcessFailed, "process_failed"},
@@ -128,7 +133,7 @@ struct Words<emulator::FaultKind> {
 template <>
 struct Words<emulator::RejectionReason> {
   using R = emulator::RejectionReason;
-  static constexpr std::array<WordOf<R>, 14> kTable{
+  static constexpr std::array<WordOf<R>, 15> kTable{
       {{R::Malformed, "malformed"},
        {R::UnknownSensor, "unknown_sensor"},
        {R::Duplicate, "duplicate"},
@@ -142,7 +147,8 @@ struct Words<emulator::RejectionReason> {
        {R::StaleSchedule, "stale_schedule"},
        {R::MalformedSchedule, "malformed_schedule"},
        {R::MalformedEpisodeControl, "malformed_episode_control"},
-       {R::BeyondTally, "beyond_tally"}}};
+       {R::BeyondTally, "beyond_tally"},
+       {R::WrongIdentity, "wrong_identity"}}};
 };
 
 }  // namespace sensornet

@@ -28,6 +28,7 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "emulation_fixture.hpp"
 #include "support/background_process.hpp"
@@ -133,10 +134,18 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   dds::Topic<sensornet_Command> command_topic(participant);
   dds::Topic<sensornet_CommandReply> reply_topic(participant);
   dds::Reader<sensornet_Report> reports(participant, report_topic);
-  dds::Writer<sensornet_Command> commands(participant, command_topic);
+  // An operator's commands come in the operator's partition; statuses in each sensor process's
+  // (run_partitions.hpp).
+  dds::Writer<sensornet_Command> commands(
+      participant, command_topic,
+      dds::endpointQosIn<sensornet_Command>(emulator::commandPartition(
+          participant.partition(), emulator::CommandSender::Operator)));
   dds::Reader<sensornet_CommandReply> replies(participant, reply_topic);
   dds::Topic<sensornet_SensorStatus> status_topic(participant);
-  dds::Reader<sensornet_SensorStatus> statuses(participant, status_topic);
+  dds::Reader<sensornet_SensorStatus> statuses(
+      participant, status_topic,
+      dds::readerQosMatching<sensornet_SensorStatus>(
+          emulator::sensorPartitionPattern(participant.partition())));
 
   // Wait for episode 0's report: episode 1 is then about to start.
   const auto deadline = std::chrono::steady_clock::now() + 60s;

@@ -24,8 +24,9 @@ using testing::ProcessResult;
 using testing::runProcess;
 
 constexpr int kExitBadInput = 2;
-const std::vector<std::string> kRoles = {"coordinator", "fusion_center", "sensor", "operator",
-                                         "launcher"};
+// The roles, and one identity per sensor process: init() asks for sensors 0 to 2.
+const std::vector<std::string> kRoles = {"coordinator", "fusion_center", "operator", "launcher",
+                                         "sensor-0",    "sensor-1",      "sensor-2"};
 
 std::string textOf(const fs::path& file) {
   std::ifstream in(file);
@@ -35,7 +36,8 @@ std::string textOf(const fs::path& file) {
 class PkiInit : public testing::LaunchTest {
  protected:
   ProcessResult init(const fs::path& dir, std::vector<std::string> extra = {}) {
-    std::vector<std::string> argv = {testing::kLauncher, "pki", "init", dir.string(), "--days", "30"};
+    std::vector<std::string> argv = {testing::kLauncher, "pki", "init", dir.string(), "--days",
+                                     "30", "--sensors", "3"};
     argv.insert(argv.end(), extra.begin(), extra.end());
     return runProcess(argv, 120s);
   }
@@ -87,15 +89,48 @@ TEST_F(PkiInit, EachRoleFolderHoldsItsOwnFilesOnlyAndTheCaKeyStaysApart) {
   EXPECT_EQ(textOf(third / "ca.pem"), textOf(other / "ca.pem")) << "the same CA signed both";
 }
 
+// A sensor process's identity may publish the sensor topics in its own block's partition only
+// (and nothing else); the launcher's and the operator's Command each in their own partition.
+// With --scenario the blocks are those `sensornet launch` starts.
+TEST_F(PkiInit, EachSensorProcessMayPublishInItsOwnPartitionOnly) {
+  const fs::path dir = dir_ / "pki";
+  const ProcessResult r = init(dir, {"--scenario", testing::kDefaultScenario,
+                                     "--sensors-per-process", "2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::set<std::string> sensors;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename();
+    if (name.rfind("sensor", 0) == 0) sensors.insert(name);
+  }
+  EXPECT_EQ(sensors, (std::set<std::string>{"sensor-0-1", "sensor-2-3", "sensor-4-5"}));
+  const std::string permissions = textOf(dir / "sensor-2-3" / "permissions.p7s");
+  const std::size_t publish = permissions.find("<publish>");
+  const std::size_t subscribe = permissions.find("<subscribe>");
+  ASSERT_NE(publish, std::string::npos);
+  ASSERT_NE(subscribe, std::string::npos);
+  const std::string published = permissions.substr(publish, subscribe - publish);
+  EXPECT_NE(published.find("<partition>sensornet/*/sensors/2-3</partition>"), std::string::npos)
+      << published;
+  EXPECT_EQ(published.find("<partition>sensornet/*</partition>"), std::string::npos) << published;
+  EXPECT_NE(permissions.find("<subject_name>CN=sensor-2-3,O=sensornet</subject_name>"),
+            std::string::npos);
+  EXPECT_NE(textOf(dir / "operator" / "permissions.p7s")
+                .find("<partition>sensornet/*/operator</partition>"),
+            std::string::npos);
+  EXPECT_NE(textOf(dir / "launcher" / "permissions.p7s")
+                .find("<partition>sensornet/*/launcher</partition>"),
+            std::string::npos);
+}
+
 TEST_F(PkiInit, ForceWritesNothingThroughAPlantedLink) {
   const fs::path dir = dir_ / "pki";
   ASSERT_EQ(init(dir).exit_code, 0);
   const fs::path precious = dir_ / "precious.txt";
   std::ofstream(precious) << "precious\n";
   // A link planted where the sensor's private key goes: refused, the target untouched.
-  fs::remove(dir / "sensor" / "key.pem");
-  fs::create_symlink(precious, dir / "sensor" / "key.pem");
-  expectRefused(init(dir, {"--force"}), dir / "sensor" / "key.pem", "symbolic link");
+  fs::remove(dir / "sensor-0" / "key.pem");
+  fs::create_symlink(precious, dir / "sensor-0" / "key.pem");
+  expectRefused(init(dir, {"--force"}), dir / "sensor-0" / "key.pem", "symbolic link");
   EXPECT_EQ(textOf(precious), "precious\n");
   // A link planted as the log of earlier versions: not a file it makes, so never opened.
   const fs::path fresh = dir_ / "fresh";

@@ -4,11 +4,15 @@
 //   realized costs are those of a clean run with the same seed;
 // - `sensornet pki init` and `--security`: a secured run's costs equal an unsecured run's; a
 //   participant without a certificate that publishes a Schedule with a higher version and
-//   Measurements claiming sensor 0 changes nothing (the run completes clean); one with a
-//   sensor's certificate cannot even create its Schedule writer (access control), and its
-//   Measurements are kept out by the second-writer rule (degraded, exit 3); an expired
+//   Measurements claiming sensor 0 changes nothing (the run completes clean); an expired
 //   certificate and one signed by another CA are refused before anything starts (exit 2, one
-//   line naming the file and why).
+//   line naming the file and why);
+// - a stolen credential (issue 30): with sensor 1's process identity an attacker cannot create a
+//   Schedule writer nor write in another sensor's partition, and what it writes in its own for
+//   sensor 0 before the agents (the pre-launch impostor), for sensor 4 and a forged tally of
+//   sensor 2 are all kept out as wrong_identity while the real agents' samples are fused (costs
+//   of a clean run); with the operator's, a forged failure notice for a live sensor is refused
+//   by right (command_refused) and the sensor goes on delivering.
 //
 // Costs are compared with a clean launch of the same seed and schedule in the same test: the
 // fusion takes the same floating-point steps whatever the arrival timing, so they are equal bit
@@ -23,6 +27,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,9 +37,11 @@
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/dds_error.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/dds/reader.hpp"
 #include "sensornet/emulator/messages.hpp"
-#include "sensornet/io/scenario_file.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+#include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet {
 namespace {
@@ -101,15 +108,17 @@ class Security : public testing::LaunchTest {
   std::string schedule_;
 };
 
-// Well-formed measurements claiming sensor 0 (one value, times in [0, T], version 1) of the
-// episodes from `first` to the last, written by `writer`.
-void writeClaimsOfSensor0(dds::Writer<sensornet_Measurement>& writer, const std::string& run_id,
-                          std::uint32_t first) {
+constexpr std::uint64_t kClaimsPerEpisode = 20;
+
+// Well-formed measurements claiming `sensor` (one value, times in [0, T], version 1) of the
+// episodes from `first` to the last, written by `writer`: kClaimsPerEpisode per episode.
+void writeClaimsOf(dds::Writer<sensornet_Measurement>& writer, const std::string& run_id,
+                   std::uint32_t first, std::uint32_t sensor = 0) {
   const std::vector<double> z = {1e3};
   for (std::uint32_t episode = first; episode < kEpisodes; ++episode) {
-    for (std::uint64_t i = 0; i < 20; ++i) {
+    for (std::uint64_t i = 0; i < kClaimsPerEpisode; ++i) {
       sensornet_Measurement m{};
-      m.sensor_id = 0;
+      m.sensor_id = sensor;
       m.run_id = dds::borrowString(run_id);
       m.episode = episode;
       m.seq = 100000 + i;
@@ -138,12 +147,18 @@ dds::WriteResult writeHijackingSchedule(dds::Writer<sensornet_Schedule>& writer,
   return emulator::publishSchedule(writer, run_id, emulator::digestOf(yaml), v);
 }
 
-// Makes the security files of a run in `dir` with `sensornet pki init`.
+// Makes the security files of a run of the default scenario in `dir` with `sensornet pki init`
+// (one identity per sensor process, as the launch starts them).
 void pkiInit(const fs::path& dir) {
   const testing::ProcessResult r =
-      runProcess({testing::kLauncher, "pki", "init", dir.string(), "--days", "30"}, 120s);
+      runProcess({testing::kLauncher, "pki", "init", dir.string(), "--days", "30", "--scenario",
+                  testing::kDefaultScenario},
+                 120s);
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
+
+// The identity a stolen credential of sensor 1's host gives: its process's folder.
+const char* const kStolenSensor = "sensor-1";
 
 // Replaces the sensor identity in `dir` with one signed by its CA that expired in 2021
 // (`openssl ca` with explicit dates; `x509 -days` cannot go back in time).
@@ -157,9 +172,10 @@ void expireSensorCertificate(const fs::path& dir) {
          "commonName = supplied\n";
   std::ofstream(work / "index.txt");
   std::ofstream(work / "serial") << "1000\n";
-  const fs::path sensor = dir / "sensor";
+  const fs::path sensor = dir / kStolenSensor;
   ASSERT_EQ(runProcess({"/usr/bin/openssl", "req", "-new", "-key", (sensor / "key.pem").string(),
-                        "-subj", "/O=sensornet/CN=sensor", "-out", (work / "sensor.csr").string()},
+                        "-subj", "/O=sensornet/CN=" + std::string(kStolenSensor), "-out",
+                        (work / "sensor.csr").string()},
                        30s)
                 .exit_code,
             0);
@@ -182,11 +198,15 @@ TEST_F(Security, SecondWriterClaimingASensorIsKeptOutAndReported) {
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);
   dds::Topic<sensornet_Measurement> topic(participant);
-  dds::Writer<sensornet_Measurement> foreign(participant, topic);
+  // Without security anyone may write in sensor 0's partition: the one-writer rule holds.
+  dds::Writer<sensornet_Measurement> foreign(
+      participant, topic,
+      dds::endpointQosIn<sensornet_Measurement>(
+          emulator::sensorPartition(participant.partition(), {0})));
   // Sensor 0's own writer has spoken once the first episode is logged.
   ASSERT_TRUE(waitUntil([&] { return readJsonLines(dir_ / "foreign.jsonl").size() >= 1; }, 60s));
   ASSERT_TRUE(foreign.waitForReaders(1, 10s));
-  writeClaimsOfSensor0(foreign, run_id_, 1);
+  writeClaimsOf(foreign, run_id_, 1);
   ASSERT_TRUE(foreign.waitForAcks(10s));
 
   const testing::ProcessResult& r = launcher.result();
@@ -252,11 +272,14 @@ TEST_F(SecuredRun, ParticipantWithoutCertificateChangesNothing) {
   dds::Topic<sensornet_Schedule> schedule_topic(participant);
   dds::Topic<sensornet_Measurement> measurement_topic(participant);
   dds::Writer<sensornet_Schedule> schedules(participant, schedule_topic);
-  dds::Writer<sensornet_Measurement> measurements(participant, measurement_topic);
+  dds::Writer<sensornet_Measurement> measurements(
+      participant, measurement_topic,
+      dds::endpointQosIn<sensornet_Measurement>(
+          emulator::sensorPartition(participant.partition(), {0})));
   ASSERT_TRUE(waitUntil([&] { return readJsonLines(dir_ / "intruded.jsonl").size() >= 1; }, 60s));
   EXPECT_EQ(schedules.matchedReaders(), 0u) << "an unauthenticated participant matched";
   EXPECT_EQ(writeHijackingSchedule(schedules, run_id_), dds::WriteResult::Written);
-  writeClaimsOfSensor0(measurements, run_id_, 1);
+  writeClaimsOf(measurements, run_id_, 1);
 
   const testing::ProcessResult& r = launcher.result();
   EXPECT_EQ(r.exit_code, kExitCompleted) << r.err;
@@ -268,54 +291,188 @@ TEST_F(SecuredRun, ParticipantWithoutCertificateChangesNothing) {
   EXPECT_EQ(report.at("schedule_versions").size(), 1u) << report.at("schedule_versions").dump();
 }
 
-// The sensor's certificate allows Measurements (the second-writer rule keeps them out: one
-// foreign_writer fault, degraded, exit 3), never a Schedule (access control refuses the writer).
-TEST_F(SecuredRun, ParticipantWithASensorCertificateCannotScheduleNorSpeakForSensor0) {
+// A well-formed tally of `sensor` for `episode` claiming `sent` measurements.
+dds::WriteResult writeTally(dds::Writer<sensornet_EpisodeTally>& writer, const std::string& run_id,
+                            std::uint32_t sensor, std::uint32_t episode, std::uint64_t sent) {
+  sensornet_EpisodeTally t{};
+  t.sensor_id = sensor;
+  t.run_id = dds::borrowString(run_id);
+  t.episode = episode;
+  t.sent = sent;
+  t.finished = true;
+  t.wall_time_ns = emulator::wallNowNs();
+  return writer.write(t);
+}
+
+// Stolen: the files of sensor 1's process. They allow no Schedule writer and no writer in
+// another sensor's partition (access control refuses them); in its own partition the attacker
+// speaks before any agent does, for sensor 0 (the pre-launch impostor), for sensor 4 and with a
+// forged tally of sensor 2 claiming 500 sent. Every one of those samples is kept out as
+// wrong_identity and named; the real agents' samples are fused: costs of a clean run, nothing
+// lost, one schedule version. (Before identities were bound to sensors, the impostor owned
+// sensor 0, the forged tally stalled every episode, and the run ended completed or failed.)
+TEST_F(SecuredRun, AStolenSensorIdentitySpeaksForItsOwnSensorsOnlyWhateverItsOrder) {
   const LeftoverGuard guard(run_id_);
   const std::vector<double> clean = cleanCosts();
-  RunningProgram launcher(secured("sensor-cert", "2"), 120s);
   emulator::RunOptions options;
   options.run_id = run_id_;
-  options.security_dir = pki_.string();
-  options.security_role = dds::SecurityRole::Sensor;
+  options.security_dir = (pki_ / kStolenSensor).string();
+  options.security_identity = {dds::SecurityRole::Sensor, "1"};
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);
   dds::Topic<sensornet_Schedule> schedule_topic(participant);
   dds::Topic<sensornet_Measurement> measurement_topic(participant);
+  dds::Topic<sensornet_EpisodeTally> tally_topic(participant);
+  const std::string p = participant.partition();
   EXPECT_THROW(dds::Writer<sensornet_Schedule>(participant, schedule_topic), dds::DdsError);
-  dds::Writer<sensornet_Measurement> measurements(participant, measurement_topic);
-  ASSERT_TRUE(
-      waitUntil([&] { return readJsonLines(dir_ / "sensor-cert.jsonl").size() >= 1; }, 60s));
-  ASSERT_TRUE(measurements.waitForReaders(1, 10s));
-  writeClaimsOfSensor0(measurements, run_id_, 1);
+  EXPECT_THROW(dds::Writer<sensornet_Measurement>(
+                   participant, measurement_topic,
+                   dds::endpointQosIn<sensornet_Measurement>(emulator::sensorPartition(p, {0}))),
+               dds::DdsError)
+      << "sensor 1's identity wrote in sensor 0's partition";
+  dds::Writer<sensornet_Measurement> measurements(
+      participant, measurement_topic,
+      dds::endpointQosIn<sensornet_Measurement>(emulator::sensorPartition(p, {1})));
+  dds::Writer<sensornet_EpisodeTally> tallies(
+      participant, tally_topic,
+      dds::endpointQosIn<sensornet_EpisodeTally>(emulator::sensorPartition(p, {1})));
+
+  RunningProgram launcher(secured("stolen", "2"), 120s);
+  // First to speak: as soon as the fusion center reads, before the first episode starts.
+  ASSERT_TRUE(measurements.waitForReaders(1, 60s));
+  ASSERT_TRUE(tallies.waitForReaders(1, 10s));
+  writeClaimsOf(measurements, run_id_, 0, 0);
+  writeClaimsOf(measurements, run_id_, 0, 4);
+  ASSERT_EQ(writeTally(tallies, run_id_, 2, 0, 500), dds::WriteResult::Written);
   ASSERT_TRUE(measurements.waitForAcks(10s));
+  ASSERT_TRUE(tallies.waitForAcks(10s));
 
   const testing::ProcessResult& r = launcher.result();
   EXPECT_EQ(r.exit_code, kExitDegraded) << r.err;
-  const json report = readJson(dir_ / "sensor-cert.json");
+  const json report = readJson(dir_ / "stolen.json");
   ASSERT_TRUE(report.is_object()) << r.err;
   EXPECT_EQ(report.at("status"), "degraded");
   EXPECT_EQ(realizedCosts(report), clean);
-  EXPECT_GT(report.at("summary").at("rejected_by_reason").value("foreign_writer", 0), 0);
+  const json& by_reason = report.at("summary").at("rejected_by_reason");
+  EXPECT_EQ(by_reason.value("wrong_identity", 0), 2 * kEpisodes * kClaimsPerEpisode + 1)
+      << by_reason.dump();
+  EXPECT_EQ(by_reason.value("foreign_writer", 0), 0) << by_reason.dump();
+  EXPECT_EQ(report.at("summary").at("lost"), 0);
+  EXPECT_EQ(report.at("summary").at("received"), report.at("summary").at("sent"));
+  int named = 0;
+  for (const json& f : report.at("faults")) {
+    if (f.at("kind") != "wrong_identity") continue;
+    ++named;
+    EXPECT_NE(f.at("detail").get<std::string>().find("speaks for sensors 1"), std::string::npos)
+        << f.dump();
+  }
+  EXPECT_EQ(named, 2) << "one per writer: " << report.at("faults").dump();
   EXPECT_EQ(report.at("schedule_versions").size(), 1u);
   for (const json& e : report.at("per_episode")) EXPECT_TRUE(e.at("complete").get<bool>());
+}
+
+// Stolen: the operator's files. Its Commands come in the operator's partition (it cannot write
+// in the launcher's), so its failure notice for the live sensor 2 is refused by right: the
+// reply says so, the fault names it, sensor 2 goes on delivering (costs of a clean run) and no
+// schedule is re-planned.
+TEST_F(SecuredRun, AFailureNoticeFromTheOperatorIsRefusedByRight) {
+  const LeftoverGuard guard(run_id_);
+  const std::vector<double> clean = cleanCosts();
+  RunningProgram launcher(secured("forged-failure", "2"), 120s);
+  emulator::RunOptions options;
+  options.run_id = run_id_;
+  options.security_dir = pki_.string();
+  options.security_identity = dds::SecurityRole::Operator;
+  dds::Domain domain(options.domainConfig());
+  dds::Participant participant(domain);
+  dds::Topic<sensornet_Command> command_topic(participant);
+  dds::Topic<sensornet_CommandReply> reply_topic(participant);
+  const std::string p = participant.partition();
+  EXPECT_THROW(dds::Writer<sensornet_Command>(
+                   participant, command_topic,
+                   dds::endpointQosIn<sensornet_Command>(
+                       emulator::commandPartition(p, emulator::CommandSender::Launcher))),
+               dds::DdsError)
+      << "the operator wrote in the launcher's partition";
+  dds::Writer<sensornet_Command> commands(
+      participant, command_topic,
+      dds::endpointQosIn<sensornet_Command>(
+          emulator::commandPartition(p, emulator::CommandSender::Operator)));
+  dds::Reader<sensornet_CommandReply> replies(participant, reply_topic);
+  ASSERT_TRUE(
+      waitUntil([&] { return readJsonLines(dir_ / "forged-failure.jsonl").size() >= 1; }, 60s));
+  ASSERT_TRUE(commands.waitForReaders(1, 10s));
+  const std::vector<std::uint32_t> victims = {2};
+  const std::string issuer = "sensornet launch 1", detail = "sensor_agent-2 killed by signal 9";
+  const std::string empty;
+  sensornet_Command command{};
+  command.run_id = dds::borrowString(run_id_);
+  command.command_id = static_cast<std::uint64_t>(emulator::wallNowNs());
+  command.kind = sensornet_COMMAND_SENSORS_FAILED;
+  command.surrogate = dds::borrowString(empty);
+  dds::borrowSequence(command.sensor_ids, victims);
+  command.schedule_json = dds::borrowString(empty);
+  command.issuer = dds::borrowString(issuer);  // free text: claims to be the launcher
+  command.issued_wall_time_ns = emulator::wallNowNs();
+  command.detail = dds::borrowString(detail);
+  ASSERT_EQ(commands.write(command), dds::WriteResult::Written);
+  std::optional<std::string> refusal;
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        for (auto& reply : replies.take(8).samples) {
+          if (reply.sample->command_id != command.command_id) continue;
+          EXPECT_FALSE(reply.sample->accepted);
+          refusal = std::string(dds::viewString(reply.sample->reason));
+        }
+        return refusal.has_value();
+      },
+      20s));
+  EXPECT_NE(refusal->find("only the launcher may report sensors failed"), std::string::npos)
+      << *refusal;
+
+  const testing::ProcessResult& r = launcher.result();
+  EXPECT_EQ(r.exit_code, kExitDegraded) << r.err;
+  const json report = readJson(dir_ / "forged-failure.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "degraded");
+  EXPECT_EQ(realizedCosts(report), clean);
+  int refused = 0;
+  for (const json& f : report.at("faults")) {
+    EXPECT_NE(f.at("kind"), "sensor_died") << f.dump();
+    refused += f.at("kind") == "command_refused" ? 1 : 0;
+  }
+  EXPECT_EQ(refused, 1) << report.at("faults").dump();
+  EXPECT_EQ(report.at("schedule_versions").size(), 1u);
+  for (const json& e : report.at("per_episode")) EXPECT_TRUE(e.at("complete").get<bool>());
+}
+
+// A launch whose sensor processes have no identity of their own in the folder is refused
+// before anything starts, naming the missing folder and the `pki init` that makes it.
+TEST_F(SecuredRun, ASensorProcessWithoutItsOwnIdentityIsRefusedAtStart) {
+  const testing::ProcessResult r = runProcess(
+      launch("refused", "10", {"--security", pki_.string(), "--sensors-per-process", "2"}), 60s);
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find((pki_ / "sensor-0-1").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--sensors-per-process 2"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "refused-logs")) << "nothing may start";
 }
 
 TEST_F(SecuredRun, ExpiredCertificateIsRefusedAtStart) {
   const LeftoverGuard guard(run_id_);
   expireSensorCertificate(pki_);
-  expectRefusedAtStart(pki_, pki_ / "sensor" / "identity.pem", "expired");
+  expectRefusedAtStart(pki_, pki_ / kStolenSensor / "identity.pem", "expired");
 }
 
 TEST_F(SecuredRun, CertificateOfAnotherAuthorityIsRefusedAtStart) {
   const LeftoverGuard guard(run_id_);
   const fs::path other = dir_ / "other-pki";
   pkiInit(other);
-  fs::copy_file(other / "sensor" / "identity.pem", pki_ / "sensor" / "identity.pem",
+  fs::copy_file(other / kStolenSensor / "identity.pem", pki_ / kStolenSensor / "identity.pem",
                 fs::copy_options::overwrite_existing);
-  fs::copy_file(other / "sensor" / "key.pem", pki_ / "sensor" / "key.pem",
+  fs::copy_file(other / kStolenSensor / "key.pem", pki_ / kStolenSensor / "key.pem",
                 fs::copy_options::overwrite_existing);
-  expectRefusedAtStart(pki_, pki_ / "sensor" / "identity.pem", "not signed by that CA");
+  expectRefusedAtStart(pki_, pki_ / kStolenSensor / "identity.pem", "not signed by that CA");
 }
 
 // One byte changed in a signed document: its S/MIME signature no longer verifies, and the launch
@@ -337,14 +494,14 @@ TEST_F(SecuredRun, TamperedPermissionsAreRefusedAtStartNamingTheFile) {
 }
 
 TEST_F(SecuredRun, TamperedGovernanceIsRefusedAtStartNamingTheFile) {
-  const fs::path file = pki_ / "sensor" / "governance.p7s";
+  const fs::path file = pki_ / kStolenSensor / "governance.p7s";
   changeOneByte(file, "<data_protection_kind>ENCRYPT", "<data_protection_kind>ENCRYPU");
   expectRefusedAtStart(pki_, file, "signature does not verify");
 }
 
 TEST_F(SecuredRun, ACaKeyInARolesFolderIsRefusedAtStart) {
-  fs::copy_file(pki_ / "ca" / "ca.key", pki_ / "sensor" / "ca.key");
-  expectRefusedAtStart(pki_, pki_ / "sensor" / "ca.key", "no private key but the role's own");
+  fs::copy_file(pki_ / "ca" / "ca.key", pki_ / kStolenSensor / "ca.key");
+  expectRefusedAtStart(pki_, pki_ / kStolenSensor / "ca.key", "no private key but the role's own");
 }
 
 TEST_F(SecuredRun, MissingFileIsNamedAtStart) {
@@ -363,7 +520,7 @@ TEST_F(Security, PkiInitRefusesAFolderThatIsNotEmptyUnlessForced) {
   EXPECT_FALSE(fs::exists(dir / "ca.pem"));
   r = runProcess({testing::kLauncher, "pki", "init", dir.string(), "--force", "--key", "rsa"}, 120s);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(fs::exists(dir / "sensor" / "permissions.p7s"));
+  EXPECT_TRUE(fs::exists(dir / "sensor-0" / "permissions.p7s"));
   EXPECT_TRUE(fs::exists(dir / "notes.txt")) << "--force overwrites only its own files";
 }
 

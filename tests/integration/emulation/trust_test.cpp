@@ -33,6 +33,7 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "support/sanitizer.hpp"
@@ -365,7 +366,12 @@ TEST_F(Trust, RogueMeasurementsAreRefusedCountedAndNeverFused) {
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);
   dds::Topic<sensornet_Measurement> topic(participant);
-  dds::Writer<sensornet_Measurement> rogue(participant, topic);
+  // In the partition of sensors 0 and 1 (run_partitions.hpp): what it writes for them is
+  // refused for what it is, not for its identity.
+  dds::Writer<sensornet_Measurement> rogue(
+      participant, topic,
+      dds::endpointQosIn<sensornet_Measurement>(
+          emulator::sensorPartition(participant.partition(), {0, 1})));
   ASSERT_TRUE(rogue.waitForReaders(1, 10s));
   const std::vector<double> wrong_size = {1.0, 2.0, 3.0};
   const std::vector<double> one = {1.0};

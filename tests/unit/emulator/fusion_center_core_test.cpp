@@ -37,9 +37,17 @@ class FakeWriters final : public WriterFacts {
   [[nodiscard]] bool measurementWriterMatchedWith(WriterId status_writer) const override {
     return held.count(status_writer) > 0;
   }
+  // A writer not listed in speaks_for writes in a partition of every sensor (as anyone can
+  // without security).
+  [[nodiscard]] const std::vector<int>& sensorsOf(SensorTopic, WriterId w) const override {
+    const auto it = speaks_for.find(w);
+    return it == speaks_for.end() ? kEverySensor : it->second;
+  }
   std::set<WriterId> dead;
   std::set<WriterId> held;  // status writers whose process's Measurement writer is matched
   std::uint32_t matched = 0;
+  std::map<WriterId, std::vector<int>> speaks_for;
+  const std::vector<int> kEverySensor = {0, 1, 2, 3, 4, 5, 6, 7};
 };
 
 // Sensor j writes measurements as writer 100 + j, tallies as 200 + j, statuses as 300 + j.
@@ -447,6 +455,84 @@ TEST_F(FusionCenterCoreTest, ASecondWriterOfASensorIsKeptOutWhileTheFirstLives) 
   EXPECT_EQ(faultKinds(), std::vector<std::string>{"foreign_writer"}) << "named once per writer";
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
   EXPECT_EQ(final_.at("summary").at("rejected_by_reason").at("foreign_writer"), 2);
+}
+
+// Issue 30: a writer speaks only for the sensors its identity (its partition) names. An
+// impostor holding sensor 1's identity that speaks first, for sensor 0, and forges sensor 2's
+// tally is kept out, and the real writers' samples are fused whatever came first.
+TEST_F(FusionCenterCoreTest, AWriterSpeaksOnlyForTheSensorsOfItsIdentityWhateverCameFirst) {
+  constexpr WriterId kImpostor = 777, kImpostorTally = 778;
+  for (int j = 0; j < 4; ++j) {
+    writers_.speaks_for[measurementWriter(j)] = {j};
+    writers_.speaks_for[tallyWriter(j)] = {j};
+    writers_.speaks_for[statusWriter(j)] = {j};
+  }
+  writers_.speaks_for[kImpostor] = {1};
+  writers_.speaks_for[kImpostorTally] = {1};
+  begin(0);
+  const auto all = measurements(0);
+  MeasurementArrival forged = *std::find_if(
+      all.begin(), all.end(), [](const auto& m) { return m.measurement.sensor == 0; });
+  forged.measurement.seq = 0;
+  forged.writer = kImpostor;
+  core_->onMeasurement(forged, now_);  // before any measurement of sensor 0's own writer
+  forged.measurement.seq = 1;
+  core_->onMeasurement(forged, now_);
+  EpisodeTally forged_tally = tally(2, 0, 500, now_);
+  forged_tally.writer = kImpostorTally;
+  core_->onTally(forged_tally, now_);  // before sensor 2's own tally
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+  for (int j = 0; j < 4; ++j) {
+    EXPECT_EQ(reports_[0].result.sensors[static_cast<std::size_t>(j)].sent, sentBy(all)[j]);
+  }
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"wrong_identity", "wrong_identity"}))
+      << "named once per writer";
+  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("speaks for sensors 1"),
+            std::string::npos);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(final_.at("summary").at("rejected_by_reason").at("wrong_identity"), 3);
+}
+
+// A writer that names no sensor block (the run's own partition, a stranger's name, or one gone
+// before it could be looked up) speaks for nobody.
+TEST_F(FusionCenterCoreTest, AWriterOfNoSensorBlockSpeaksForNobody) {
+  writers_.speaks_for[999] = {};
+  begin(0);
+  const auto all = measurements(0);
+  MeasurementArrival stranger = all.front();
+  stranger.writer = 999;
+  stranger.measurement.seq = 1000;
+  core_->onMeasurement(stranger, now_);
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+  ASSERT_EQ(faultKinds(), std::vector<std::string>{"wrong_identity"});
+  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("speaks for no sensor"),
+            std::string::npos);
+}
+
+// A command the coordinator refused by right is a fault once, however often its reply comes.
+TEST_F(FusionCenterCoreTest, ACommandRefusedByRightIsAFaultOnce) {
+  begin(0);
+  const auto all = measurements(0);
+  deliver(all);
+  core_->onCommandRefused(42, "only the launcher may report sensors failed", now_);
+  core_->onCommandRefused(42, "only the launcher may report sensors failed", now_);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"command_refused"});
+  EXPECT_EQ(core_->faults()[0].at("process"), "coordinator");
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
 }
 
 TEST_F(FusionCenterCoreTest, ANewWriterTakesOverWhenTheFirstIsGone) {

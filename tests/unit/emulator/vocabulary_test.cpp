@@ -41,7 +41,8 @@ TEST(Vocabulary, EveryWordHasOneSpellingThatReadsBack) {
 TEST(Vocabulary, TheLastEnumeratorOfEachVocabularyIsInItsTable) {
   // A value added to an enum but not to its table would print as "unknown".
   EXPECT_NE(wordOf(FaultKind::SensorDied), "unknown");
-  EXPECT_NE(wordOf(RejectionReason::MalformedEpisodeControl), "unknown");
+  EXPECT_NE(wordOf(RejectionReason::WrongIdentity), "unknown");
+  EXPECT_NE(wordOf(FaultKind::CommandRefused), "unknown");
   EXPECT_NE(wordOf(RunStatus::Interrupted), "unknown");
   EXPECT_NE(wordOf(PlanSurrogate::MonteCarlo), "unknown");
 }
