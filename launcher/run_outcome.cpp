@@ -7,6 +7,7 @@
 #include <map>
 
 #include "output_file.hpp"
+#include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -178,15 +179,12 @@ std::string arrivalsLine(const json& arrivals) {
          "says whether the cost lies in it";
 }
 
-// Two brackets differ beyond their rounding.
+// Two brackets of the report differ beyond their rounding (false when one is not there).
 bool differs(const json& a, const json& b) {
-  for (const char* end : {"info", "cov"}) {
-    const json x = field(a, end), y = field(b, end);
-    if (!x.is_number() || !y.is_number()) return false;
-    const double u = x.get<double>(), v = y.get<double>();
-    if (std::abs(u - v) > 1e-9 * std::max(std::abs(u), std::abs(v))) return true;
-  }
-  return false;
+  const json ia = field(a, "info"), ca = field(a, "cov"), ib = field(b, "info"),
+             cb = field(b, "cov");
+  if (!ia.is_number() || !ca.is_number() || !ib.is_number() || !cb.is_number()) return false;
+  return bracketsDiffer(ia.get<double>(), ca.get<double>(), ib.get<double>(), cb.get<double>());
 }
 
 // What the schedule could deliver, when that is not what it planned (an emulated network's

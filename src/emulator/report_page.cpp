@@ -5,9 +5,12 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
+#include <utility>
 #include <sstream>
 #include <vector>
 
+#include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/core/student_t.hpp"
@@ -29,6 +32,10 @@ constexpr const char* kAccent = "#e0891c";   // light-middle orange: what went w
 constexpr const char* kPale = "#cfdbee";     // pale: expected counts
 constexpr const char* kSand = "#e9e1cf";     // pale and warm: the bracket, apart from the interval
 constexpr const char* kGrey = "#8c8c8c";
+// The bracket a schedule delivered, beside the planned one; the real-time cost beside the
+// realized one.
+const Style kDelivered = Style::line("#8a6d3b", 1.3, "4 3");
+const Style kRealtime = Style::outlined(kGrey, kGrey);
 
 double number(const json& j, const char* key) {
   const auto it = j.find(key);
@@ -123,6 +130,30 @@ RunningMean runningMean(const json& per_episode) {
   return r;
 }
 
+// The bracket the schedule delivered, when it is not the planned one (a dead sensor's share, an
+// emulated network's losses and outages); nullopt otherwise.
+std::optional<std::pair<double, double>> deliveredBracketOf(const json& e) {
+  if (!e.contains("bracket") || !e.contains("delivered_bracket")) return std::nullopt;
+  const double info = number(e.at("bracket"), "info"), cov = number(e.at("bracket"), "cov");
+  const double d_info = number(e.at("delivered_bracket"), "info");
+  const double d_cov = number(e.at("delivered_bracket"), "cov");
+  if (!std::isfinite(d_info) || !std::isfinite(d_cov) ||
+      !bracketsDiffer(info, cov, d_info, d_cov)) {
+    return std::nullopt;
+  }
+  return std::make_pair(d_info, d_cov);
+}
+
+// The real-time cost of a complete episode, when measurements arrived late enough to make it
+// differ from the realized one.
+std::optional<double> realtimeCostOf(const json& e) {
+  const double realized = number(e, "realized_cost"), realtime = number(e, "realtime_cost");
+  if (!e.value("complete", false) || !std::isfinite(realtime) || realtime == realized) {
+    return std::nullopt;
+  }
+  return realtime;
+}
+
 // The cost axis: what the complete episodes, the brackets and the interval span (the interval
 // from the third complete episode on: with two, Student's t stretches it tenfold). An incomplete
 // episode's cost (cut short, aborted) joins only if it does not stretch the axis past half as
@@ -135,6 +166,11 @@ Interval costRange(const json& per_episode, const RunningMean& running) {
       y.add(number(e.at("bracket"), "info"));
       y.add(number(e.at("bracket"), "cov"));
     }
+    if (const auto delivered = deliveredBracketOf(e)) {
+      y.add(delivered->first);
+      y.add(delivered->second);
+    }
+    if (const auto realtime = realtimeCostOf(e)) y.add(*realtime);
   }
   for (std::size_t i = 2; i < running.low.size(); ++i) {
     y.add(running.low[i]);
@@ -158,8 +194,15 @@ std::string costPlot(const json& report) {
   if (!std::isfinite(y_range.lo)) {
     return note("Realized cost per episode", "No episode has a finite cost.");
   }
-  SvgPlot plot(SvgPlot::Frame{}, episodeAxis(x.lo, x.hi, "episode"),
-               Axis{y_range, "cost J (state units²)"});
+  const bool any_delivered = std::any_of(per_episode.begin(), per_episode.end(), [](const json& e) {
+    return deliveredBracketOf(e).has_value();
+  });
+  const bool any_realtime = std::any_of(per_episode.begin(), per_episode.end(), [](const json& e) {
+    return realtimeCostOf(e).has_value();
+  });
+  SvgPlot::Frame frame;
+  if (any_delivered || any_realtime) frame.top += kLegendRow;  // the legend takes two rows
+  SvgPlot plot(frame, episodeAxis(x.lo, x.hi, "episode"), Axis{y_range, "cost J (state units²)"});
   for (const json& e : per_episode) {
     const double k = number(e, "episode");
     if (!e.contains("bracket")) continue;
@@ -168,6 +211,16 @@ std::string costPlot(const json& report) {
     plot.rect(k - 0.5, k + 0.5, info, cov, Style::area(kSand),
               "episode " + formatTick(k) + ": bracket [" + formatTick(info) + ", " +
                   formatTick(cov) + "]");
+  }
+  // What the schedule delivered, beside what it planned: a dashed box.
+  for (const json& e : per_episode) {
+    const auto delivered = deliveredBracketOf(e);
+    if (!delivered) continue;
+    const double k = number(e, "episode");
+    plot.rect(k - 0.4, k + 0.4, std::min(delivered->first, y_range.hi),
+              std::min(delivered->second, y_range.hi), kDelivered,
+              "episode " + formatTick(k) + ": delivered bracket [" +
+                  formatTick(delivered->first) + ", " + formatTick(delivered->second) + "]");
   }
   Style interval = Style::area(kMid, 0.45);
   plot.band(running.episodes, running.low, running.high, interval, "95% interval of the mean");
@@ -189,16 +242,37 @@ std::string costPlot(const json& report) {
                 "episode " + formatTick(k) + ": " + formatTick(cost) +
                     (complete ? "" : " (incomplete)") + (above ? ", off the scale" : ""));
   }
-  plot.legend({{"bracket in force", Style::area(kSand)},
-               {"realized cost", Style::outlined(kInk, kInk)},
-               {"incomplete", Style::outlined("white", kAccent)},
-               {"running mean", Style::line(kInk, 2.0)},
-               {"95% interval", interval}});
+  for (const json& e : per_episode) {
+    const auto realtime = realtimeCostOf(e);
+    if (!realtime) continue;
+    const double k = number(e, "episode");
+    plot.circle(k, std::min(*realtime, y_range.hi), 2.5, kRealtime,
+                "episode " + formatTick(k) + ": real-time cost " + formatTick(*realtime));
+  }
+  std::vector<LegendEntry> legend = {{"bracket in force", Style::area(kSand)}};
+  if (any_delivered) legend.push_back({"bracket delivered", kDelivered});
+  legend.push_back({"realized cost", Style::outlined(kInk, kInk)});
+  if (any_realtime) legend.push_back({"real-time cost", kRealtime});
+  legend.push_back({"incomplete", Style::outlined("white", kAccent)});
+  legend.push_back({"running mean", Style::line(kInk, 2.0)});
+  legend.push_back({"95% interval", interval});
+  plot.legend(legend);
   return figure("cost", "Realized cost per episode", plot.svg("plot-cost", "Realized cost per episode"),
                 "Each dot is one episode's realized cost J(P); the shaded box behind it is the "
                 "bracket [J(P<sub>info</sub>), J(P<sub>cov</sub>)] of the schedule in force. The "
                 "line is the running mean over complete episodes with its 95% Student-t interval; "
                 "dashed rules mark the episodes where a new schedule version took effect." +
+                    std::string(any_delivered
+                                    ? " A dashed box is the bracket of what the schedule could "
+                                      "still deliver (dead sensors deliver nothing; the emulated "
+                                      "network's losses and outages thin the rates), where it "
+                                      "differs from the planned one."
+                                    : "") +
+                    std::string(any_realtime
+                                    ? " A small grey dot is the episode's real-time cost: the "
+                                      "covariance of what had arrived by each instant, with the "
+                                      "emulated network's delay."
+                                    : "") +
                     std::string(off_scale ? " An incomplete episode whose cost lies far above "
                                             "the rest sits on the top edge (its value is in "
                                             "its tooltip)."
@@ -688,9 +762,33 @@ std::string summaryTable(const json& report) {
                                : "not measured (no complete episode)");
   t += row("meets the bracket", meets.is_boolean() ? (meets.get<bool>() ? "yes" : "no")
                                                    : "undetermined (fewer than 2 complete episodes)");
-  t += row("sent / received / lost", formatTick(number(s, "sent")) + " / " +
-                                         formatTick(number(s, "received")) + " / " +
-                                         formatTick(number(s, "lost")));
+  // What the schedule delivered and the real-time cost, where they are not the planned bracket
+  // and the realized cost (as the launcher's closing lines say).
+  const json delivered = s.value("delivered_bracket", json::object());
+  const double d_info = number(delivered, "info"), d_cov = number(delivered, "cov");
+  if (complete >= 1.0 && std::isfinite(d_info) && std::isfinite(d_cov) && std::isfinite(info) &&
+      std::isfinite(cov) && bracketsDiffer(info, cov, d_info, d_cov)) {
+    const json meets_delivered = s.value("meets_delivered_bracket", json());
+    t += row("mean bracket delivered (dead sensors, network losses)",
+             "[" + formatTick(d_info) + ", " + formatTick(d_cov) + "]");
+    t += row("meets the delivered bracket",
+             meets_delivered.is_boolean() ? (meets_delivered.get<bool>() ? "yes" : "no")
+                                          : "undetermined (fewer than 2 complete episodes)");
+  }
+  const double realtime = number(s, "realtime_mean");
+  if (complete >= 1.0 && std::isfinite(realtime) && std::isfinite(mean) && realtime != mean) {
+    t += row("mean real-time cost (what had arrived by each instant)", formatTick(realtime));
+  }
+  const double dropped = number(s, "dropped_by_network");
+  if (std::isfinite(dropped) && dropped > 0.0) {
+    t += row("sent / received / dropped by the emulated network / lost",
+             formatTick(number(s, "sent")) + " / " + formatTick(number(s, "received")) + " / " +
+                 formatTick(dropped) + " / " + formatTick(number(s, "lost")));
+  } else {
+    t += row("sent / received / lost", formatTick(number(s, "sent")) + " / " +
+                                           formatTick(number(s, "received")) + " / " +
+                                           formatTick(number(s, "lost")));
+  }
   // Causes: an entry that followed from another (caused_by) is counted with it.
   const json faults = report.value("faults", json::array());
   const std::size_t causes = causeCount(faults);

@@ -295,8 +295,15 @@ std::string SvgPlot::axesSvg() const {
 std::string SvgPlot::legendSvg() const {
   std::string s = "<g class=\"legend\">\n";
   double x = frame_.left;
-  const double y = 14.0;
+  double y = 14.0;
   for (const LegendEntry& e : legend_) {
+    // About 6.5 px a character; an entry that would pass the frame's right edge starts a new
+    // row (Frame::top leaves room for kLegendRow px a row).
+    const double width = 27.0 + 6.5 * static_cast<double>(e.label.size());
+    if (x > frame_.left && x + width > frame_.width - frame_.right) {
+      x = frame_.left;
+      y += kLegendRow;
+    }
     if (e.style.fill != "none") {
       Style swatch = e.style;
       s += "<rect x=\"" + formatPixels(x) + "\" y=\"" + formatPixels(y - 8.0) +
@@ -308,7 +315,7 @@ std::string SvgPlot::legendSvg() const {
     }
     s += "<text x=\"" + formatPixels(x + 27.0) + "\" y=\"" + formatPixels(y) + "\">" +
          escapeXml(e.label) + "</text>\n";
-    x += 27.0 + 6.5 * static_cast<double>(e.label.size()) + 18.0;  // about 6.5 px a character
+    x += width + 18.0;
   }
   return s + "</g>\n";
 }

@@ -6,6 +6,8 @@
 #include <iterator>
 #include <utility>
 
+#include "sensornet/core/bracket_differs.hpp"
+
 namespace sensornet::launcher {
 namespace {
 
@@ -58,9 +60,8 @@ std::string formatProgress(const EpisodeReportSeen& report,
     }
     text += format(", bracket [%.4g, %.4g]", s.bracket_lower_mean, s.bracket_upper_mean);
     // Beside the plan, what it could deliver: a dead sensor's share, the network's losses.
-    const double tolerance = 1e-9 * std::max(std::abs(s.bracket_upper_mean), 1.0);
-    if (std::abs(s.delivered_lower_mean - s.bracket_lower_mean) > tolerance ||
-        std::abs(s.delivered_upper_mean - s.bracket_upper_mean) > tolerance) {
+    if (bracketsDiffer(s.bracket_lower_mean, s.bracket_upper_mean, s.delivered_lower_mean,
+                       s.delivered_upper_mean)) {
       text += format(" (delivered [%.4g, %.4g])", s.delivered_lower_mean, s.delivered_upper_mean);
     }
   }

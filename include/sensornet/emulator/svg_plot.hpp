@@ -86,6 +86,9 @@ struct LegendEntry {
   Style style;
 };
 
+// The height of a legend row: the legend wraps where a row would pass the frame's right edge.
+inline constexpr double kLegendRow = 16.0;
+
 class SvgPlot {
  public:
   struct Frame {
@@ -93,7 +96,7 @@ class SvgPlot {
     double height = 300.0;
     double left = 72.0;
     double right = 20.0;
-    double top = 34.0;  // room for the legend row
+    double top = 34.0;  // room for the legend row (kLegendRow more for each further row)
     double bottom = 50.0;
   };
 

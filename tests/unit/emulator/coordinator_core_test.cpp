@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -106,12 +107,17 @@ class CoordinatorCoreTest : public ::testing::Test {
     return core_->onReport(r, now_);
   }
 
+  // From its rightful sender unless `sender` says otherwise: the launcher reports sensors
+  // failed, an operator sends the rest.
   CoordinatorActions command(CommandKind kind, std::uint64_t id,
-                             std::vector<std::uint32_t> sensors = {}) {
+                             std::vector<std::uint32_t> sensors = {},
+                             std::optional<CommandSender> sender = std::nullopt) {
     CommandEvent c;
     c.run_id = config_.run_id;
     c.command_id = id;
     c.kind = kind;
+    c.sender = sender.value_or(kind == CommandKind::SensorsFailed ? CommandSender::Launcher
+                                                                  : CommandSender::Operator);
     c.issuer = "test";
     c.sensor_ids = std::move(sensors);
     c.surrogate = "cov";
@@ -633,6 +639,33 @@ TEST(FailurePolicyWords, ReadBackAndListTheChoices) {
   EXPECT_EQ(wordChoices<FailurePolicy>(), "replan, continue or stop");
   EXPECT_EQ(lookUpWord<FailurePolicy>("stop"), FailurePolicy::Stop);
   EXPECT_EQ(wordOf(SensorState::Excluded), "excluded");
+}
+
+// Commands by right (issue 30): a failure notice from an operator, or a re-plan from the
+// launcher, is refused whatever its issuer field says: the reply begins "not permitted: ",
+// nothing is announced or re-planned, and the same command coming again gets the same answer.
+TEST_F(CoordinatorCommands, ACommandFromASenderWithoutTheRightIsRefused) {
+  config_.on_sensor_failure = FailurePolicy::Continue;
+  (void)startRunning();
+  const std::vector<SendReply> forged =
+      only<SendReply>(command(CommandKind::SensorsFailed, 21, {2}, CommandSender::Operator));
+  ASSERT_EQ(forged.size(), 1u);
+  EXPECT_FALSE(forged[0].answer.accepted);
+  EXPECT_EQ(forged[0].answer.reason.rfind(std::string(kNotPermitted), 0), 0u)
+      << forged[0].answer.reason;
+  EXPECT_NE(forged[0].answer.reason.find("only the launcher may report sensors failed"),
+            std::string::npos);
+  const CoordinatorActions again =
+      command(CommandKind::SensorsFailed, 21, {2}, CommandSender::Operator);
+  EXPECT_TRUE(controls(again, ControlKind::SensorsFailed).empty()) << "announced a forged death";
+  const std::vector<SendReply> replan =
+      only<SendReply>(command(CommandKind::Replan, 22, {}, CommandSender::Launcher));
+  ASSERT_EQ(replan.size(), 1u);
+  EXPECT_FALSE(replan[0].answer.accepted);
+  EXPECT_EQ(replan[0].answer.schedule_version, 0u);
+  // The rightful sender's notice is obeyed.
+  const CoordinatorActions real = command(CommandKind::SensorsFailed, 23, {2});
+  EXPECT_EQ(controls(real, ControlKind::SensorsFailed).size(), 1u);
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "sensornet/emulator/covariance_trace.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/emulator/svg_plot.hpp"
 #include "support/csv_rows.hpp"
 
 namespace sensornet::emulator {
@@ -316,6 +317,49 @@ TEST(ReportPage, PrintsNoIntervalWithOneCompleteEpisodeAndNoMeanWithNone) {
   page = reportPage(report, "r.json");
   EXPECT_NE(page.find("<th>mean realized cost</th><td>not measured (no complete episode)"),
             std::string::npos);
+}
+
+// Issue 24: beside the planned bracket, what the schedule delivered, and beside the realized
+// cost, the real-time one; neither where it is the same number.
+TEST(ReportPage, ShowsTheDeliveredBracketAndTheRealtimeCostWhereTheyDiffer) {
+  json report = sampleReport();
+  std::string page = reportPage(report, "r.json");
+  const std::string cost = svgOf(page, "plot-cost");
+  double realtime_sum = 0.0;
+  int complete = 0;
+  for (const json& e : report.at("per_episode")) {
+    const std::string k = formatTick(e.at("episode").get<double>());
+    EXPECT_NE(cost.find("episode " + k + ": delivered bracket [1.5, 6.5]"), std::string::npos) << k;
+    const std::string realtime =
+        "episode " + k + ": real-time cost " + formatTick(e.at("realtime_cost").get<double>());
+    if (e.at("complete").get<bool>()) {
+      EXPECT_NE(cost.find(realtime), std::string::npos) << k;
+      realtime_sum += e.at("realtime_cost").get<double>();
+      ++complete;
+    } else {
+      EXPECT_EQ(cost.find(realtime), std::string::npos) << "an incomplete episode " << k;
+    }
+  }
+  EXPECT_NE(cost.find(">bracket delivered<"), std::string::npos);
+  EXPECT_NE(page.find("<td>[1.5, 6.5]</td>"), std::string::npos);
+  EXPECT_NE(page.find("<th>mean real-time cost (what had arrived by each instant)</th><td>" +
+                      formatTick(realtime_sum / complete) + "</td>"),
+            std::string::npos);
+  const std::string dropped_row = "<th>sent / received / dropped by the emulated network / lost";
+  EXPECT_NE(page.find(dropped_row), std::string::npos);
+
+  // Nothing delivered short of the plan, nothing late: only the planned bracket is shown.
+  for (json& e : report["per_episode"]) {
+    e["delivered_bracket"] = e.at("bracket");
+    e["realtime_cost"] = e.at("realized_cost");
+  }
+  report["summary"]["delivered_bracket"] = report["summary"]["bracket"];
+  report["summary"]["realtime_mean"] = report["summary"]["mean"];
+  report["summary"]["dropped_by_network"] = 0;
+  page = reportPage(report, "r.json");
+  EXPECT_EQ(page.find("delivered"), std::string::npos);
+  EXPECT_EQ(page.find("real-time"), std::string::npos);
+  EXPECT_EQ(page.find(dropped_row), std::string::npos);
 }
 
 TEST(ReportPage, WritesFaultNumbersToSixDigitsNotAsRawFloats) {
