@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -33,6 +34,7 @@
 #include "sensornet/core/planner.hpp"
 #include "sensornet/dds/security.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/emulator/junit_report.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
@@ -72,6 +74,7 @@ struct LaunchOptions {
   std::string network_aware = "auto";  // auto: when the scenario has a network: section
   std::string arrivals;  // poisson or timetable; empty: the scenario's `arrivals:`
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
+  std::string junit_path;  // --junit: the run and each criterion as JUnit test cases
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
@@ -356,6 +359,7 @@ int runLaunch(LaunchOptions options) {
   // background job has it) is the run's interruption, seen by the supervisor at its first look,
   // never a launcher killed with 130 and no report (issue 31, chaos seed 45).
   installInterruptHandlers();
+  const auto launched = std::chrono::steady_clock::now();
   // Bad input fails here, before anything starts.
   const Scenario scenario = loadScenarioFile(options.scenario_path);
   if (!options.schedule_path.empty()) (void)loadScheduleFile(options.schedule_path, scenario);
@@ -380,6 +384,10 @@ int runLaunch(LaunchOptions options) {
   if (!plan.default_report) {
     makeParentFolders(plan.report_path, "--report");
     checkReportPaths(plan);
+  }
+  if (!options.junit_path.empty()) {
+    makeParentFolders(options.junit_path, "--junit");
+    checkOutputFile(options.junit_path, "--junit");
   }
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
@@ -432,6 +440,17 @@ int runLaunch(LaunchOptions options) {
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
+  }
+  if (!options.junit_path.empty()) {  // like the page: a warning, never an exit code
+    const emulator::JunitRun junit{
+        plan.run_id, std::string(wordOf(outcome.status)), outcome.exit_code,
+        outcome.report.value("faults", nlohmann::json::array()), outcome.checks,
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count()};
+    try {
+      replaceFileAtomically(options.junit_path, emulator::junitXml(junit));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "sensornet: warning: --junit: %s\n", e.what());
+    }
   }
   if (!options.no_html) {  // a page that cannot be written is a warning, never an exit code
     if (const auto problem = writePageBeside(plan.report_path)) {
@@ -555,6 +574,10 @@ Subcommand addLaunchCommand(CLI::App& app) {
                       "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
                       "the schedule, not the run's cost"),
       wordTexts<ArrivalMode>());
+  cmd->add_option("--junit", options->junit_path,
+                  "also write the run as JUnit XML for CI: a test case \"run\" that passes only "
+                  "when the run completed (its message: status, exit code, faults by kind) and "
+                  "one per --require criterion with the value measured");
   cmd->add_option("--require", options->require,
                   "make the run a CI gate: comma-separated criteria checked against the report "
                   "after the run, each printed as pass or FAIL with the value measured; any "

@@ -224,12 +224,23 @@ TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
   EXPECT_FALSE(fs::exists(dir_ / "sensornet" / "current-run"));
 }
 
+// How many times `needle` occurs in `text`.
+std::size_t occurrences(const std::string& text, const std::string& needle) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
+    ++n;
+  }
+  return n;
+}
+
 // --require makes a run a CI gate: each criterion is judged from the report (recomputed here
-// from the report's own numbers), a failed one exits 4 while the status stays the run's.
+// from the report's own numbers), a failed one exits 4 while the status stays the run's; with
+// --junit (into a folder that does not exist yet) the run and each criterion are test cases.
 TEST_F(Launcher, RequireJudgesTheRunAndAFailedCriterionExitsFour) {
   const LeftoverGuard guard(run_id_);
   std::vector<std::string> argv = launchArgs(3, 10);
-  argv.insert(argv.end(), {"--require", "episodes-complete,latency-p99<=10s,mean<=0,lost<=0"});
+  argv.insert(argv.end(), {"--require", "episodes-complete,latency-p99<=10s,mean<=0,lost<=0",
+                           "--junit", (dir_ / "ci" / "run.xml").string()});
   const ProcessResult r = runProcess(argv, 60s);
   const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
   ASSERT_TRUE(report.is_object()) << r.err;
@@ -249,6 +260,28 @@ TEST_F(Launcher, RequireJudgesTheRunAndAFailedCriterionExitsFour) {
   EXPECT_NE(r.out.find("require mean<=0: FAIL (measured "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("require latency-p99<=10s: pass"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("exit code 4"), std::string::npos) << r.out;
+
+  // The JUnit file: one suite, the run's case (passing: completed) and one case per criterion,
+  // failing exactly where the report's check failed, each case closed.
+  const std::string xml = readText(dir_ / "ci" / "run.xml");
+  EXPECT_EQ(xml.rfind("<?xml version=\"1.0\" encoding=\"UTF-8\"?>", 0), 0u) << xml;
+  EXPECT_EQ(occurrences(xml, "<testsuite "), 1u) << xml;
+  EXPECT_EQ(occurrences(xml, "<testcase "), 5u) << xml;
+  EXPECT_EQ(occurrences(xml, "</testcase>"), 5u) << xml;
+  std::size_t failed = 0;
+  for (const json& c : checks) failed += c["pass"].get<bool>() ? 0 : 1;
+  EXPECT_EQ(occurrences(xml, "<failure "), failed) << xml;
+  EXPECT_NE(xml.find("tests=\"5\" failures=\"" + std::to_string(failed) + "\""),
+            std::string::npos)
+      << xml;
+  const std::size_t mean_case = xml.find("name=\"require mean&lt;=0\"");
+  ASSERT_NE(mean_case, std::string::npos) << xml;
+  EXPECT_EQ(xml.find("<failure message=\"measured ", mean_case), xml.find("<failure ", mean_case))
+      << xml;
+  const std::size_t run_case = xml.find("name=\"run\"");
+  ASSERT_NE(run_case, std::string::npos) << xml;
+  EXPECT_LT(xml.find("</testcase>", run_case), xml.find("<failure", run_case)) << "a clean run failed";
+  EXPECT_NE(xml.find("status completed, exit 4, 0 faults", run_case), std::string::npos) << xml;
 }
 
 TEST_F(Launcher, UnknownRequirementIsRefusedBeforeAnythingStarts) {
