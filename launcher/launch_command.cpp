@@ -75,6 +75,8 @@ struct LaunchOptions {
   std::string arrivals;  // poisson or timetable; empty: the scenario's `arrivals:`
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
   std::string junit_path;  // --junit: the run and each criterion as JUnit test cases
+  std::string external_sensors;
+  double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator  // --external-sensors: sensors a participant of the user's speaks for
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
@@ -124,6 +126,18 @@ CLI::Validator seedNumber() {
         return {};
       },
       range);
+}
+
+// --external-sensors as sensor ids of the scenario (sorted); InputError for anything else.
+std::vector<int> externalSensors(const LaunchOptions& options, int sensor_count) {
+  if (options.external_sensors.empty()) return {};
+  std::vector<int> ids = emulator::parseSensorIds(options.external_sensors, "--external-sensors");
+  if (ids.back() >= sensor_count) {
+    throw InputError("--external-sensors", "sensors",
+                     "sensor ids of the scenario (0 to " + std::to_string(sensor_count - 1) +
+                         "), got " + std::to_string(ids.back()));
+  }
+  return ids;
 }
 
 // The flags every child needs to join the run: the launcher's own, resolved.
@@ -176,7 +190,14 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
                                     roleFlags(flags, options, dds::SecurityRole::FusionCenter),
                                     plan.log_dir));
   const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
-  for (const std::vector<int>& sensors : sensorBlocks(hosts, sensor_count, per_process)) {
+  // External sensors get no agent: a participant of the user's speaks for them.
+  const std::vector<int> external = externalSensors(options, sensor_count);
+  std::vector<std::vector<int>> blocks;
+  for (std::vector<int> block : sensorBlocks(hosts, sensor_count, per_process)) {
+    std::erase_if(block, [&](int j) { return std::binary_search(external.begin(), external.end(), j); });
+    if (!block.empty()) blocks.push_back(std::move(block));
+  }
+  for (const std::vector<int>& sensors : blocks) {
     const std::string block = emulator::formatSensorIds(sensors);
     const std::string name = "sensor_agent-" + block;
     plan.children.push_back(
@@ -210,6 +231,7 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   if (!options.arrivals.empty()) {
     coordinator.insert(coordinator.end(), {"--arrivals", options.arrivals});
   }
+  coordinator.insert(coordinator.end(), {"--ready-timeout", formatNumber(options.ready_timeout_s)});
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator),
                                     roleFlags(flags, options, dds::SecurityRole::Coordinator),
                                     plan.log_dir));
@@ -339,6 +361,28 @@ void explainFailure(const RunFailure& failure, const LaunchPlan& plan, const Pro
   std::fprintf(stderr, "sensornet: logs in %s\n", plan.log_dir.c_str());
 }
 
+// External sensors no participant spoke for: the cause of a coordinator that gave up waiting
+// is named with them (on standard error and in its fault's detail), not left at "exited with
+// status 1".
+void nameSilentExternals(const std::vector<int>& external, const ProgressWatcher& progress,
+                         std::vector<Fault>& faults) {
+  std::vector<int> silent;
+  for (const int j : external) {
+    if (!progress.heardFrom(j)) silent.push_back(j);
+  }
+  if (silent.empty()) return;
+  const std::string why = "no participant spoke for the external sensors " +
+                          emulator::formatSensorIds(silent) +
+                          " (--external-sensors): the coordinator waited for them up to "
+                          "--ready-timeout";
+  std::fprintf(stderr, "sensornet: %s\n", why.c_str());
+  for (Fault& f : faults) {
+    if (f.process == kCoordinator && f.kind == emulator::FaultKind::ProcessFailed) {
+      f.detail += "; " + why;
+    }
+  }
+}
+
 // Every role's identity and one per sensor process of `plan`, each checked (security.hpp).
 void checkSecurityFiles(const LaunchOptions& options, const LaunchPlan& plan) {
   std::vector<std::string> blocks;
@@ -377,6 +421,7 @@ int runLaunch(LaunchOptions options) {
     throw InputError(options.scenario_path, "network",
                      "a network: section for --network-aware yes (the scenario has none)");
   }
+  const std::vector<int> external = externalSensors(options, scenario.sensorCount());
   LaunchPlan plan = planLaunch(options, scenario, programs, domain, hosts ? &*hosts : nullptr);
   // Every identity's files, so that a bad one is refused here, not when its process starts.
   if (!options.run.security_dir.empty()) checkSecurityFiles(options, plan);
@@ -406,6 +451,14 @@ int runLaunch(LaunchOptions options) {
                "run id: %s; change it live with: sensornet replan%s --surrogate info (or "
                "--exclude, --include, --budget, --schedule); see it with: sensornet status%s\n",
                plan.run_id.c_str(), reach.c_str(), reach.c_str());
+  if (!external.empty()) {
+    std::fprintf(stderr,
+                 "sensornet: sensors %s are external: the run waits (up to the coordinator's "
+                 "ready timeout) for a participant on DDS domain %d that writes for them in "
+                 "partition %s/sensors/<their ids> (docs/wire-protocol.md, \"Sensor\")\n",
+                 emulator::formatSensorIds(external).c_str(), static_cast<int>(domain.domain_id),
+                 domain.partition.c_str());
+  }
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   try {
     writeRunRecord(plan.log_dir, {plan.run_id, fs::absolute(options.scenario_path),
@@ -428,15 +481,18 @@ int runLaunch(LaunchOptions options) {
     spdlog::warn("{} had not left after the run ended; stopped it ({})", lingering.name,
                  lingering.describe());
   }
+  std::vector<Fault> faults = core.faults();
+  nameSilentExternals(external, progress, faults);
   const RunEnd end{
       plan.run_id,
       plan.report_path,
       scenario.sensorCount(),
       options.episodes,
-      core.faults(),
+      std::move(faults),
       core.interrupted(),
       options.require.empty() ? std::vector<emulator::Requirement>{}
-                              : emulator::parseRequirements(options.require)};
+                              : emulator::parseRequirements(options.require),
+      external};
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
@@ -547,6 +603,11 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->add_option("--log-dir", options->log_dir,
                   "where each process's log goes, made if missing (default "
                   "/tmp/sensornet-<uid>/<run id>/)");
+  cmd->add_option("--ready-timeout", options->ready_timeout_s,
+                  "seconds the coordinator waits for every sensor (yours with --external-sensors "
+                  "too) and the fusion center before it gives up and the run fails")
+      ->capture_default_str()
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")
@@ -574,6 +635,12 @@ Subcommand addLaunchCommand(CLI::App& app) {
                       "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
                       "the schedule, not the run's cost"),
       wordTexts<ArrivalMode>());
+  cmd->add_option("--external-sensors", options->external_sensors,
+                  "sensors (ids as sensor_agent --sensors takes them: 2,5 or 0-2) that a "
+                  "participant of your own speaks for: no agent is started for them, and the run "
+                  "waits for their SensorStatus READY as for its own agents. It writes "
+                  "Measurement, EpisodeTally and SensorStatus in a partition that names them, "
+                  "sensornet/<run id>/sensors/<ids> (docs/wire-protocol.md, \"Sensor\")");
   cmd->add_option("--junit", options->junit_path,
                   "also write the run as JUnit XML for CI: a test case \"run\" that passes only "
                   "when the run completed (its message: status, exit code, faults by kind) and "

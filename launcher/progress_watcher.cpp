@@ -29,9 +29,11 @@ void ProgressWatcher::poll(std::chrono::milliseconds wait) {
   if (started_) return;
   const RunPosition at = view_.positionAt(emulator::wallNowNs());
   if (at.episode || view_.ended()) {
-    // The coordinator starts only once every sensor is ready.
+    // The coordinator starts only once every sensor is ready; a run that ended without an
+    // episode (its coordinator gave up waiting) did not have them all.
     started_ = true;
-    if (static_cast<int>(ready_said_) < sensor_count_) {
+    const bool ran = at.episode.has_value() || view_.episodesReported() > 0;
+    if (ran && static_cast<int>(ready_said_) < sensor_count_) {
       sayReady(static_cast<std::size_t>(sensor_count_));
     }
     return;

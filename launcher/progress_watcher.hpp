@@ -38,6 +38,9 @@ class ProgressWatcher {
   // Waits up to `wait` for the run's topics; prints a line for each episode reported meanwhile.
   void poll(std::chrono::milliseconds wait);
   [[nodiscard]] std::size_t episodesSeen() const noexcept { return view_.episodesReported(); }
+  [[nodiscard]] bool heardFrom(int sensor) const {
+    return view_.heardFrom(static_cast<std::uint32_t>(sensor));
+  }
   [[nodiscard]] RunPosition positionAt(std::int64_t wall_ns) const {
     return view_.positionAt(wall_ns);
   }

@@ -242,6 +242,10 @@ RunOutcome settleRun(const RunEnd& end) {
     // The launcher's causes first: what the other processes saw of them follows, marked.
     (*report)["faults"] = faultList(verdict.faults, field(*report, "faults"));
   }
+  if (!end.external_sensors.empty()) {  // the roles a participant of the user's played
+    (*report)["external"] = {{"sensors", end.external_sensors}};
+    outcome.amended = true;
+  }
   if (!end.requirements.empty()) {  // against the settled report: its status and faults
     outcome.checks = emulator::checkRequirements(end.requirements, *report);
     (*report)["requirements"] = emulator::toJson(outcome.checks);

@@ -35,6 +35,7 @@ struct RunEnd {
   std::vector<Fault> faults;  // the launcher's own
   bool interrupted = false;   // a signal stopped the run
   std::vector<emulator::Requirement> requirements;  // --require: checked against the report
+  std::vector<int> external_sensors;  // --external-sensors: recorded in the report
 };
 
 struct RunOutcome {

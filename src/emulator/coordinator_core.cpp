@@ -10,6 +10,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/network.hpp"
+#include "sensornet/emulator/sensor_ids.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -231,8 +232,15 @@ void CoordinatorCore::tickAwaitingPeers(std::int64_t now_ns) {
     phase_ = Phase::Settling;
     settled_ns_ = now_ns + config_.settle.count();
   } else if (now_ns > ready_deadline_ns_) {
-    log(err, fmt::format("not ready after {} s: {} of {} sensors ready, fusion center {}",
+    std::vector<int> silent;
+    const std::set<int>& failed = replanner_.settings().failed;
+    for (int j = 0; j < run_.scenario.sensorCount(); ++j) {
+      if (!failed.count(j) && !ready_sensors_.count(j)) silent.push_back(j);
+    }
+    log(err, fmt::format("not ready after {} s: {} of {} sensors ready{}, fusion center {}",
                          config_.ready_timeout_s, readySensorsInService(), sensorsInService(),
+                         silent.empty() ? std::string()
+                                        : " (not ready: sensors " + formatSensorIds(silent) + ")",
                          fusion_matched_ ? "present" : "missing"));
     phase_ = Phase::Ended;
     exit_code_ = kCoordinatorExitFailed;

@@ -282,6 +282,11 @@ std::size_t RunView::sensorsReady() const {
       [](const auto& s) { return s.second.state.has_value() && s.second.schedule_version >= 1; }));
 }
 
+bool RunView::heardFrom(std::uint32_t sensor) const {
+  const auto found = sensors_.find(sensor);
+  return found != sensors_.end() && found->second.state.has_value();
+}
+
 bool RunView::allSensorsAccounted() const {
   if (!scenario_) return false;
   for (std::uint32_t id = 0; id < scenario_->sensor_count; ++id) {

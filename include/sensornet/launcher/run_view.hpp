@@ -194,6 +194,8 @@ class RunView {
   }
   // Sensors whose status names a schedule version (as the coordinator counts them ready).
   [[nodiscard]] std::size_t sensorsReady() const;
+  // A status of `sensor` came (from its agent or a participant speaking for it).
+  [[nodiscard]] bool heardFrom(std::uint32_t sensor) const;
   // The scenario is known and every one of its sensors answered or is known dead.
   [[nodiscard]] bool allSensorsAccounted() const;
   [[nodiscard]] std::size_t episodesReported() const noexcept { return reported_count_; }

@@ -262,11 +262,19 @@ TEST_F(CoordinatorReadiness, AFailedSensorIsNotWaitedFor) {
 TEST_F(CoordinatorReadiness, NotReadyInTimeExitsOneWithoutAShutdown) {
   (void)make();
   core_->onFusionCenterMatched(true);
+  // Sensors 0 and 2 said they are ready; 1 and 3 (of the 4) never did: the line names them.
+  (void)core_->onSensorStatus({0, SensorState::Ready, 1, ""}, now_);
+  (void)core_->onSensorStatus({2, SensorState::Ready, 1, ""}, now_);
   EXPECT_TRUE(only<ExitProgram>(tickAt(kT0 + 30 * kSecond)).empty()) << "the limit itself is in";
   const CoordinatorActions late = tickAt(kT0 + 30 * kSecond + 1);
   EXPECT_TRUE(only<ShutDownRun>(late).empty());
   ASSERT_EQ(only<ExitProgram>(late).size(), 1u);
   EXPECT_EQ(core_->exitCode(), kCoordinatorExitFailed);
+  bool named = false;
+  for (const LogLine& line : only<LogLine>(late)) {
+    named |= line.text.find("2 of 4 sensors ready (not ready: sensors 1,3)") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << "the sensors that never said they are ready are named";
 }
 
 TEST_F(CoordinatorReadiness, AStatusOfASensorTheScenarioDoesNotHaveIsCountedAndIgnored) {
