@@ -242,6 +242,13 @@ RunOutcome settleRun(const RunEnd& end) {
     // The launcher's causes first: what the other processes saw of them follows, marked.
     (*report)["faults"] = faultList(verdict.faults, field(*report, "faults"));
   }
+  // The fusion center learns the planned count from the first episode's start: a run that
+  // ended before one says 0. What the launch asked for is the plan.
+  if (const json planned = field(*report, "episodes_planned");
+      !planned.is_number() || planned.get<double>() < 1.0) {
+    (*report)["episodes_planned"] = end.episodes_planned;
+    outcome.amended = true;
+  }
   if (!end.external_sensors.empty()) {  // the roles a participant of the user's played
     (*report)["external"] = {{"sensors", end.external_sensors}};
     outcome.amended = true;

@@ -79,6 +79,9 @@ TEST_F(ExternalRoles, AnExternalSensorNobodySpeaksForFailsTheRunNamingIt) {
   const json report = readJson(dir_ / "report.json");
   ASSERT_TRUE(report.is_object()) << r.err;
   EXPECT_EQ(report.at("status"), "failed");
+  EXPECT_EQ(report.at("episodes_planned"), 2) << "the plan is what the launch asked for";
+  EXPECT_NE(r.out.find("episodes: 0 complete, 0 incomplete, of 2 planned"), std::string::npos)
+      << r.out;
   bool named = false;
   for (const json& f : report.at("faults")) {
     named |= f.at("process") == "coordinator" &&
