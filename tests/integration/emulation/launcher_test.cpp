@@ -29,6 +29,7 @@
 
 #include "sensornet/dds/domain.hpp"
 #include "support/background_process.hpp"
+#include "support/occurrences.hpp"
 #include "support/process.hpp"
 
 namespace {
@@ -224,14 +225,7 @@ TEST_F(Launcher, ShortRunCompletesWritesTheReportAndLeavesNothingBehind) {
   EXPECT_FALSE(fs::exists(dir_ / "sensornet" / "current-run"));
 }
 
-// How many times `needle` occurs in `text`.
-std::size_t occurrences(const std::string& text, const std::string& needle) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
-    ++n;
-  }
-  return n;
-}
+using sensornet::testing::occurrences;
 
 // --require makes a run a CI gate: each criterion is judged from the report (recomputed here
 // from the report's own numbers), a failed one exits 4 while the status stays the run's; with

@@ -4,16 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include "support/occurrences.hpp"
+
 namespace sensornet::emulator {
 namespace {
 
-std::size_t count(const std::string& text, const std::string& needle) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
-    ++n;
-  }
-  return n;
-}
+using sensornet::testing::occurrences;
 
 RequirementCheck check(const std::string& text, bool pass, const std::string& measured) {
   RequirementCheck c;
@@ -34,9 +30,9 @@ TEST(JunitReport, ADegradedRunAndAFailedCriterionAreFailuresWithTheirReasons) {
   run.checks = {check("no-loss", true, "0"), check("latency-p99<=5ms", false, "7.2 ms")};
   run.seconds = 12.5;
   const std::string xml = junitXml(run);
-  EXPECT_EQ(count(xml, "<testcase "), 3u);
-  EXPECT_EQ(count(xml, "</testcase>"), 3u);
-  EXPECT_EQ(count(xml, "<failure "), 2u) << xml;
+  EXPECT_EQ(occurrences(xml, "<testcase "), 3u);
+  EXPECT_EQ(occurrences(xml, "</testcase>"), 3u);
+  EXPECT_EQ(occurrences(xml, "<failure "), 2u) << xml;
   EXPECT_NE(xml.find("tests=\"3\" failures=\"2\" errors=\"0\" time=\"12.5\""), std::string::npos)
       << xml;
   EXPECT_NE(xml.find("name=\"sensornet run r&lt;1&gt;\""), std::string::npos) << xml;
@@ -56,8 +52,8 @@ TEST(JunitReport, ACompletedRunWithoutCriteriaIsOnePassingCase) {
   run.status = "completed";
   run.exit_code = 0;
   const std::string xml = junitXml(run);
-  EXPECT_EQ(count(xml, "<testcase "), 1u);
-  EXPECT_EQ(count(xml, "<failure"), 0u) << xml;
+  EXPECT_EQ(occurrences(xml, "<testcase "), 1u);
+  EXPECT_EQ(occurrences(xml, "<failure"), 0u) << xml;
   EXPECT_NE(xml.find("tests=\"1\" failures=\"0\""), std::string::npos) << xml;
   EXPECT_NE(xml.find("status completed, exit 0, 0 faults"), std::string::npos) << xml;
 }

@@ -21,6 +21,7 @@
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/svg_plot.hpp"
 #include "support/csv_rows.hpp"
+#include "support/occurrences.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -248,11 +249,7 @@ std::string svgOf(const std::string& page, const std::string& id) {
   return page.substr(from, page.find("</svg>", at) - from);
 }
 
-std::size_t occurrences(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
+using sensornet::testing::occurrences;
 
 TEST(ReportPage, DrawsOneScheduleMapWithEverySwitchMarked) {
   const std::string page = reportPage(reportWithVersions(10, 12), "r.json");
