@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -11,6 +12,7 @@
 #include "sensornet/core/network.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
+#include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
@@ -204,8 +206,7 @@ class CoordinatorNode {
     for (auto& received : state_reader_.take(8).samples) {
       carryOut(core_.onFusionState(fusionStateOf(*received.sample), wallNowNs()));
     }
-    core_.onFusionCenterMatched(report_reader_.matchedWriters() > 0 &&
-                                state_reader_.matchedWriters() > 0);
+    core_.onFusionCenterMatched(fusionCenterPresent());
     for (auto& received : launcher_commands_.take(8).samples) {
       carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Launcher),
                                wallNowNs()));
@@ -214,6 +215,28 @@ class CoordinatorNode {
       carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Operator),
                                wallNowNs()));
     }
+  }
+
+  // The fusion center counts as present once one participant matched all three: a reader of
+  // this EpisodeControl writer, and writers of the Report and FusionState readers. Discovery
+  // announces endpoints one by one (on a lossy link seconds apart), and a control reader that
+  // matches after the first two episodes were announced gets only the latest of them. The
+  // participants are looked up again when a match count changes, and twice a second in case
+  // one endpoint left and another came between two looks.
+  bool fusionCenterPresent() {
+    const std::array<std::uint32_t, 3> counts{control_writer_.matchedReaders(),
+                                              report_reader_.matchedWriters(),
+                                              state_reader_.matchedWriters()};
+    const std::int64_t now = wallNowNs();
+    if (counts != presence_counts_ || now >= presence_recheck_ns_) {
+      presence_counts_ = counts;
+      presence_recheck_ns_ = now + 500'000'000;
+      fusion_present_ = counts[1] > 0 && counts[2] > 0 &&
+                        dds::sharesParticipant({dds::participantsOfMatchedReaders(control_writer_),
+                                                dds::participantsOfMatchedWriters(report_reader_),
+                                                dds::participantsOfMatchedWriters(state_reader_)});
+    }
+    return fusion_present_;
   }
 
   void carryOut(const emulator::CoordinatorActions& actions) {
@@ -311,6 +334,9 @@ class CoordinatorNode {
   dds::ReadCondition operator_command_ready_;
   dds::ReadCondition status_ready_;
   dds::ReadCondition report_ready_;
+  std::array<std::uint32_t, 3> presence_counts_{};
+  std::int64_t presence_recheck_ns_ = 0;
+  bool fusion_present_ = false;
 };
 
 // Plans version 1 (or adopts --schedule), as a fresh journal.

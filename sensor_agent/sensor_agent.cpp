@@ -359,12 +359,14 @@ class Agent {
     }
   }
 
-  // Ready once it has the scenario and a schedule and its measurement and tally writers have
+  // Ready once it has the scenario and a schedule, its measurement and tally writers have
   // matched a reader (the fusion center's): a measurement written before the match would not
-  // reach a volatile reader. (On a lossy link discovery can lag the scenario by seconds.)
+  // reach a volatile reader, and its episode-control reader has matched the coordinator's
+  // writer: a reader that matches late gets only the latest announcement. (On a lossy link
+  // discovery can lag the scenario by seconds, and endpoints are announced one by one.)
   [[nodiscard]] sensornet_SensorState currentState() const {
     if (episode_) return sensornet_SENSOR_RUNNING;
-    if (inputs_.hasScenario() && !inputs_.book().empty() &&
+    if (inputs_.hasScenario() && !inputs_.book().empty() && inputs_.controlMatched() &&
         measurement_writer_.matchedReaders() > 0 && tally_writer_.matchedReaders() > 0) {
       return sensornet_SENSOR_READY;
     }

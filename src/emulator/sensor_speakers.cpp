@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "sensornet/dds/matched_writers.hpp"
+#include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet::emulator {

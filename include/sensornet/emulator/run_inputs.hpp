@@ -62,6 +62,9 @@ class RunInputs {
   [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return last_started_; }
   // Every sensor the coordinator has said is dead (from starts and failure notices).
   [[nodiscard]] const std::set<int>& failedSensors() const { return failed_sensors_; }
+  // True once the EpisodeControl reader matched a writer (the coordinator's): before that an
+  // episode's announcement may be missed, since a late joiner gets only the latest control.
+  [[nodiscard]] bool controlMatched() const { return control_reader_.matchedWriters() > 0; }
   // Samples refused, by reason: malformed scenario or schedule, stale schedule, bad episode
   // control.
   [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const { return rejected_; }

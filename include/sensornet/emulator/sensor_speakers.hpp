@@ -3,7 +3,7 @@
 // (run_partitions.hpp), read from its discovery data when its first sample is taken and kept,
 // so that the question costs a map look-up per sample. In a secured run the partition is the
 // writer's authenticated identity. Used by the fusion center and the coordinator, in their main
-// loops only (not thread-safe; never from a listener, see dds/matched_writers.hpp).
+// loops only (not thread-safe; never from a listener, see dds/matched_endpoints.hpp).
 //
 //   SensorSpeakers speakers(participant.partition());
 //   if (!speakers.speaksFor(reader, info.publication, sample.sensor_id)) { refuse; }
