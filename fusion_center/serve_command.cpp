@@ -55,6 +55,7 @@ struct ServeOptions {
   double state_period_s = 0.05;  // FusionState publication period (wall seconds)
   bool json = false;
   bool resume = false;           // restarted by the launcher: go on from the episode log
+  bool reference = false;        // beside an external fusion center: write in P/reference
 };
 
 // The Report instances (one per episode) kept registered for late joiners: the latest ones.
@@ -229,53 +230,6 @@ emulator::SensorStatus statusOf(const sensornet_SensorStatus& s, emulator::Write
   return out;
 }
 
-// A Report sample of an episode's result and the run's summary so far.
-sensornet_Report reportSample(const std::string& run_id, const emulator::EpisodeResult& e,
-                              const emulator::RunSummary& s,
-                              std::vector<sensornet_SensorCounts>& counts) {
-  for (std::size_t j = 0; j < e.sensors.size(); ++j) {
-    const emulator::SensorTally& t = e.sensors[j];
-    counts.push_back({static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late,
-                      t.sent, t.dropped_by_network});
-  }
-  sensornet_Report r{};
-  r.run_id = dds::borrowString(run_id);
-  r.episode = e.episode;
-  r.realized_cost = e.realized_cost;
-  r.realtime_cost = e.realtime_cost;
-  r.bracket_lower = e.bracket.info;
-  r.bracket_upper = e.bracket.cov;
-  r.delivered_bracket_lower = e.delivered_bracket.info;
-  r.delivered_bracket_upper = e.delivered_bracket.cov;
-  dds::borrowSequence(r.schedule_versions, e.versions);
-  r.nees = e.nees;
-  dds::borrowSequence(r.counts, counts);
-  r.latency_median_s = s.latency_median_s;
-  r.latency_p99_s = s.latency_p99_s;
-  r.summary.episodes = s.episodes;
-  r.summary.episodes_complete = s.episodes_complete;
-  r.summary.realized_mean = s.mean;
-  r.summary.realized_ci95_low = s.ci95_low;
-  r.summary.realized_ci95_high = s.ci95_high;
-  r.summary.realtime_mean = s.realtime_mean;
-  r.summary.bracket_lower_mean = s.bracket_mean.info;
-  r.summary.bracket_upper_mean = s.bracket_mean.cov;
-  r.summary.meets_bracket = s.meets_bracket.value_or(false);
-  r.summary.delivered_lower_mean = s.delivered_bracket_mean.info;
-  r.summary.delivered_upper_mean = s.delivered_bracket_mean.cov;
-  r.summary.meets_delivered_bracket = s.meets_delivered_bracket.value_or(false);
-  r.summary.nees_mean = s.nees_mean;
-  r.summary.sent = s.sent;
-  r.summary.received = s.received;
-  r.summary.lost = s.lost;
-  r.summary.dropped_by_network = s.dropped_by_network;
-  r.summary.latency_median_s = s.latency_median_s;
-  r.summary.latency_p99_s = s.latency_p99_s;
-  r.complete = e.complete;
-  r.incomplete_reason = dds::borrowString(e.incomplete_reason);
-  return r;
-}
-
 class FusionCenter {
  public:
   explicit FusionCenter(const ServeOptions& options)
@@ -298,8 +252,9 @@ class FusionCenter {
                        dds::readerQosMatching<sensornet_SensorStatus>(sensorPartitions())),
         reply_topic_(participant_),
         reply_reader_(participant_, reply_topic_),
-        report_writer_(participant_, report_topic_, dds::reportWriterQos()),
-        state_writer_(participant_, state_topic_),
+        report_writer_(participant_, report_topic_, outputQos(dds::reportWriterQos())),
+        state_writer_(participant_, state_topic_,
+                      outputQos(dds::defaultEndpointQos<sensornet_FusionState>())),
         waitset_(participant_),
         tally_ready_(tally_reader_),
         status_ready_(status_reader_),
@@ -315,6 +270,13 @@ class FusionCenter {
                                                      : emulator::EpisodeLog::Mode::Truncate);
       spdlog::info("episode log: {}", log_path.string());
     }
+  }
+
+  // The Report and FusionState writers' QoS: in the run's partition, or as the reference
+  // (--reference) in P/reference, where neither the coordinator nor the launcher reads them.
+  [[nodiscard]] dds::Qos outputQos(dds::Qos qos) const {
+    if (options_.reference) qos.partition(emulator::referencePartition(participant_.partition()));
+    return qos;
   }
 
   int run() {
@@ -449,7 +411,7 @@ class FusionCenter {
                    a.result.episode, json(a.lacking_writers).dump());
     }
     std::vector<sensornet_SensorCounts> counts;
-    const sensornet_Report r = reportSample(options_.run.run_id, a.result, a.summary, counts);
+    const sensornet_Report r = emulator::reportSample(options_.run.run_id, a.result, a.summary, counts);
     if (report_writer_.write(r) == dds::WriteResult::TimedOut) {
       spdlog::warn("the report of episode {} timed out on the wire (kept in the file)",
                    a.result.episode);
@@ -572,6 +534,11 @@ Subcommand addServeCommand(CLI::App& app) {
                   "the emulated clock, past which the run is reported as overloaded (degraded)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
+  cmd->add_flag("--reference", options->reference,
+                "run as the reference beside an external fusion center (sensornet launch "
+                "--reference-fusion): fuse the same measurements, write the report file, and "
+                "publish Report and FusionState in partition <partition>/reference, where the "
+                "coordinator does not pace on them");
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");
   cmd->add_flag("--resume", options->resume,
                 "restarted after a death (the launcher adds it): start the report from the "

@@ -75,8 +75,10 @@ struct LaunchOptions {
   std::string arrivals;  // poisson or timetable; empty: the scenario's `arrivals:`
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
   std::string junit_path;  // --junit: the run and each criterion as JUnit test cases
-  std::string external_sensors;
-  double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator  // --external-sensors: sensors a participant of the user's speaks for
+  std::string external_sensors;  // --external-sensors: sensors a participant of the user's speaks for
+  bool external_fusion_center = false;  // --external-fusion-center: a participant of the user's fuses
+  bool reference_fusion = false;  // --reference-fusion: ours beside it, on the same measurements
+  double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
@@ -91,6 +93,7 @@ struct LaunchPlan {
   std::vector<std::string> sensor_agents;
   std::map<std::string, std::vector<int>> sensors_of;  // sensor agent -> the sensors it hosts
   fs::path coordinator_state;  // the coordinator's journal, what a restarted one resumes from
+  fs::path reference_report;   // --reference-fusion: the reference fusion center's report
 };
 
 // --require as parseRequirements() takes it, so that an unknown criterion is refused before
@@ -185,10 +188,18 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
       plan.default_report ? plan.log_dir / "report.json" : fs::absolute(options.report_path);
   const std::vector<std::string> flags = runFlags(options, domain);
 
-  plan.children.push_back(childSpec(kFusionCenter,
-                                    {programs.fusion_center, "serve", "--report", plan.report_path},
-                                    roleFlags(flags, options, dds::SecurityRole::FusionCenter),
-                                    plan.log_dir));
+  if (!options.external_fusion_center) {
+    plan.children.push_back(childSpec(kFusionCenter,
+                                      {programs.fusion_center, "serve", "--report", plan.report_path},
+                                      roleFlags(flags, options, dds::SecurityRole::FusionCenter),
+                                      plan.log_dir));
+  } else if (options.reference_fusion) {
+    plan.reference_report = plan.log_dir / "reference-report.json";
+    plan.children.push_back(childSpec(
+        kReferenceFusionCenter,
+        {programs.fusion_center, "serve", "--reference", "--report", plan.reference_report},
+        roleFlags(flags, options, dds::SecurityRole::FusionCenter), plan.log_dir));
+  }
   const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
   // External sensors get no agent: a participant of the user's speaks for them.
   const std::vector<int> external = externalSensors(options, sensor_count);
@@ -244,7 +255,7 @@ void placeOnHosts(LaunchPlan& plan, const emulator::HostsFile& hosts,
   for (ChildSpec& child : plan.children) {
     if (child.name == kCoordinator) {
       placement.place(child, hosts.coordinatorHost(), dds::DiscoveryRole::Hub);
-    } else if (child.name == kFusionCenter) {
+    } else if (child.name == kFusionCenter || child.name == kReferenceFusionCenter) {
       placement.place(child, hosts.fusionCenterHost(), dds::DiscoveryRole::Hub);
     } else {
       const emulator::Host& host = hosts.hostOfSensor(plan.sensors_of.at(child.name).front());
@@ -301,6 +312,10 @@ std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher&
   removeRegularFile(plan.report_path);
   removeRegularFile(emulator::episodeLogPath(plan.report_path));
   removeRegularFile(plan.coordinator_state);
+  if (!plan.reference_report.empty()) {
+    removeRegularFile(plan.reference_report);
+    removeRegularFile(emulator::episodeLogPath(plan.reference_report));
+  }
   return lock;
 }
 
@@ -332,6 +347,9 @@ SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& o
     config.sensor_agents.emplace_back(name, plan.sensors_of.at(name));
   }
   config.on_sensor_failure = *lookUpWord<emulator::FailurePolicy>(options.on_sensor_failure);
+  if (options.external_fusion_center) {
+    config.report_writer = options.reference_fusion ? kReferenceFusionCenter : "";
+  }
   for (const CrashFault& crash : scenario.faults) config.scripted_crash_sensors.push_back(crash.sensor);
   if (options.timeout_s > 0.0) {
     config.timeout = std::chrono::duration_cast<milliseconds>(
@@ -364,21 +382,29 @@ void explainFailure(const RunFailure& failure, const LaunchPlan& plan, const Pro
 // External sensors no participant spoke for: the cause of a coordinator that gave up waiting
 // is named with them (on standard error and in its fault's detail), not left at "exited with
 // status 1".
-void nameSilentExternals(const std::vector<int>& external, const ProgressWatcher& progress,
-                         std::vector<Fault>& faults) {
+void nameSilentExternals(const std::vector<int>& external, bool external_fusion_center,
+                         const ProgressWatcher& progress, std::vector<Fault>& faults) {
   std::vector<int> silent;
   for (const int j : external) {
     if (!progress.heardFrom(j)) silent.push_back(j);
   }
-  if (silent.empty()) return;
-  const std::string why = "no participant spoke for the external sensors " +
-                          emulator::formatSensorIds(silent) +
-                          " (--external-sensors): the coordinator waited for them up to "
-                          "--ready-timeout";
-  std::fprintf(stderr, "sensornet: %s\n", why.c_str());
-  for (Fault& f : faults) {
-    if (f.process == kCoordinator && f.kind == emulator::FaultKind::ProcessFailed) {
-      f.detail += "; " + why;
+  std::vector<std::string> whys;
+  if (!silent.empty()) {
+    whys.push_back("no participant spoke for the external sensors " +
+                   emulator::formatSensorIds(silent) +
+                   " (--external-sensors): the coordinator waited for them up to --ready-timeout");
+  }
+  if (external_fusion_center && !progress.reportWriterSeen()) {
+    whys.emplace_back(
+        "no participant played the fusion center (--external-fusion-center): no writer of the "
+        "run's Report topic came within --ready-timeout");
+  }
+  for (const std::string& why : whys) {
+    std::fprintf(stderr, "sensornet: %s\n", why.c_str());
+    for (Fault& f : faults) {
+      if (f.process == kCoordinator && f.kind == emulator::FaultKind::ProcessFailed) {
+        f.detail += "; " + why;
+      }
     }
   }
 }
@@ -417,6 +443,16 @@ int runLaunch(LaunchOptions options) {
     domain.cyclone_config = placement->launcherConfigXml();
   }
   const EmulatorPrograms programs = findEmulatorPrograms();
+  if (options.reference_fusion && !options.external_fusion_center) {
+    throw InputError("--reference-fusion", "",
+                     "--external-fusion-center as well (the reference fusion center runs beside "
+                     "an external one)");
+  }
+  if (options.reference_fusion && !options.run.security_dir.empty()) {
+    throw InputError("--reference-fusion", "",
+                     "a run without --security: the reference publishes in partition "
+                     "<partition>/reference, which no identity of pki init may write in");
+  }
   if (options.network_aware == "yes" && !scenario.network) {
     throw InputError(options.scenario_path, "network",
                      "a network: section for --network-aware yes (the scenario has none)");
@@ -438,6 +474,11 @@ int runLaunch(LaunchOptions options) {
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
   if (placement) writeLauncherConfig(plan, domain);
+  // An external fusion center's Reports are the run's results: the launcher keeps them in the
+  // episode log, as our fusion center would, and builds the report from it.
+  if (options.external_fusion_center) {
+    progress.recordReportsTo(emulator::episodeLogPath(plan.report_path), scenario.sensorCount());
+  }
 
   // The flags a tool on this host needs to reach the run (--hosts: the launcher's config).
   const std::string reach = " --run-id " + plan.run_id +
@@ -458,6 +499,15 @@ int runLaunch(LaunchOptions options) {
                  "partition %s/sensors/<their ids> (docs/wire-protocol.md, \"Sensor\")\n",
                  emulator::formatSensorIds(external).c_str(), static_cast<int>(domain.domain_id),
                  domain.partition.c_str());
+  }
+  if (options.external_fusion_center) {
+    std::fprintf(stderr,
+                 "sensornet: the fusion center is external: the run waits (up to the "
+                 "coordinator's ready timeout) for a participant on DDS domain %d that reads the "
+                 "run in partition %s and writes Report and FusionState there "
+                 "(docs/wire-protocol.md, \"Fusion center\")%s\n",
+                 static_cast<int>(domain.domain_id), domain.partition.c_str(),
+                 options.reference_fusion ? "; ours runs beside it as the reference" : "");
   }
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   try {
@@ -482,7 +532,7 @@ int runLaunch(LaunchOptions options) {
                  lingering.describe());
   }
   std::vector<Fault> faults = core.faults();
-  nameSilentExternals(external, progress, faults);
+  nameSilentExternals(external, options.external_fusion_center, progress, faults);
   const RunEnd end{
       plan.run_id,
       plan.report_path,
@@ -492,7 +542,10 @@ int runLaunch(LaunchOptions options) {
       core.interrupted(),
       options.require.empty() ? std::vector<emulator::Requirement>{}
                               : emulator::parseRequirements(options.require),
-      external};
+      external,
+      options.external_fusion_center,
+      plan.reference_report,
+      progress.reportsRefused()};
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
@@ -641,6 +694,18 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "waits for their SensorStatus READY as for its own agents. It writes "
                   "Measurement, EpisodeTally and SensorStatus in a partition that names them, "
                   "sensornet/<run id>/sensors/<ids> (docs/wire-protocol.md, \"Sensor\")");
+  cmd->add_flag("--external-fusion-center", options->external_fusion_center,
+                "start no fusion center: a participant of your own fuses the run. It reads the "
+                "run's topics, writes a Report per episode (the coordinator paces the episodes on "
+                "them) and FusionState (docs/wire-protocol.md, \"Fusion center\"); the launcher "
+                "builds the report from its Reports (report.jsonl beside it), with "
+                "\"external\": {\"fusion_center\": true}");
+  cmd->add_flag("--reference-fusion", options->reference_fusion,
+                "with --external-fusion-center: also run ours on the same measurements as the "
+                "reference (writing in <partition>/reference, log dir reference-report.json); "
+                "the report adds per episode its realized cost beside the external one and their "
+                "relative difference, and the criterion fusion-agreement<=X of --require checks "
+                "the largest");
   cmd->add_option("--junit", options->junit_path,
                   "also write the run as JUnit XML for CI: a test case \"run\" that passes only "
                   "when the run completed (its message: status, exit code, faults by kind) and "

@@ -44,6 +44,12 @@ class ProgressWatcher {
   [[nodiscard]] RunPosition positionAt(std::int64_t wall_ns) const {
     return view_.positionAt(wall_ns);
   }
+  // The external fusion center's Reports into the episode log (RunFollower::recordReportsTo).
+  void recordReportsTo(const std::filesystem::path& path, int sensor_count) {
+    follower_.recordReportsTo(path, sensor_count);
+  }
+  [[nodiscard]] std::uint64_t reportsRefused() const noexcept { return follower_.reportsRefused(); }
+  [[nodiscard]] bool reportWriterSeen() const noexcept { return follower_.reportWriterSeen(); }
   // Its participant in the run's domain and partition, for other launcher entities of the run.
   [[nodiscard]] const dds::Participant& participant() const noexcept {
     return follower_.participant();

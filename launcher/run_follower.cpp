@@ -1,5 +1,7 @@
 #include "run_follower.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <thread>
 
 #include "sensornet/dds/wire.hpp"
@@ -121,10 +123,29 @@ void RunFollower::pollInto(RunView& view, std::chrono::milliseconds wait) {
     if (ours(s.sample->run_id)) view.onSchedule(scheduleOf(*s.sample), now);
   }
   takeStatuses(view, now);
+  if (!report_writer_seen_ && reports_.matchedWriters() > 0) report_writer_seen_ = true;
   for (const auto& s : reports_.take().samples) {
-    if (ours(s.sample->run_id)) view.onReport(reportOf(*s.sample), now);
+    if (!ours(s.sample->run_id)) continue;
+    record(*s.sample);
+    view.onReport(reportOf(*s.sample), now);
   }
   takeControls(view, now);
+}
+
+void RunFollower::recordReportsTo(const std::filesystem::path& path, int sensor_count) {
+  record_ = std::make_unique<emulator::EpisodeLog>(path);
+  record_sensor_count_ = sensor_count;
+}
+
+void RunFollower::record(const sensornet_Report& report) {
+  if (!record_ || recorded_.contains(report.episode)) return;
+  try {
+    record_->append(emulator::episodeEntryOfReport(report, record_sensor_count_));
+    recorded_.insert(report.episode);
+  } catch (const std::exception& e) {  // a Report that does not fit, or a log that cannot grow
+    ++reports_refused_;
+    spdlog::warn("did not record the Report of episode {}: {}", report.episode, e.what());
+  }
 }
 
 void RunFollower::takeStatuses(RunView& view, std::int64_t now) {

@@ -13,6 +13,9 @@
 
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <set>
 #include <string>
 
 #include "sensornet/dds/domain.hpp"
@@ -20,6 +23,7 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "sensornet/launcher/run_view.hpp"
 
 namespace sensornet::launcher {
@@ -33,12 +37,21 @@ class RunFollower {
   // True if, within `wait`, a writer of the run's Scenario or Report topic matches: a
   // coordinator or fusion center of this run id is alive in this domain and partition.
   [[nodiscard]] bool seesLiveRun(std::chrono::milliseconds wait) const;
+  // From now on, appends every episode's Report (the first of each episode) to the episode log
+  // at `path` as its per_episode entry (episodeEntryOfReport): the record of an external fusion
+  // center's results, from which the launcher builds the run's report. A Report that does not
+  // fit the scenario's `sensor_count` sensors is logged and counted, never recorded.
+  void recordReportsTo(const std::filesystem::path& path, int sensor_count);
+  [[nodiscard]] std::uint64_t reportsRefused() const noexcept { return reports_refused_; }
+  // True once a writer of the run's Report topic was matched (an external fusion center came).
+  [[nodiscard]] bool reportWriterSeen() const noexcept { return report_writer_seen_; }
   // Its participant, for other launcher entities of the run.
   [[nodiscard]] const dds::Participant& participant() const noexcept { return participant_; }
 
  private:
   void takeControls(RunView& view, std::int64_t now_ns);
   void takeStatuses(RunView& view, std::int64_t now_ns);
+  void record(const sensornet_Report& report);
   [[nodiscard]] bool ours(const char* run_id) const;
 
   std::string run_id_;  // from the partition "sensornet/<run id>"; empty: take every sample
@@ -57,6 +70,11 @@ class RunFollower {
   dds::ReadCondition has_scenario_, has_schedule_, has_control_, has_status_, has_report_;
   dds::WaitSet waitset_;
   bool coordinator_seen_ = false;  // the episode controls had a writer
+  bool report_writer_seen_ = false;
+  std::unique_ptr<emulator::EpisodeLog> record_;  // recordReportsTo
+  int record_sensor_count_ = 0;
+  std::set<std::uint32_t> recorded_;
+  std::uint64_t reports_refused_ = 0;
 };
 
 }  // namespace sensornet::launcher

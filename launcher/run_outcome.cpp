@@ -5,12 +5,15 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <set>
 
 #include "output_file.hpp"
 #include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/command_line.hpp"
+#include "sensornet/launcher/supervisor.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -59,6 +62,106 @@ json rebuildReport(const RunEnd& end, bool logged) {
   return report;
 }
 
+json field(const json& object, const char* key) {
+  return object.is_object() && object.contains(key) ? object[key] : json();
+}
+
+// The report of a run whose fusion center was external: built from the Reports the launcher
+// recorded in the episode log, with the status our fusion center would give the same results
+// (completed: every episode complete, nothing lost, no Report refused; else degraded, its
+// cause in `faults`).
+json externalReport(const RunEnd& end, bool logged) {
+  json report = rebuildReport(end, logged);
+  report.erase("rebuilt_from");
+  const fs::path log = emulator::episodeLogPath(end.report_path);
+  report["built_from"] = "the Reports of the external fusion center, recorded in " + log.string();
+  json faults = json::array();
+  const json summary = field(report, "summary");
+  const std::uint64_t lost = field(summary, "lost").is_number_unsigned()
+                                 ? field(summary, "lost").get<std::uint64_t>()
+                                 : 0;
+  if (lost > 0) {
+    faults.push_back(emulator::faultEntry(
+        emulator::FaultKind::Lost, kFusionCenter, std::nullopt, std::nullopt, std::nullopt,
+        "the external fusion center reported " + std::to_string(lost) + " measurements lost"));
+  }
+  if (end.reports_refused > 0) {
+    faults.push_back(emulator::faultEntry(
+        emulator::FaultKind::Rejected, kFusionCenter, std::nullopt, std::nullopt, std::nullopt,
+        std::to_string(end.reports_refused) +
+            " Reports of the external fusion center did not fit the scenario (the launcher's "
+            "log says why)"));
+  }
+  // The latencies the external fusion center measured, as its last Report gave them (ours
+  // sends the run's so far); none when it left them at zero.
+  double median = 0.0;
+  double p99 = 0.0;
+  if (logged) {
+    emulator::forEachReportedEpisode(log, [&](const json& entry) {
+      median = field(entry, "latency_median_s").is_number() ? entry["latency_median_s"].get<double>() : 0.0;
+      p99 = field(entry, "latency_p99_s").is_number() ? entry["latency_p99_s"].get<double>() : 0.0;
+    });
+  }
+  if (median > 0.0) {
+    report["latency_s"]["median"] = median;
+    report["latency_s"]["p99"] = p99;
+  }
+  const bool all_complete = field(summary, "episodes") == field(summary, "episodes_complete");
+  report["status"] = faults.empty() && all_complete ? "completed" : "degraded";
+  report["faults"] = std::move(faults);
+  return report;
+}
+
+// The realized cost of each episode an episode log holds with one (null: not fused).
+std::map<std::uint32_t, double> realizedCosts(const fs::path& log) {
+  std::map<std::uint32_t, double> costs;
+  std::error_code missing;
+  if (!fs::is_regular_file(log, missing)) return costs;
+  emulator::forEachReportedEpisode(log, [&costs](const json& entry) {
+    const json cost = field(entry, "realized_cost");
+    if (field(entry, "episode").is_number_unsigned() && cost.is_number()) {
+      costs.emplace(entry["episode"].get<std::uint32_t>(), cost.get<double>());
+    }
+  });
+  return costs;
+}
+
+// --reference-fusion: per episode the external realized cost beside the reference's and their
+// relative difference |external - reference| / |reference|, and the largest over the episodes
+// both fused (null when there is none).
+json referenceComparison(const RunEnd& end) {
+  const fs::path reference_log = emulator::episodeLogPath(end.reference_report);
+  const std::map<std::uint32_t, double> external =
+      realizedCosts(emulator::episodeLogPath(end.report_path));
+  const std::map<std::uint32_t, double> reference = realizedCosts(reference_log);
+  std::set<std::uint32_t> episodes;
+  for (const auto& [k, cost] : external) episodes.insert(k);
+  for (const auto& [k, cost] : reference) episodes.insert(k);
+  json per_episode = json::array();
+  std::optional<double> largest;
+  std::size_t compared = 0;
+  for (const std::uint32_t k : episodes) {
+    const auto e = external.find(k);
+    const auto r = reference.find(k);
+    json row = {{"episode", k},
+                {"external", e != external.end() ? json(e->second) : json(nullptr)},
+                {"reference", r != reference.end() ? json(r->second) : json(nullptr)},
+                {"relative_difference", nullptr}};
+    if (e != external.end() && r != reference.end()) {
+      const double scale = std::abs(r->second) > 0.0 ? std::abs(r->second) : 1.0;
+      const double difference = std::abs(e->second - r->second) / scale;
+      row["relative_difference"] = difference;
+      largest = std::max(largest.value_or(0.0), difference);
+      ++compared;
+    }
+    per_episode.push_back(std::move(row));
+  }
+  return {{"report", end.reference_report.string()},
+          {"episodes_compared", compared},
+          {"max_relative_difference", largest ? json(*largest) : json(nullptr)},
+          {"per_episode", std::move(per_episode)}};
+}
+
 std::uint64_t finishedEpisodes(const json& report) {
   if (report.contains("episodes") && report["episodes"].is_number_unsigned()) {
     return report["episodes"].get<std::uint64_t>();
@@ -78,10 +181,6 @@ std::string shown(const json& value) {
     return text;
   }
   return "n/a";
-}
-
-json field(const json& object, const char* key) {
-  return object.is_object() && object.contains(key) ? object[key] : json();
 }
 
 // A count that may be given by reason ({"malformed": 2, ...}): its total.
@@ -224,11 +323,18 @@ RunOutcome settleRun(const RunEnd& end) {
   const fs::path log = emulator::episodeLogPath(end.report_path);
   std::error_code missing;
   const bool logged = fs::is_regular_file(log, missing);
-  std::optional<json> report = readReport(end.report_path, end.run_id, logged, seen.problem);
-  seen.readable = report.has_value();
-  if (!report) {
-    report = rebuildReport(end, logged);
-    outcome.rebuilt = true;
+  std::optional<json> report;
+  if (end.external_fusion_center) {  // no process of ours wrote one: the Reports make it
+    report = externalReport(end, logged);
+    seen.readable = true;
+    outcome.amended = true;
+  } else {
+    report = readReport(end.report_path, end.run_id, logged, seen.problem);
+    seen.readable = report.has_value();
+    if (!report) {
+      report = rebuildReport(end, logged);
+      outcome.rebuilt = true;
+    }
   }
   seen.status = report->value("status", std::string());
   seen.finished_episodes = finishedEpisodes(*report);
@@ -236,7 +342,8 @@ RunOutcome settleRun(const RunEnd& end) {
   outcome.status = verdict.status;
   outcome.exit_code = exitCodeOf(verdict.status);
   const std::string status(wordOf(verdict.status));
-  outcome.amended = outcome.rebuilt || status != seen.status || !verdict.faults.empty();
+  outcome.amended =
+      outcome.amended || outcome.rebuilt || status != seen.status || !verdict.faults.empty();
   if (outcome.amended) {
     (*report)["status"] = status;
     // The launcher's causes first: what the other processes saw of them follows, marked.
@@ -249,8 +356,15 @@ RunOutcome settleRun(const RunEnd& end) {
     (*report)["episodes_planned"] = end.episodes_planned;
     outcome.amended = true;
   }
-  if (!end.external_sensors.empty()) {  // the roles a participant of the user's played
-    (*report)["external"] = {{"sensors", end.external_sensors}};
+  if (!end.external_sensors.empty() || end.external_fusion_center) {
+    json external = json::object();  // the roles a participant of the user's played
+    if (!end.external_sensors.empty()) external["sensors"] = end.external_sensors;
+    if (end.external_fusion_center) external["fusion_center"] = true;
+    (*report)["external"] = std::move(external);
+    outcome.amended = true;
+  }
+  if (!end.reference_report.empty()) {
+    (*report)["reference_fusion"] = referenceComparison(end);
     outcome.amended = true;
   }
   if (!end.requirements.empty()) {  // against the settled report: its status and faults
@@ -330,7 +444,10 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
                 shown(ms(field(latency, "median"))).c_str(),
                 shown(ms(field(latency, "p99"))).c_str());
   } else {
-    std::printf("latency publish-to-fusion: not measured (no measurement arrived)\n");
+    std::printf("latency publish-to-fusion: %s\n",
+                field(field(report, "external"), "fusion_center") == true
+                    ? "not reported by the external fusion center"
+                    : "not measured (no measurement arrived)");
   }
   if (delayed) {
     std::printf("emulated network delay: mean %s ms, largest %s ms (emulated time)\n",

@@ -36,6 +36,12 @@ struct RunEnd {
   bool interrupted = false;   // a signal stopped the run
   std::vector<emulator::Requirement> requirements;  // --require: checked against the report
   std::vector<int> external_sensors;  // --external-sensors: recorded in the report
+  // --external-fusion-center: the report is built from the Reports the launcher recorded in the
+  // episode log beside report_path (none written by a process of ours).
+  bool external_fusion_center = false;
+  // --reference-fusion: the reference fusion center's report, compared episode by episode.
+  std::filesystem::path reference_report;
+  std::uint64_t reports_refused = 0;  // external Reports that did not fit the scenario
 };
 
 struct RunOutcome {

@@ -69,13 +69,16 @@ class Wiring {
     }
   }
 
-  // The fusion center last, so that it can write its report; how each child ended goes back to
-  // the core, which counts none of it as a fault.
+  // The fusion center (ours, or the reference beside an external one) last, so that it can
+  // write its report; how each child ended goes back to the core, which counts none of it as a
+  // fault.
   void stop(const RunPosition& at) {
     std::vector<std::string> others = run_.group.runningNames();
     std::erase(others, std::string(kFusionCenter));
+    std::erase(others, std::string(kReferenceFusionCenter));
     std::vector<ChildExit> ended = run_.group.stop(others, kStopGrace);
-    for (ChildExit& e : run_.group.stop({kFusionCenter}, kFusionCenterStopGrace)) {
+    for (ChildExit& e : run_.group.stop({kFusionCenter, kReferenceFusionCenter},
+                                        kFusionCenterStopGrace)) {
       ended.push_back(std::move(e));
     }
     for (ChildExit& e : run_.group.reap()) ended.push_back(std::move(e));

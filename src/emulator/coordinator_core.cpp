@@ -339,8 +339,8 @@ void CoordinatorCore::endRun(const std::string& failure, int exit_code, std::int
   act(ShutDownRun{std::move(c)});
   log(info, fmt::format("run {} shut down after {} episodes{}", config_.run_id, episodesDone(),
                         failure.empty() ? "" : ": " + failure));
-  std::optional<RunSummary> summary;
-  if (failure.empty()) summary = RunSummary{config_.run_id, episodesDone(), book_.latest().version};
+  std::optional<CoordinatorSummary> summary;
+  if (failure.empty()) summary = CoordinatorSummary{config_.run_id, episodesDone(), book_.latest().version};
   phase_ = Phase::Ended;
   exit_code_ = exit_code;
   act(ExitProgram{exit_code, std::move(summary)});

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <vector>
+#include <algorithm>
 
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
@@ -170,6 +172,89 @@ std::string sensorStateName(sensornet_SensorState state) {
       return "failed";
   }
   return "unknown";
+}
+
+sensornet_Report reportSample(const std::string& run_id, const EpisodeResult& e,
+                              const RunSummary& s, std::vector<sensornet_SensorCounts>& counts) {
+  counts.clear();
+  for (std::size_t j = 0; j < e.sensors.size(); ++j) {
+    const SensorTally& t = e.sensors[j];
+    counts.push_back({static_cast<std::uint32_t>(j), t.received, t.expected, t.lost, t.late,
+                      t.sent, t.dropped_by_network});
+  }
+  sensornet_Report r{};
+  r.run_id = dds::borrowString(run_id);
+  r.episode = e.episode;
+  r.realized_cost = e.realized_cost;
+  r.realtime_cost = e.realtime_cost;
+  r.bracket_lower = e.bracket.info;
+  r.bracket_upper = e.bracket.cov;
+  r.delivered_bracket_lower = e.delivered_bracket.info;
+  r.delivered_bracket_upper = e.delivered_bracket.cov;
+  dds::borrowSequence(r.schedule_versions, e.versions);
+  r.nees = e.nees;
+  dds::borrowSequence(r.counts, counts);
+  r.latency_median_s = s.latency_median_s;
+  r.latency_p99_s = s.latency_p99_s;
+  r.summary.episodes = s.episodes;
+  r.summary.episodes_complete = s.episodes_complete;
+  r.summary.realized_mean = s.mean;
+  r.summary.realized_ci95_low = s.ci95_low;
+  r.summary.realized_ci95_high = s.ci95_high;
+  r.summary.realtime_mean = s.realtime_mean;
+  r.summary.bracket_lower_mean = s.bracket_mean.info;
+  r.summary.bracket_upper_mean = s.bracket_mean.cov;
+  r.summary.meets_bracket = s.meets_bracket.value_or(false);
+  r.summary.delivered_lower_mean = s.delivered_bracket_mean.info;
+  r.summary.delivered_upper_mean = s.delivered_bracket_mean.cov;
+  r.summary.meets_delivered_bracket = s.meets_delivered_bracket.value_or(false);
+  r.summary.nees_mean = s.nees_mean;
+  r.summary.sent = s.sent;
+  r.summary.received = s.received;
+  r.summary.lost = s.lost;
+  r.summary.dropped_by_network = s.dropped_by_network;
+  r.summary.latency_median_s = s.latency_median_s;
+  r.summary.latency_p99_s = s.latency_p99_s;
+  r.complete = e.complete;
+  r.incomplete_reason = dds::borrowString(e.incomplete_reason);
+  return r;
+}
+
+nlohmann::json episodeEntryOfReport(const sensornet_Report& r, int sensor_count) {
+  EpisodeResult e;
+  e.episode = r.episode;
+  e.realized_cost = r.realized_cost;
+  e.realtime_cost = r.realtime_cost;
+  e.received_realtime_cost = std::numeric_limits<double>::quiet_NaN();
+  e.bracket = {r.bracket_lower, r.bracket_upper};
+  e.delivered_bracket = {r.delivered_bracket_lower, r.delivered_bracket_upper};
+  const auto versions = dds::viewSequence(r.schedule_versions);
+  e.versions.assign(versions.begin(), versions.end());
+  e.nees = r.nees;
+  e.sensors.resize(static_cast<std::size_t>(std::max(sensor_count, 0)));
+  std::vector<bool> counted(e.sensors.size(), false);
+  for (const sensornet_SensorCounts& c : dds::viewSequence(r.counts)) {
+    if (c.sensor_id >= e.sensors.size() || counted[c.sensor_id]) {
+      throw InputError("Report of episode " + std::to_string(r.episode), "counts.sensor_id",
+                       "each sensor of the scenario (0.." + std::to_string(sensor_count - 1) +
+                           ") at most once, got " + std::to_string(c.sensor_id));
+    }
+    counted[c.sensor_id] = true;
+    SensorTally& t = e.sensors[c.sensor_id];
+    t.sent = c.sent;
+    t.received = c.received;
+    t.lost = c.lost;
+    t.late = c.late;
+    t.expected = c.expected;
+    t.dropped_by_network = c.dropped_by_network;
+    t.tallied = true;
+  }
+  e.complete = r.complete;
+  e.incomplete_reason = std::string(dds::viewString(r.incomplete_reason));
+  nlohmann::json entry = episodeEntry(e);
+  entry["latency_median_s"] = r.latency_median_s;
+  entry["latency_p99_s"] = r.latency_p99_s;
+  return entry;
 }
 
 }  // namespace sensornet::emulator

@@ -54,6 +54,10 @@ std::string commandPartition(std::string_view run_partition, CommandSender sende
   return under(run_partition, "/" + std::string(commandSenderName(sender)));
 }
 
+std::string referencePartition(std::string_view run_partition) {
+  return under(run_partition, "/reference");
+}
+
 std::string_view commandSenderName(CommandSender sender) noexcept {
   switch (sender) {
     case CommandSender::Launcher: return "launcher";

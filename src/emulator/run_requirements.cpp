@@ -114,6 +114,10 @@ const std::vector<Property>& properties() {
        [](const json& r) { return numberAt(r, {"summary", "rejected"}); }},
       {"late", Kind::Count, "measurements that arrived after a later one (re-fused in order)",
        [](const json& r) { return numberAt(r, {"summary", "late"}); }},
+      {"fusion-agreement", Kind::Number,
+       "largest relative difference of an external fusion center's realized cost from the "
+       "reference's, over the episodes both fused (--reference-fusion)",
+       [](const json& r) { return numberAt(r, {"reference_fusion", "max_relative_difference"}); }},
   };
   return table;
 }

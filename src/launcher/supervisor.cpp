@@ -80,7 +80,7 @@ std::vector<Action> Supervisor::onBadExit(const ChildExit& exit, const RunPositi
     return fail({RunFailureKind::ChildFailed, exit.name, exit.describe(), 0, at},
                 exitFault(exit, at));
   }
-  if (exit.name == kFusionCenter) return restartOrFail(exit, at);
+  if (exit.name == config_.report_writer) return restartOrFail(exit, at);
   return onSensorAgentDeath(exit, at);
 }
 
@@ -190,8 +190,8 @@ std::vector<Action> Supervisor::onTick(SteadyTime now, const RunPosition& at) {
   if (phase_ == Phase::AwaitFusionCenter && now >= phase_until_) {
     const std::string reason = "did not exit within " + seconds(config_.fusion_center_exit_limit) +
                                " s after the coordinator ended the run";
-    return fail({RunFailureKind::ChildFailed, kFusionCenter, reason, 0, at},
-                Fault{FaultKind::ProcessHung, kFusionCenter, {}, at, reason});
+    return fail({RunFailureKind::ChildFailed, config_.report_writer, reason, 0, at},
+                Fault{FaultKind::ProcessHung, config_.report_writer, {}, at, reason});
   }
   // Sensor agents still running after their limit are stopped by the executable; that alone
   // does not fail a run whose report is written.
@@ -218,7 +218,8 @@ void Supervisor::ended(const std::string& name, SteadyTime now) {
     phase_ = Phase::AwaitFusionCenter;
     phase_until_ = now + config_.fusion_center_exit_limit;
   }
-  if (phase_ == Phase::AwaitFusionCenter && ended_.contains(kFusionCenter)) {
+  if (phase_ == Phase::AwaitFusionCenter &&
+      (config_.report_writer.empty() || ended_.contains(config_.report_writer))) {
     phase_ = Phase::AwaitSensorAgents;
     phase_until_ = now + config_.sensor_agent_exit_limit;
   }

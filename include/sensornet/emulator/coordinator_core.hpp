@@ -169,14 +169,14 @@ struct LogLine {
   std::string text;
 };
 // The program ends with this code; `summary` when the run ran to its end (for --json).
-struct RunSummary {
+struct CoordinatorSummary {
   std::string run_id;
   int episodes = 0;
   std::uint32_t schedule_versions = 0;
 };
 struct ExitProgram {
   int exit_code = kCoordinatorExitDone;
-  std::optional<RunSummary> summary;
+  std::optional<CoordinatorSummary> summary;
 };
 
 using CoordinatorAction = std::variant<PublishScenario, PublishVersion, PublishControl, SendReply,

@@ -8,12 +8,15 @@
 //   ScheduleVersion v = scheduleFromWire(sample, scenario, digest);  // everyone else
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
 namespace sensornet::emulator {
@@ -53,5 +56,18 @@ struct RunScenario {
 [[nodiscard]] ScheduleVersion scheduleFromWire(const sensornet_Schedule& sample,
                                                const Scenario& scenario,
                                                const std::string& scenario_digest);
+
+// The Report sample of an episode's result and the run's summary after it. It borrows from
+// `run_id`, `e` and `counts` (which receives its per-sensor counts): all must outlive it.
+[[nodiscard]] sensornet_Report reportSample(const std::string& run_id, const EpisodeResult& e,
+                                            const RunSummary& s,
+                                            std::vector<sensornet_SensorCounts>& counts);
+
+// The per_episode entry (episodeEntry) of a Report sample, for the report the launcher builds
+// from an external fusion center's Reports. What the wire does not carry is null (the
+// received-real-time cost) or zero (switch time, failed sensors, rejections, drain, backlog,
+// network delays); the latencies are the Report's. Throws InputError naming the field when a
+// count names a sensor outside [0, sensor_count) or twice.
+[[nodiscard]] nlohmann::json episodeEntryOfReport(const sensornet_Report& r, int sensor_count);
 
 }  // namespace sensornet::emulator

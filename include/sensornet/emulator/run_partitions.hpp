@@ -42,6 +42,10 @@ namespace sensornet::emulator {
 enum class CommandSender { Launcher, Operator };
 [[nodiscard]] std::string commandPartition(std::string_view run_partition, CommandSender sender);
 [[nodiscard]] std::string_view commandSenderName(CommandSender sender) noexcept;
+// Where a reference fusion center (ours beside an external one, `launch --reference-fusion`)
+// writes its Report and FusionState: "P/reference", which the coordinator and the launcher's
+// readers in P do not match, so that only the external fusion center paces the run.
+[[nodiscard]] std::string referencePartition(std::string_view run_partition);
 // How the coordinator's CommandReply begins when it refused a command its sender had no right
 // to send (the fusion center records it as a command_refused fault).
 inline constexpr std::string_view kNotPermitted = "not permitted: ";

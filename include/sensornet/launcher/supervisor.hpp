@@ -34,6 +34,8 @@ using SteadyTime = std::chrono::steady_clock::time_point;
 
 inline constexpr const char* kCoordinator = "coordinator";
 inline constexpr const char* kFusionCenter = "fusion_center";
+// Ours beside an external fusion center (--reference-fusion): same inputs, its own report.
+inline constexpr const char* kReferenceFusionCenter = "reference_fusion_center";
 inline constexpr const char* kLauncherProcess = "sensornet";
 
 // How a child ended.
@@ -72,7 +74,11 @@ struct SupervisorConfig {
   std::vector<int> scripted_crash_sensors;  // sensors of the scenario's `faults:` crashes
   std::optional<std::chrono::milliseconds> timeout;  // --timeout, if any
   int max_restarts = 3;  // a coordinator or fusion center killed more often is not restarted
-  // After the coordinator ends the run the fusion center writes its report and exits; the
+  // The child that writes the run's report (restarted with --resume when killed, awaited after
+  // the coordinator ended the run): the fusion center; kReferenceFusionCenter or none ("") when
+  // the fusion center is external.
+  std::string report_writer = kFusionCenter;
+  // After the coordinator ends the run the report writer writes its report and exits; the
   // sensor agents leave on the same RUN_SHUTDOWN.
   std::chrono::milliseconds fusion_center_exit_limit{15'000};
   std::chrono::milliseconds sensor_agent_exit_limit{5'000};
