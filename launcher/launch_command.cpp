@@ -296,8 +296,8 @@ void makeLogDirectory(const LaunchPlan& plan) {
 // checks what goes in it and removes an earlier run's results. Returns the lock that keeps the
 // run's log folder this launch's own. (A --report given by the user is checked before.)
 std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher& progress,
-                                  const dds::DomainConfig& domain) {
-  if (progress.seesLiveRun(kLiveRunProbe)) {
+                                  const dds::DomainConfig& domain, bool external_fusion_center) {
+  if (progress.seesLiveRun(kLiveRunProbe, !external_fusion_center)) {
     throw InputError("--run-id " + plan.run_id, "",
                      "a run id not in use on this host: run " + plan.run_id +
                          " is live (its coordinator or fusion center answers on DDS domain " +
@@ -472,7 +472,7 @@ int runLaunch(LaunchOptions options) {
   }
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
-  const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain);
+  const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain, options.external_fusion_center);
   if (placement) writeLauncherConfig(plan, domain);
   // An external fusion center's Reports are the run's results: the launcher keeps them in the
   // episode log, as our fusion center would, and builds the report from it.

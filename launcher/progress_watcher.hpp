@@ -28,11 +28,11 @@ class ProgressWatcher {
   ProgressWatcher(const dds::DomainConfig& config, int episodes_planned, double horizon_s,
                   int sensor_count);
 
-  // True if, within `wait`, a writer of the run's Scenario or Report topic matches: a
-  // coordinator or fusion center of this run id is alive in this domain and partition. Returns
-  // as soon as one matches. Call it before starting the run's own processes.
-  [[nodiscard]] bool seesLiveRun(std::chrono::milliseconds wait) const {
-    return follower_.seesLiveRun(wait);
+  // True if, within `wait`, a writer of the run's Scenario or (with `fusion_centers`) Report
+  // topic matches: a coordinator or fusion center of this run id is alive in this domain and
+  // partition. Returns as soon as one matches. Call it before starting the run's own processes.
+  [[nodiscard]] bool seesLiveRun(std::chrono::milliseconds wait, bool fusion_centers = true) const {
+    return follower_.seesLiveRun(wait, fusion_centers);
   }
 
   // Waits up to `wait` for the run's topics; prints a line for each episode reported meanwhile.

@@ -104,10 +104,12 @@ bool RunFollower::ours(const char* run_id) const {
   return run_id_.empty() || dds::viewString(run_id) == run_id_;
 }
 
-bool RunFollower::seesLiveRun(std::chrono::milliseconds wait) const {
+bool RunFollower::seesLiveRun(std::chrono::milliseconds wait, bool fusion_centers) const {
   const auto until = std::chrono::steady_clock::now() + wait;
   for (;;) {
-    if (scenarios_.matchedWriters() > 0 || reports_.matchedWriters() > 0) return true;
+    if (scenarios_.matchedWriters() > 0 || (fusion_centers && reports_.matchedWriters() > 0)) {
+      return true;
+    }
     if (std::chrono::steady_clock::now() >= until) return false;
     std::this_thread::sleep_for(kProbeStep);
   }

@@ -34,9 +34,11 @@ class RunFollower {
 
   // Waits up to `wait` for data, then hands everything new to `view`.
   void pollInto(RunView& view, std::chrono::milliseconds wait);
-  // True if, within `wait`, a writer of the run's Scenario or Report topic matches: a
-  // coordinator or fusion center of this run id is alive in this domain and partition.
-  [[nodiscard]] bool seesLiveRun(std::chrono::milliseconds wait) const;
+  // True if, within `wait`, a writer of the run's Scenario or (with `fusion_centers`) Report
+  // topic matches: a coordinator or fusion center of this run id is alive in this domain and
+  // partition. A launch that waits for an external fusion center asks only for coordinators:
+  // the user's fusion center may well be there first.
+  [[nodiscard]] bool seesLiveRun(std::chrono::milliseconds wait, bool fusion_centers = true) const;
   // From now on, appends every episode's Report (the first of each episode) to the episode log
   // at `path` as its per_episode entry (episodeEntryOfReport): the record of an external fusion
   // center's results, from which the launcher builds the run's report. A Report that does not

@@ -5,17 +5,32 @@
 // as one where the launcher started every agent (costs and counts per episode to the bit). A
 // participant that never comes fails the run naming the sensors; an id the scenario does not
 // have is bad input before anything starts.
+//
+// `--external-fusion-center` starts no fusion center: here the user's is our fusion_center
+// started by the test (the run must equal one with ours, episode by episode), or a relay in this
+// process that republishes the reference's Reports with the cost off by a known factor (the
+// comparison `--reference-fusion` adds must measure that factor, and `--require
+// fusion-agreement` must fail on it).
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "launch_fixture.hpp"
+#include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet {
 namespace {
@@ -30,6 +45,88 @@ using testing::runProcess;
 
 constexpr int kEpisodes = 3;
 const std::string kSensorAgentProgram = SENSORNET_SENSOR_AGENT;
+const std::string kFusionCenterProgram = SENSORNET_FUSION_CENTER;
+
+// The mean of the realized costs of the complete episodes of a report's per_episode.
+double meanOfComplete(const json& per_episode) {
+  double sum = 0.0;
+  int count = 0;
+  for (const json& e : per_episode) {
+    if (!e.at("complete").get<bool>()) continue;
+    sum += e.at("realized_cost").get<double>();
+    ++count;
+  }
+  return count > 0 ? sum / count : std::nan("");
+}
+
+// An external fusion center that is off by a known factor: it reads the reference fusion
+// center's Reports and FusionStates (partition P/reference) and republishes them in the run's
+// partition with every realized cost multiplied by `factor`; it reads EpisodeControl as a fusion
+// center must, to count as present.
+class SkewedRelay {
+ public:
+  SkewedRelay(const std::string& run_id, double factor)
+      : options_(optionsOf(run_id)),
+        domain_(options_.domainConfig()),
+        participant_(domain_),
+        reports_(participant_),
+        states_(participant_),
+        controls_(participant_),
+        reference_reports_(participant_, reports_,
+                           dds::endpointQosIn<sensornet_Report>(
+                               emulator::referencePartition(participant_.partition()))),
+        reference_states_(participant_, states_,
+                          dds::endpointQosIn<sensornet_FusionState>(
+                              emulator::referencePartition(participant_.partition()))),
+        control_reader_(participant_, controls_),
+        report_writer_(participant_, reports_, dds::reportWriterQos()),
+        state_writer_(participant_, states_),
+        factor_(factor),
+        thread_([this] { relay(); }) {}
+  SkewedRelay(const SkewedRelay&) = delete;
+  SkewedRelay& operator=(const SkewedRelay&) = delete;
+  ~SkewedRelay() {
+    stop_ = true;
+    thread_.join();
+  }
+
+ private:
+  static emulator::RunOptions optionsOf(const std::string& run_id) {
+    emulator::RunOptions options;
+    options.run_id = run_id;
+    return options;
+  }
+
+  void relay() {
+    while (!stop_) {
+      for (const auto& s : reference_reports_.take(16).samples) {
+        sensornet_Report skewed = *s.sample;  // borrows the loaned sample's strings
+        skewed.realized_cost *= factor_;
+        (void)report_writer_.write(skewed);
+      }
+      for (const auto& s : reference_states_.take(16).samples) {
+        (void)state_writer_.write(*s.sample);
+      }
+      (void)control_reader_.take(16);
+      std::this_thread::sleep_for(5ms);
+    }
+  }
+
+  emulator::RunOptions options_;
+  dds::Domain domain_;
+  dds::Participant participant_;
+  dds::Topic<sensornet_Report> reports_;
+  dds::Topic<sensornet_FusionState> states_;
+  dds::Topic<sensornet_EpisodeControl> controls_;
+  dds::Reader<sensornet_Report> reference_reports_;
+  dds::Reader<sensornet_FusionState> reference_states_;
+  dds::Reader<sensornet_EpisodeControl> control_reader_;
+  dds::Writer<sensornet_Report> report_writer_;
+  dds::Writer<sensornet_FusionState> state_writer_;
+  double factor_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 class ExternalRoles : public testing::LaunchTest {};
 
@@ -88,6 +185,122 @@ TEST_F(ExternalRoles, AnExternalSensorNobodySpeaksForFailsTheRunNamingIt) {
              f.at("detail").get<std::string>().find(why) != std::string::npos;
   }
   EXPECT_TRUE(named) << report.at("faults").dump();
+}
+
+TEST_F(ExternalRoles, AnExternalFusionCenterCarriesTheRunAndItsReportsMakeTheReport) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> clean = launchArgs(kEpisodes, "5", dir_ / "clean.json", dir_ / "clean-logs");
+  clean.insert(clean.end(), {"--seed", "7", "--no-html"});
+  const testing::ProcessResult c = runProcess(clean, 120s);
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const json expected = readJson(dir_ / "clean.json");
+
+  std::vector<std::string> argv = launchArgs(kEpisodes, "5", dir_ / "ext.json", dir_ / "ext-logs");
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--external-fusion-center",
+                           "--reference-fusion", "--require", "fusion-agreement<=1e-12"});
+  RunningProgram launcher(argv, 120s);
+  // The user's fusion center: ours, started outside the launch, with a report of its own.
+  RunningProgram external({kFusionCenterProgram, "serve", "--run-id", run_id_, "--report",
+                           (dir_ / "users.json").string()},
+                          120s);
+  const testing::ProcessResult& r = launcher.result();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(external.result().exit_code, 0) << external.result().err;
+  EXPECT_NE(r.err.find("the fusion center is external"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("started fusion_center"), std::string::npos) << r.err;
+
+  const json report = readJson(dir_ / "ext.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "completed") << report.at("faults").dump();
+  EXPECT_EQ(report.at("external").at("fusion_center"), true);
+  const json& got = report.at("per_episode");
+  const json& want = expected.at("per_episode");
+  const json users = readJson(dir_ / "users.json").at("per_episode");
+  ASSERT_EQ(got.size(), want.size());
+  ASSERT_EQ(users.size(), want.size());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    // What went over the wire is what the user's fusion center computed, and the same run as ours.
+    EXPECT_EQ(got[k].at("realized_cost").get<double>(), users[k].at("realized_cost").get<double>())
+        << "episode " << k;
+    EXPECT_EQ(got[k].at("realized_cost").get<double>(), want[k].at("realized_cost").get<double>())
+        << "episode " << k;
+    EXPECT_EQ(got[k].at("received"), want[k].at("received")) << "episode " << k;
+  }
+  // The summary from those entries, recomputed here.
+  EXPECT_DOUBLE_EQ(report.at("summary").at("mean").get<double>(), meanOfComplete(got));
+  EXPECT_EQ(report.at("summary").at("episodes_complete"), kEpisodes);
+  // The reference fused the same measurements: its own report file says the same costs.
+  const json reference = readJson(dir_ / "ext-logs" / "reference-report.json");
+  ASSERT_TRUE(reference.is_object());
+  const json& comparison = report.at("reference_fusion");
+  EXPECT_EQ(comparison.at("episodes_compared"), kEpisodes);
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(reference.at("per_episode")[k].at("realized_cost").get<double>(),
+              want[k].at("realized_cost").get<double>());
+    EXPECT_EQ(comparison.at("per_episode")[k].at("relative_difference").get<double>(), 0.0);
+  }
+  EXPECT_EQ(comparison.at("max_relative_difference").get<double>(), 0.0);
+}
+
+TEST_F(ExternalRoles, TheReferenceMeasuresHowFarAnExternalFilterIsOff) {
+  const LeftoverGuard guard(run_id_);
+  constexpr double kSkew = 1.0 + 1e-3;
+  std::vector<std::string> argv = launchArgs(kEpisodes, "5");
+  argv.insert(argv.end(), {"--seed", "3", "--no-html", "--external-fusion-center",
+                           "--reference-fusion", "--require", "fusion-agreement<=1e-6"});
+  const SkewedRelay relay(run_id_, kSkew);
+  const testing::ProcessResult r = runProcess(argv, 120s);
+  // The run itself completed; the criterion failed: exit 4 (README, "Exit status").
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "completed") << report.at("faults").dump();
+  const json reference = readJson(dir_ / "logs" / "reference-report.json");
+  ASSERT_TRUE(reference.is_object()) << r.err;
+  const json& got = report.at("per_episode");
+  ASSERT_EQ(got.size(), static_cast<std::size_t>(kEpisodes));
+  double largest = 0.0;
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    const double ours = reference.at("per_episode")[k].at("realized_cost").get<double>();
+    const double theirs = got[k].at("realized_cost").get<double>();
+    EXPECT_EQ(theirs, ours * kSkew) << "episode " << k;
+    largest = std::max(largest, std::abs(theirs - ours) / ours);
+  }
+  const json& comparison = report.at("reference_fusion");
+  EXPECT_EQ(comparison.at("max_relative_difference").get<double>(), largest);
+  EXPECT_NEAR(largest, kSkew - 1.0, 1e-12);
+  const json& checks = report.at("requirements");
+  ASSERT_EQ(checks.size(), 1u);
+  EXPECT_EQ(checks[0].at("pass"), false);
+}
+
+TEST_F(ExternalRoles, AnExternalFusionCenterThatNeverComesFailsTheRunNamingIt) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(2, "5");
+  argv.insert(argv.end(), {"--no-html", "--external-fusion-center", "--ready-timeout", "3"});
+  const testing::ProcessResult r = runProcess(argv, 90s);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  const std::string why = "no participant played the fusion center (--external-fusion-center)";
+  EXPECT_NE(r.err.find(why), std::string::npos) << r.err;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "failed");
+  bool named = false;
+  for (const json& f : report.at("faults")) {
+    named |= f.at("process") == "coordinator" &&
+             f.at("detail").get<std::string>().find(why) != std::string::npos;
+  }
+  EXPECT_TRUE(named) << report.at("faults").dump();
+}
+
+TEST_F(ExternalRoles, AReferenceWithoutAnExternalFusionCenterIsBadInput) {
+  std::vector<std::string> argv = launchArgs(2, "5");
+  argv.insert(argv.end(), {"--reference-fusion"});
+  const testing::ProcessResult r = runProcess(argv, 30s);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("--external-fusion-center as well"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "logs")) << "nothing may start on bad input";
 }
 
 TEST_F(ExternalRoles, AnExternalSensorTheScenarioDoesNotHaveIsBadInput) {
