@@ -351,6 +351,7 @@ SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& o
     config.report_writer = options.reference_fusion ? kReferenceFusionCenter : "";
   }
   for (const CrashFault& crash : scenario.faults) config.scripted_crash_sensors.push_back(crash.sensor);
+  config.external_sensors = externalSensors(options, scenario.sensorCount());
   if (options.timeout_s > 0.0) {
     config.timeout = std::chrono::duration_cast<milliseconds>(
         std::chrono::duration<double>(options.timeout_s));
@@ -523,7 +524,7 @@ int runLaunch(LaunchOptions options) {
   }
   FailureNotices notices(progress.participant(), plan.run_id);
   Supervisor core(supervisorConfig(plan, options, scenario), std::chrono::steady_clock::now());
-  superviseRun(core, {group, progress, notices, plan.children, plan.log_dir});
+  superviseRun(core, {group, progress, notices, plan.children, plan.log_dir, external});
   if (const auto& failure = core.failure()) {
     explainFailure(*failure, plan, group, core.stoppedChildren());
   }

@@ -41,6 +41,7 @@ class ProgressWatcher {
   [[nodiscard]] bool heardFrom(int sensor) const {
     return view_.heardFrom(static_cast<std::uint32_t>(sensor));
   }
+  [[nodiscard]] bool gone(int sensor) const { return view_.gone(static_cast<std::uint32_t>(sensor)); }
   [[nodiscard]] RunPosition positionAt(std::int64_t wall_ns) const {
     return view_.positionAt(wall_ns);
   }

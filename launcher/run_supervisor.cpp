@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <map>
 
 #include "interrupts.hpp"
 #include "sensornet/emulator/messages.hpp"
@@ -15,6 +16,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::chrono::milliseconds kWatchStep{50};
 constexpr std::chrono::seconds kStopGrace{3};
+// An external sensor whose SensorStatus writer (liveliness 1 s) stays gone this long is dead.
+constexpr std::chrono::seconds kExternalGoneLimit{2};
 // Stopped last and given longer: on SIGTERM the fusion center closes its open episodes and
 // writes the report.
 constexpr std::chrono::seconds kFusionCenterStopGrace{10};
@@ -30,11 +33,30 @@ class Wiring {
     for (const ChildExit& exit : run_.group.reap()) {
       carryOut(core_.onChildExit(exit, at, Clock::now()), at);
     }
+    if (const std::vector<int> gone = externalsGone(); !gone.empty()) {
+      carryOut(core_.onExternalSensorsGone(gone, at), at);
+    }
     if (const int signal = pendingInterrupt()) carryOut(core_.onSignal(signal, at), at);
     carryOut(core_.onTick(Clock::now(), at), at);
   }
 
  private:
+  // The external sensors gone for kExternalGoneLimit without a break: their participant left
+  // (a pause shorter than that, of the process or of its link, is a stall, as for our agents).
+  std::vector<int> externalsGone() {
+    std::vector<int> gone;
+    const auto now = Clock::now();
+    for (const int j : run_.external_sensors) {
+      if (!run_.progress.gone(j)) {
+        gone_since_.erase(j);
+        continue;
+      }
+      const auto since = gone_since_.try_emplace(j, now).first->second;
+      if (now - since >= kExternalGoneLimit) gone.push_back(j);
+    }
+    return gone;
+  }
+
   void carryOut(const std::vector<Action>& actions, const RunPosition& at) {
     for (const Action& action : actions) {
       if (const auto* restart = std::get_if<RestartChild>(&action)) {
@@ -88,6 +110,7 @@ class Wiring {
 
   Supervisor& core_;
   RunHandles run_;
+  std::map<int, Clock::time_point> gone_since_;
 };
 
 }  // namespace

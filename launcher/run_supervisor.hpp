@@ -29,6 +29,7 @@ struct RunHandles {
   FailureNotices& notices;
   const std::vector<ChildSpec>& children;
   std::filesystem::path log_dir;
+  std::vector<int> external_sensors;  // watched for a participant that leaves mid-run
 };
 
 // Watches the run until the core says it is over.

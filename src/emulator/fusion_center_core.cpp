@@ -49,6 +49,9 @@ struct FusionCenterCore::OpenEpisode {
   std::vector<EpisodeTally> tallies;        // as received (sent, lag, stalls), per sensor
   std::vector<double> held_back_s;          // per sensor: the longest a sample of it was in transit
   std::int64_t last_tally_ns = 0;           // publication wall time of the latest tally
+  // When the latest failure notice that applied to it came: until then the dead sensors' counts
+  // were owed, and waiting for them is not the fusion center's backlog.
+  std::int64_t last_failure_notice_ns = 0;
   std::int64_t last_arrival_ns = 0;         // receipt of the latest measurement or tally
   std::optional<std::int64_t> settled_ns;   // when everything owed was in
   std::uint64_t backlog = 0;
@@ -168,7 +171,10 @@ void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_
   failed_sensors_.insert(failure.sensors.begin(), failure.sensors.end());
   failures_.push_back(failure);
   releaseClaims(failure.sensors);
-  for (auto& [number, open] : open_) applyFailure(number, *open, failure);
+  for (auto& [number, open] : open_) {
+    applyFailure(number, *open, failure);
+    open->last_failure_notice_ns = now;
+  }
 }
 
 // A failed sensor is never awaited: in the episode it died in (the episode is incomplete), in
@@ -693,14 +699,15 @@ json FusionCenterCore::covarianceTraces() {
 }
 
 // Overload: the fusion center settled an episode late after the last of what it owed had
-// arrived (not counting its own stalls), or a sensor published far behind the emulated clock
+// arrived or the last failure notice that released it came (not counting its own stalls), or a sensor published far behind the emulated clock
 // (not counting the sensor's stalls). Samples that arrived late (a cut link, a stalled sender)
 // are not the fusion center's backlog: noteHeldBack lists them as stalls.
 void FusionCenterCore::checkKeepingUp(std::uint32_t number, const OpenEpisode& open,
                                       EpisodeResult& result) {
   if (open.settled_ns) {
-    const std::int64_t from = std::max({open.clock.wallAt(scenario().horizon_s),
-                                        open.last_tally_ns, open.last_arrival_ns});
+    const std::int64_t from =
+        std::max({open.clock.wallAt(scenario().horizon_s), open.last_tally_ns,
+                  open.last_arrival_ns, open.last_failure_notice_ns});
     if (*open.settled_ns > from) result.drain_s = awakeSince(from, *open.settled_ns);
   }
   if (result.drain_s > config_.keep_up_limit_s) {

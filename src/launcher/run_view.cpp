@@ -282,6 +282,12 @@ std::size_t RunView::sensorsReady() const {
       [](const auto& s) { return s.second.state.has_value() && s.second.schedule_version >= 1; }));
 }
 
+bool RunView::gone(std::uint32_t sensor) const {
+  const auto found = sensors_.find(sensor);
+  return found != sensors_.end() && found->second.state.has_value() && !found->second.alive &&
+         found->second.state != emulator::SensorState::Stopped;
+}
+
 bool RunView::heardFrom(std::uint32_t sensor) const {
   const auto found = sensors_.find(sensor);
   return found != sensors_.end() && found->second.state.has_value();

@@ -94,26 +94,46 @@ std::vector<Action> Supervisor::onSensorAgentDeath(const ChildExit& exit, const 
                 exitFault(exit, at));
   }
   ended_.insert(exit.name);
-  Entry entry{exitFault(exit, at), true, false};
+  return onSensorsDead(exit.name, *sensors, exitFault(exit, at), exit.describe());
+}
+
+std::vector<Action> Supervisor::onExternalSensorsGone(const std::vector<int>& sensors,
+                                                      const RunPosition& at) {
+  if (phase_ != Phase::Running || !at.episode) return {};
+  std::vector<int> fresh;
+  for (const int j : sensors) {
+    if (external_gone_.insert(j).second) fresh.push_back(j);
+  }
+  if (fresh.empty()) return {};
+  const std::string how = "left the run (the SensorStatus writer of its participant went away)";
+  return onSensorsDead("the external participant", fresh, Fault{FaultKind::SensorDied, kExternalProcess, fresh, at, how},
+                       how);
+}
+
+std::vector<Action> Supervisor::onSensorsDead(const std::string& name,
+                                              const std::vector<int>& sensors, Fault fault,
+                                              const std::string& how) {
+  Entry entry{std::move(fault), true, false};
   // The coordinator ends the run under policy stop, and under any policy when no sensor is left.
-  const bool stops =
-      config_.on_sensor_failure == emulator::FailurePolicy::Stop ||
+  const bool none_left =
       std::all_of(config_.sensor_agents.begin(), config_.sensor_agents.end(),
-                  [this](const auto& agent) { return ended_.contains(agent.first); });
+                  [this](const auto& agent) { return ended_.contains(agent.first); }) &&
+      std::all_of(config_.external_sensors.begin(), config_.external_sensors.end(),
+                  [this](int j) { return external_gone_.contains(j); });
+  const bool stops = config_.on_sensor_failure == emulator::FailurePolicy::Stop || none_left;
   entry.fault.survived = !stops;
   entries_.push_back(std::move(entry));
   std::vector<Action> actions = {
-      LogLine{false, exit.name + " (sensor" + (sensors->size() == 1 ? " " : "s ") +
-                         listed(*sensors) + ") " + exit.describe() +
-                         "; the coordinator applies the failure policy " +
+      LogLine{false, name + " (sensor" + (sensors.size() == 1 ? " " : "s ") + listed(sensors) +
+                         ") " + how + "; the coordinator applies the failure policy " +
                          std::string(wordOf(config_.on_sensor_failure))},
-      NotifySensorsFailed{exit.name, *sensors, exit.describe()}};
+      NotifySensorsFailed{entries_.back().fault.process, sensors, how}};
   if (stops && !stop_policy_cause_) {
     // The coordinator ends the run; the launcher waits for it instead of stopping everything,
     // so that the fusion center closes the run as after any end.
     stop_policy_cause_ = entries_.size() - 1;
-    failure_ = RunFailure{RunFailureKind::ChildFailed, exit.name,
-                          exit.describe() + "; the coordinator ends the run", 0, at};
+    failure_ = RunFailure{RunFailureKind::ChildFailed, name,
+                          how + "; the coordinator ends the run", 0, entries_.back().fault.at};
   }
   return actions;
 }

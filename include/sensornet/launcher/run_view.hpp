@@ -196,6 +196,9 @@ class RunView {
   [[nodiscard]] std::size_t sensorsReady() const;
   // A status of `sensor` came (from its agent or a participant speaking for it).
   [[nodiscard]] bool heardFrom(std::uint32_t sensor) const;
+  // It spoke, and its SensorStatus has no writer any more without its having said it stopped:
+  // its process is gone (or has not asserted liveliness for a lease).
+  [[nodiscard]] bool gone(std::uint32_t sensor) const;
   // The scenario is known and every one of its sensors answered or is known dead.
   [[nodiscard]] bool allSensorsAccounted() const;
   [[nodiscard]] std::size_t episodesReported() const noexcept { return reported_count_; }

@@ -37,6 +37,8 @@ inline constexpr const char* kFusionCenter = "fusion_center";
 // Ours beside an external fusion center (--reference-fusion): same inputs, its own report.
 inline constexpr const char* kReferenceFusionCenter = "reference_fusion_center";
 inline constexpr const char* kLauncherProcess = "sensornet";
+// The process of a fault of external sensors: a participant of the user's, not ours.
+inline constexpr const char* kExternalProcess = "external";
 
 // How a child ended.
 struct ChildExit {
@@ -72,6 +74,7 @@ struct SupervisorConfig {
   std::vector<std::pair<std::string, std::vector<int>>> sensor_agents;
   emulator::FailurePolicy on_sensor_failure = emulator::FailurePolicy::Replan;
   std::vector<int> scripted_crash_sensors;  // sensors of the scenario's `faults:` crashes
+  std::vector<int> external_sensors;        // --external-sensors: a participant of the user's
   std::optional<std::chrono::milliseconds> timeout;  // --timeout, if any
   int max_restarts = 3;  // a coordinator or fusion center killed more often is not restarted
   // The child that writes the run's report (restarted with --resume when killed, awaited after
@@ -110,6 +113,11 @@ class Supervisor {
 
   [[nodiscard]] std::vector<Action> onChildExit(const ChildExit& exit, const RunPosition& at,
                                                 SteadyTime now);
+  // External sensors (--external-sensors) whose participant left the run mid-run: its
+  // SensorStatus writer has been gone past the launcher's limit. A death like a sensor agent's,
+  // which the failure policy answers; before the first episode or after the run ended, nothing.
+  [[nodiscard]] std::vector<Action> onExternalSensorsGone(const std::vector<int>& sensors,
+                                                          const RunPosition& at);
   // SIGINT, SIGTERM, SIGHUP to the launcher: the run is stopped and ends interrupted.
   [[nodiscard]] std::vector<Action> onSignal(int signal, const RunPosition& at);
   // Deadlines: --timeout, the fusion center's and the sensor agents' exit limits.
@@ -147,6 +155,10 @@ class Supervisor {
                                               SteadyTime now);
   [[nodiscard]] std::vector<Action> onSensorAgentDeath(const ChildExit& exit,
                                                        const RunPosition& at);
+  // The death of the process `name` that spoke for `sensors`, recorded as `fault`: the policy.
+  [[nodiscard]] std::vector<Action> onSensorsDead(const std::string& name,
+                                                  const std::vector<int>& sensors, Fault fault,
+                                                  const std::string& how);
   [[nodiscard]] std::vector<Action> restartOrFail(const ChildExit& exit, const RunPosition& at);
   [[nodiscard]] std::vector<Action> fail(RunFailure failure, std::optional<Fault> fault);
   void ended(const std::string& name, SteadyTime now);
@@ -159,6 +171,7 @@ class Supervisor {
   Phase phase_ = Phase::Running;
   SteadyTime phase_until_{};  // the limit of the AwaitFusionCenter or AwaitSensorAgents phase
   std::set<std::string> ended_;
+  std::set<int> external_gone_;  // external sensors already answered as dead
   std::vector<std::string> stopped_;
   std::vector<Entry> entries_;
   std::optional<RunFailure> failure_;

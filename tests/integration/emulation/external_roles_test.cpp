@@ -13,6 +13,7 @@
 // fusion-agreement` must fail on it).
 
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <atomic>
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -163,6 +165,51 @@ TEST_F(ExternalRoles, SensorsSpokenForByAParticipantOfTheUsersMakeTheSameRun) {
     EXPECT_EQ(got[k].at("received"), want[k].at("received")) << "episode " << k;
     EXPECT_EQ(got[k].at("sent"), got[k].at("received")) << "episode " << k;
   }
+}
+
+TEST_F(ExternalRoles, AnExternalSensorThatLeavesMidRunIsADeathThePolicyAnswers) {
+  const LeftoverGuard guard(run_id_);
+  constexpr int kRunEpisodes = 6;
+  std::vector<std::string> argv = launchArgs(kRunEpisodes, "2");
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--external-sensors", "2,5",
+                           "--on-sensor-failure", "replan"});
+  RunningProgram launcher(argv, 180s);
+  RunningProgram external({kSensorAgentProgram, "--run-id", run_id_, "--sensors", "2,5"}, 180s);
+  ASSERT_TRUE(testing::waitUntil(
+      [&] { return testing::readJsonLines(dir_ / "report.jsonl").size() >= 2; }, 60s));
+  const std::optional<pid_t> victim = testing::processOf(run_id_, kSensorAgentProgram, "2,5");
+  ASSERT_TRUE(victim.has_value());
+  ASSERT_EQ(::kill(*victim, SIGKILL), 0);
+  const testing::ProcessResult& r = launcher.result();
+  // A sensor's death the run survived: degraded, exit 3 (README, "Exit status").
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "degraded");
+  bool named = false;
+  for (const json& f : report.at("faults")) {
+    named |= f.at("kind") == "sensor_died" && f.at("process") == "external" &&
+             f.value("sensors", json::array()) == json::array({2, 5}) &&
+             f.at("detail").get<std::string>().find("left the run") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << report.at("faults").dump();
+  for (const json& f : report.at("faults")) {
+    EXPECT_NE(f.at("kind"), "overload") << "waiting for the notice is not the fusion center's "
+                                           "backlog: "
+                                        << f.dump();
+  }
+  // The policy re-planned without them: the last version gives sensors 2 and 5 no rate at all.
+  const json& versions = report.at("schedule_versions");
+  ASSERT_GE(versions.size(), 2u) << "no re-plan after the death";
+  for (const json& row : versions.back().at("rates")) {
+    EXPECT_EQ(row.at(2).get<double>(), 0.0);
+    EXPECT_EQ(row.at(5).get<double>(), 0.0);
+  }
+  // Every episode ran; the last one heard nothing of them.
+  const json& episodes = report.at("per_episode");
+  ASSERT_EQ(episodes.size(), static_cast<std::size_t>(kRunEpisodes));
+  EXPECT_EQ(episodes.back().at("sent").at(2), 0);
+  EXPECT_EQ(episodes.back().at("sent").at(5), 0);
 }
 
 TEST_F(ExternalRoles, AnExternalSensorNobodySpeaksForFailsTheRunNamingIt) {

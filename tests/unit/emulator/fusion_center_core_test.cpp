@@ -358,6 +358,28 @@ TEST_F(FusionCenterCoreTest, ADeathNoticedAtOnceIsDatedByTheNotice) {
   EXPECT_EQ(reports_[0].result.incomplete_reason, "sensor 1 failed at 1.05 s");
 }
 
+// A death noticed late (an external participant's departure is known only once its
+// liveliness lapsed, seconds after the episode's end): the fusion center waited for the dead
+// sensor's count, not for its own loop, so the episode is released without an overload.
+TEST_F(FusionCenterCoreTest, WaitingForADeathNoticeIsNoOverload) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 3; });
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 2});
+  runUntil(endOf(0) + 3 * kS);
+  EXPECT_TRUE(reports_.empty()) << "sensor 3's count is still owed";
+  core_->onSensorFailure({0, 0.0, {3}, "the external participant left the run"}, now_);
+  runUntil(now_ + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_FALSE(reports_[0].result.complete);
+  EXPECT_LT(reports_[0].result.drain_s, 0.1);
+  const std::vector<std::string> kinds = faultKinds();
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "overload"), 0) << core_->faults().dump();
+}
+
 // Defect (a): a link cut for 3 s mid-episode delays two sensors' measurements and tallies; the
 // retransmitted tally comes before the last retransmitted measurements. Nothing is lost: a stall
 // of the network, listed with the sensors it held back, and the run completed.

@@ -272,6 +272,45 @@ TEST(Supervisor, LastSensorDeathEndsTheRunUnderAnyPolicy) {
   EXPECT_EQ(verdictOf(s, "failed").status, RunStatus::Failed);
 }
 
+TEST(Supervisor, ExternalSensorsThatLeaveMidRunAreADeathAnsweredOnce) {
+  SupervisorConfig config = twoAgents(FailurePolicy::Replan);
+  config.sensor_agents.pop_back();  // sensors 3..5: 3 ours, 4 and 5 a participant of the user's
+  config.sensor_agents.push_back({"sensor_agent-3", {3}});
+  config.external_sensors = {4, 5};
+  Supervisor s(config, kStart);
+  EXPECT_TRUE(s.onExternalSensorsGone({4, 5}, {}).empty()) << "before the first episode: not yet";
+  const auto actions = s.onExternalSensorsGone({4, 5}, episode(2, 0.3));
+  const auto* notice = first<NotifySensorsFailed>(actions);
+  ASSERT_NE(notice, nullptr);
+  EXPECT_EQ(notice->sensors, (std::vector<int>{4, 5}));
+  EXPECT_EQ(notice->process, kExternalProcess);
+  EXPECT_EQ(count<StopRun>(actions), 0);
+  EXPECT_TRUE(s.onExternalSensorsGone({4, 5}, episode(2, 0.8)).empty()) << "answered once";
+  s.onReply(kExternalProcess, {true, 3, "policy replan: version 3"});
+  ASSERT_EQ(s.faults().size(), 1u);
+  const Fault f = s.faults()[0];
+  EXPECT_EQ(f.kind, FaultKind::SensorDied);
+  EXPECT_EQ(f.sensors, (std::vector<int>{4, 5}));
+  EXPECT_TRUE(f.survived);
+  EXPECT_EQ(f.schedule_version, 3u);
+  endNormally(s, kStart + seconds(1));  // waits for no external process
+  (void)s.onChildExit(exited("sensor_agent-3", 0), {}, kStart + seconds(1));
+  EXPECT_TRUE(s.done());
+  EXPECT_EQ(verdictOf(s, "degraded").status, RunStatus::Degraded);
+}
+
+TEST(Supervisor, TheLastExternalSensorsLeavingWithEveryAgentDeadEndsTheRun) {
+  SupervisorConfig config;
+  config.sensor_agents = {{"sensor_agent-0", {0}}};
+  config.external_sensors = {1};
+  Supervisor s(config, kStart);
+  (void)s.onChildExit(killed("sensor_agent-0"), episode(1), kStart);
+  ASSERT_TRUE(s.faults()[0].survived) << "sensor 1 is still there";
+  (void)s.onExternalSensorsGone({1}, episode(1, 0.9));
+  ASSERT_EQ(s.faults().size(), 2u);
+  EXPECT_FALSE(s.faults()[1].survived) << "no sensor left: the run cannot go on";
+}
+
 TEST(Supervisor, SensorAgentEndingBeforeTheFirstEpisodeFailsTheLaunch) {
   Supervisor s(twoAgents(), kStart);
   const auto actions = s.onChildExit(exited("sensor_agent-0-2", 2), {}, kStart);
