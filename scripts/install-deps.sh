@@ -13,6 +13,7 @@ packages=(
   chromium  # headless, for the report page's browser test
   openssl libssl-dev  # secured runs: `sensornet pki init` runs openssl; certificates checked with libcrypto
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
+  python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
 )
 
 missing=()

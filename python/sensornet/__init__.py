@@ -1,0 +1,116 @@
+"""sensornet from Python test suites: launch a run, wait for it, read its report.
+
+    import sensornet
+    with sensornet.launch("scenarios/default.yaml", episodes=3, external_sensors=[2, 5]) as run:
+        ...  # start your participant with run.run_id
+        result = run.wait()
+    assert result.status == "completed", result.faults
+
+The run gets a run id and a private folder of its own and is stopped (Ctrl-C to the launcher,
+then SIGKILL of its process group) when the `with` block ends or close() is called, also when
+the test failed first. The pytest fixture is in sensornet.pytest_plugin.
+"""
+
+import datetime
+import json
+import os
+import pathlib
+import shutil
+
+from ._sensornet import LaunchOptions as _LaunchOptions
+from ._sensornet import LaunchedRun as _LaunchedRun
+
+__all__ = ["launch", "Run", "Result", "program"]
+
+
+def program():
+    """The sensornet program: $SENSORNET_PROGRAM, the one installed with this package, or PATH."""
+    if os.environ.get("SENSORNET_PROGRAM"):
+        return pathlib.Path(os.environ["SENSORNET_PROGRAM"])
+    here = pathlib.Path(__file__).resolve()
+    for prefix in here.parents:  # <prefix>/lib/python3/dist-packages/sensornet/__init__.py
+        candidate = prefix / "bin" / "sensornet"
+        if candidate.is_file() and os.access(candidate, os.X_OK):
+            return candidate
+    found = shutil.which("sensornet")
+    if found is None:
+        raise RuntimeError("no sensornet program: set SENSORNET_PROGRAM or put it on the PATH")
+    return pathlib.Path(found)
+
+
+class Result:
+    """How a run ended: exit_code, status, episodes, faults, and the whole report (a dict)."""
+
+    def __init__(self, exit_code, output, errors, report_json):
+        self.exit_code = exit_code
+        self.output = output
+        self.errors = errors
+        self.report = json.loads(report_json) if report_json else {}
+        if not isinstance(self.report, dict):
+            self.report = {}
+        self.status = self.report.get("status", "")
+        self.episodes = self.report.get("per_episode", [])
+        self.summary = self.report.get("summary", {})
+        self.faults = [f"{f.get('kind')} in {f.get('process')}: {f.get('detail')}"
+                       for f in self.report.get("faults", [])]
+
+    def __repr__(self):
+        return f"Result(exit_code={self.exit_code}, status={self.status!r}, episodes={len(self.episodes)})"
+
+
+class Run:
+    """A launched run; see launch()."""
+
+    def __init__(self, scenario, episodes=4, time_scale=4.0, seed=1, external_sensors=(),
+                 external_fusion_center=False, reference_fusion=False, require="",
+                 extra_args=(), timeout_s=300):
+        options = _LaunchOptions()
+        options.program = str(program())
+        options.scenario = str(scenario)
+        options.episodes = int(episodes)
+        options.time_scale = float(time_scale)
+        options.seed = int(seed)
+        options.external_sensors = [int(j) for j in external_sensors]
+        options.external_fusion_center = bool(external_fusion_center)
+        options.reference_fusion = bool(reference_fusion)
+        options.require = str(require)
+        options.extra_args = [str(a) for a in extra_args]
+        options.timeout = datetime.timedelta(seconds=timeout_s)
+        self._run = _LaunchedRun(options)
+        self._result = None
+
+    @property
+    def run_id(self):
+        return self._run.run_id
+
+    @property
+    def log_dir(self):
+        return pathlib.Path(self._run.log_dir)
+
+    @property
+    def launcher_pid(self):
+        return self._run.launcher_pid
+
+    def wait(self):
+        """Waits for the run's end (stopping it at the timeout) and returns its Result."""
+        if self._result is None:
+            self._result = Result(*self._run.wait())
+        return self._result
+
+    def close(self):
+        """Stops the run if it still goes and removes its files."""
+        if self._run is not None:
+            run, self._run = self._run, None
+            del run  # the C++ destructor stops the run
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+def launch(scenario, **options):
+    """Starts `sensornet launch SCENARIO` with these options (see Run); returns the Run."""
+    return Run(scenario, **options)
