@@ -342,6 +342,46 @@ TEST_F(ExternalRoles, AnExternalFusionCenterCarriesTheRunAndItsReportsMakeTheRep
   EXPECT_EQ(comparison.at("max_relative_difference").get<double>(), 0.0);
 }
 
+// In a secured run the external fusion center presents the fusion center's identity of `pki
+// init` and carries the run; with a sensor's identity it cannot take the role (governance: a
+// sensor may not write Reports), and the run fails naming the missing role.
+TEST_F(ExternalRoles, ASecuredRunTakesAnExternalFusionCenterOnlyWithTheFusionCentersIdentity) {
+  const LeftoverGuard guard(run_id_);
+  const fs::path pki = dir_ / "pki";
+  const testing::ProcessResult made = runProcess(
+      {testing::kLauncher, "pki", "init", pki.string(), "--days", "30", "--scenario",
+       testing::kDefaultScenario},
+      120s);
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const auto launchWith = [&](const std::string& identity, const std::string& name,
+                              const std::string& ready_timeout) {
+    std::vector<std::string> argv =
+        launchArgs(2, "5", dir_ / (name + ".json"), dir_ / (name + "-logs"));
+    argv.insert(argv.end(), {"--no-html", "--security", pki.string(), "--external-fusion-center",
+                             "--ready-timeout", ready_timeout});
+    RunningProgram launcher(argv, 120s);
+    RunningProgram external({kFusionCenterProgram, "serve", "--run-id", run_id_, "--security",
+                             (pki / identity).string(), "--report",
+                             (dir_ / (name + "-users.json")).string()},
+                            120s);
+    testing::ProcessResult r = launcher.result();
+    return std::pair{r, readJson(dir_ / (name + ".json"))};
+  };
+  const auto [good, good_report] = launchWith("fusion_center", "good", "30");
+  EXPECT_EQ(good.exit_code, 0) << good.err;
+  ASSERT_TRUE(good_report.is_object()) << good.err;
+  EXPECT_EQ(good_report.at("status"), "completed") << good_report.at("faults").dump();
+  EXPECT_EQ(good_report.at("per_episode").size(), 2u);
+
+  const auto [stolen, stolen_report] = launchWith("sensor-1", "stolen", "4");
+  EXPECT_EQ(stolen.exit_code, 1) << stolen.err;
+  EXPECT_NE(stolen.err.find("no participant played the fusion center"), std::string::npos)
+      << stolen.err;
+  ASSERT_TRUE(stolen_report.is_object()) << stolen.err;
+  EXPECT_EQ(stolen_report.at("status"), "failed");
+  EXPECT_EQ(stolen_report.value("per_episode", json::array()).size(), 0u);
+}
+
 TEST_F(ExternalRoles, TheReferenceMeasuresHowFarAnExternalFilterIsOff) {
   const LeftoverGuard guard(run_id_);
   constexpr double kSkew = 1.0 + 1e-3;
