@@ -60,6 +60,9 @@ struct Episode {
   emulator::DelayLine held;  // delayed by the emulated network, not yet written
   std::optional<ScriptedCrash> crash;
   double max_lag_s = 0.0;  // behind the emulated clock, own stalls left out
+  // When its start reached this process: nothing is due before (a start the network delivered
+  // late is the network's delay, not this sensor falling behind).
+  std::int64_t known_from_ns = 0;
   std::uint64_t write_timeouts_at_start = 0;
 };
 
@@ -155,10 +158,12 @@ class Agent {
     if (update.new_versions > 0) publishStatus(currentState(), "");
     for (const std::uint32_t episode : update.stops) {
       if (episode_ && episode_->number == episode) finishEpisode("stopped");
-      std::erase_if(pending_, [&](const emulator::EpisodeStart& s) { return s.episode == episode; });
+      std::erase_if(pending_, [&](const Announced& a) { return a.start.episode == episode; });
     }
     // The next episode is announced while this one runs: it starts once this one is finished.
-    for (const emulator::EpisodeStart& start : update.starts) pending_.push_back(start);
+    for (const emulator::EpisodeStart& start : update.starts) {
+      pending_.push_back({start, wallNowNs()});
+    }
     return update.shutdown;
   }
 
@@ -212,7 +217,8 @@ class Agent {
   // nothing is published before its arrivals fall due). A version that arrives before its
   // start and takes effect in it redraws the timeline (onNewVersion).
   void startNextEpisode() {
-    const emulator::EpisodeStart start = pending_.front();
+    const emulator::EpisodeStart start = pending_.front().start;
+    const std::int64_t learned_ns = pending_.front().learned_ns;
     pending_.pop_front();
     std::set<int> failed = start.failed_sensors;  // and those a notice named since
     failed.insert(inputs_.failedSensors().begin(), inputs_.failedSensors().end());
@@ -224,6 +230,13 @@ class Agent {
     for (const int id : live_sensors_) e.sent[id] = 0;
     e.crash = crashIn(start.episode);
     e.write_timeouts_at_start = write_timeouts_;
+    e.known_from_ns = learned_ns;
+    if (const double late_s = 1e-9 * static_cast<double>(learned_ns - e.clock.wallAt(0.0));
+        late_s > 0.1) {
+      spdlog::warn("episode {}: its start reached this process {:.3f} s after it began (the "
+                   "network's delay; what fell due meanwhile goes out now)",
+                   e.number, late_s);
+    }
     episode_ = std::move(e);
     publishStatus(sensornet_SENSOR_RUNNING, "");
   }
@@ -292,11 +305,12 @@ class Agent {
   }
 
   // How far behind the emulated clock a measurement went out, leaving out the time this
-  // process was stalled since it fell due (a stall is not overload).
+  // process was stalled since it fell due (a stall is not overload) and the time before its
+  // episode's start reached it (the network's delay, not this process falling behind).
   void noteLag(Episode& e, double time_s) {
     const std::int64_t now = wallNowNs();
     noteOwnStall();
-    const std::int64_t due = e.clock.wallAt(time_s);
+    const std::int64_t due = std::max(e.clock.wallAt(time_s), e.known_from_ns);
     if (now <= due) return;
     const double lag = 1e-9 * static_cast<double>(now - due) - stall_watch_.stalledBetween(due, now);
     e.max_lag_s = std::max(e.max_lag_s, lag);
@@ -437,7 +451,11 @@ class Agent {
   emulator::StallWatch stall_watch_;
 
   std::optional<Episode> episode_;
-  std::deque<emulator::EpisodeStart> pending_;  // announced, to run after the current one
+  struct Announced {
+    emulator::EpisodeStart start;
+    std::int64_t learned_ns = 0;  // when the start reached this process
+  };
+  std::deque<Announced> pending_;  // announced, to run after the current one
   std::vector<int> live_sensors_ = options_.sensors;
   const NetworkSpec* network_ = nullptr;  // the scenario's, when it impairs anything
   std::uint64_t sent_total_ = 0;
