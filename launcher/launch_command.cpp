@@ -339,9 +339,9 @@ class CurrentRunRecord {
 };
 
 // What the supervisor core needs to know of this launch: the sensor agents and their sensors,
-// the failure policy, the scenario's scripted crashes, the time limit.
+// the external sensors, the failure policy, the scenario's scripted crashes, the time limit.
 SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& options,
-                                  const Scenario& scenario) {
+                                  const Scenario& scenario, const std::vector<int>& external) {
   SupervisorConfig config;
   for (const std::string& name : plan.sensor_agents) {
     config.sensor_agents.emplace_back(name, plan.sensors_of.at(name));
@@ -351,7 +351,7 @@ SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& o
     config.report_writer = options.reference_fusion ? kReferenceFusionCenter : "";
   }
   for (const CrashFault& crash : scenario.faults) config.scripted_crash_sensors.push_back(crash.sensor);
-  config.external_sensors = externalSensors(options, scenario.sensorCount());
+  config.external_sensors = external;
   if (options.timeout_s > 0.0) {
     config.timeout = std::chrono::duration_cast<milliseconds>(
         std::chrono::duration<double>(options.timeout_s));
@@ -523,7 +523,8 @@ int runLaunch(LaunchOptions options) {
     spdlog::info("started {} (pid {}), log {}", child.name, pid, child.log_path.string());
   }
   FailureNotices notices(progress.participant(), plan.run_id);
-  Supervisor core(supervisorConfig(plan, options, scenario), std::chrono::steady_clock::now());
+  Supervisor core(supervisorConfig(plan, options, scenario, external),
+                  std::chrono::steady_clock::now());
   superviseRun(core, {group, progress, notices, plan.children, plan.log_dir, external});
   if (const auto& failure = core.failure()) {
     explainFailure(*failure, plan, group, core.stoppedChildren());

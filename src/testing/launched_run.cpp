@@ -184,17 +184,12 @@ const RunResult& LaunchedRun::wait() {
   while ((done = ::waitpid(pid_, &status, WNOHANG)) == 0 && Clock::now() < until) {
     std::this_thread::sleep_for(20ms);
   }
-  int exit_code = -1;
-  if (done == pid_) {
-    exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    pid_ = -1;
-  } else {  // timed out: the run is stopped, and says so in its report
+  if (done != pid_) {  // timed out: the run is stopped, and says so in its report
     ::kill(pid_, SIGINT);
     (void)::waitpid(pid_, &status, 0);
-    exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    pid_ = -1;
   }
-  result_ = read(exit_code);
+  pid_ = -1;
+  result_ = read(WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status));
   return *result_;
 }
 
