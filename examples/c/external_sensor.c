@@ -20,21 +20,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
+#include "run_topics.h"
 #include "sensornet.h"
 
-#define MAX_VERSIONS 32
 #define MAX_STARTS 8
 #define MAX_DIM 16
-
-struct version {
-  uint32_t number;
-  uint32_t effective_episode;
-  double effective_time_s;
-  double *rates; /* N x M, row-major */
-};
 
 struct start {
   uint32_t episode;
@@ -43,14 +35,9 @@ struct start {
 };
 
 static struct {
-  const char *run_id;
   uint32_t sensor;
   uint32_t dim;
-  int have_scenario;
-  double horizon_s;
-  uint32_t intervals, sensors;
-  struct version versions[MAX_VERSIONS];
-  int version_count;
+  struct run_book book;
   struct start starts[MAX_STARTS];
   int start_count;
   int running;
@@ -62,12 +49,6 @@ static struct {
   uint64_t rng;
 } s;
 
-static int64_t wall_ns(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_REALTIME, &t);
-  return (int64_t)t.tv_sec * 1000000000 + t.tv_nsec;
-}
-
 /* xorshift64*: a uniform in (0, 1). */
 static double uniform(void) {
   s.rng ^= s.rng >> 12;
@@ -76,41 +57,13 @@ static double uniform(void) {
   return ((double)((s.rng * 2685821657736338717ULL) >> 11) + 0.5) / 9007199254740992.0;
 }
 
-/* The version in force at emulated time t of `episode`: the newest that took effect by then. */
-static const struct version *in_force(uint32_t episode, double t) {
-  const struct version *best = NULL;
-  for (int i = 0; i < s.version_count; ++i) {
-    const struct version *v = &s.versions[i];
-    const int effective = v->effective_episode < episode ||
-                          (v->effective_episode == episode && v->effective_time_s <= t);
-    if (effective && (best == NULL || v->number > best->number)) best = v;
-  }
-  return best;
-}
-
-static double rate_at(uint32_t episode, double t) {
-  const struct version *v = in_force(episode, t);
-  if (v == NULL) return 0.0;
-  uint32_t i = (uint32_t)(t / (s.horizon_s / s.intervals));
-  if (i >= s.intervals) i = s.intervals - 1;
-  return v->rates[i * s.sensors + s.sensor];
-}
-
 /* The next arrival after t of a Poisson process with the piecewise-constant rate in force: the
  * rate changes only at interval edges and where a version takes effect. */
 static double next_arrival(uint32_t episode, double t) {
   double budget = -log(uniform()); /* Exp(1) of integrated rate */
-  const double width = s.horizon_s / s.intervals;
-  while (t < s.horizon_s) {
-    double end = (floor(t / width + 1e-12) + 1.0) * width;
-    for (int i = 0; i < s.version_count; ++i) {
-      const struct version *v = &s.versions[i];
-      if (v->effective_episode == episode && v->effective_time_s > t && v->effective_time_s < end) {
-        end = v->effective_time_s;
-      }
-    }
-    if (end > s.horizon_s) end = s.horizon_s;
-    const double rate = rate_at(episode, t);
+  while (t < s.book.horizon_s) {
+    const double end = run_book_next_change(&s.book, episode, t);
+    const double rate = run_book_rate(&s.book, episode, t, s.sensor);
     if (rate * (end - t) >= budget) return t + budget / rate;
     budget -= rate * (end - t);
     t = end;
@@ -118,99 +71,32 @@ static double next_arrival(uint32_t episode, double t) {
   return INFINITY;
 }
 
-static dds_qos_t *base_qos(const char *partition) {
-  dds_qos_t *q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_partition1(q, partition);
-  return q;
-}
-
-/* Reliable, transient-local, last `depth` (and the durability service's), as the run's. */
-static dds_qos_t *last_known(const char *partition, int32_t depth) {
-  dds_qos_t *q = base_qos(partition);
-  dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
-  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, depth);
-  dds_qset_durability_service(q, 0, DDS_HISTORY_KEEP_LAST, depth, DDS_LENGTH_UNLIMITED,
-                              DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
-  return q;
-}
-
-static int matched_readers(dds_entity_t writer) {
-  dds_publication_matched_status_t m;
-  return dds_get_publication_matched_status(writer, &m) == 0 ? (int)m.current_count : 0;
-}
-
-static int matched_writers(dds_entity_t reader) {
-  dds_subscription_matched_status_t m;
-  return dds_get_subscription_matched_status(reader, &m) == 0 ? (int)m.current_count : 0;
-}
-
 static void publish_status(dds_entity_t writer, sensornet_SensorState state) {
   sensornet_SensorStatus st;
   memset(&st, 0, sizeof st);
   st.sensor_id = s.sensor;
-  st.run_id = (char *)s.run_id;
+  st.run_id = (char*)s.book.run_id;
   st.state = state;
   st.episode = s.running ? s.now.episode : 0;
-  const struct version *v = in_force(st.episode, 0.0);
+  const struct run_version* v = run_book_in_force(&s.book, st.episode, 0.0);
   st.schedule_version = v != NULL ? v->number : 0;
   st.sent_in_episode = s.running ? s.seq : 0;
   st.sent_total = s.sent_total;
   st.process_id = (int32_t)getpid();
-  st.wall_time_ns = wall_ns();
+  st.wall_time_ns = run_wall_ns();
   st.detail = "";
   (void)dds_write(writer, &st);
 }
 
-static void take_scenario(dds_entity_t reader) {
-  void *samples[4] = {NULL};
-  dds_sample_info_t infos[4];
-  const int n = dds_take(reader, samples, infos, 4, 4);
-  for (int i = 0; i < n; ++i) {
-    const sensornet_Scenario *sc = samples[i];
-    if (!infos[i].valid_data || strcmp(sc->run_id, s.run_id) != 0) continue;
-    if (s.sensor >= sc->sensor_count) {
-      fprintf(stderr, "external_sensor: --sensor %u: the scenario has %u sensors\n", s.sensor,
-              sc->sensor_count);
-      exit(2);
-    }
-    s.horizon_s = sc->horizon_s;
-    s.intervals = sc->intervals;
-    s.sensors = sc->sensor_count;
-    s.have_scenario = 1;
-  }
-  if (n > 0) dds_return_loan(reader, samples, n);
-}
-
-static void take_schedules(dds_entity_t reader) {
-  void *samples[16] = {NULL};
-  dds_sample_info_t infos[16];
-  const int n = dds_take(reader, samples, infos, 16, 16);
-  for (int i = 0; i < n; ++i) {
-    const sensornet_Schedule *sc = samples[i];
-    if (!infos[i].valid_data || strcmp(sc->run_id, s.run_id) != 0) continue;
-    if (s.version_count == MAX_VERSIONS || sc->rates_hz._length != sc->intervals * sc->sensor_count) {
-      continue;
-    }
-    struct version *v = &s.versions[s.version_count++];
-    v->number = sc->version;
-    v->effective_episode = sc->effective_episode;
-    v->effective_time_s = sc->effective_time_s;
-    v->rates = malloc(sizeof(double) * sc->rates_hz._length);
-    memcpy(v->rates, sc->rates_hz._buffer, sizeof(double) * sc->rates_hz._length);
-  }
-  if (n > 0) dds_return_loan(reader, samples, n);
-}
-
 static void take_controls(dds_entity_t reader) {
-  void *samples[8] = {NULL};
+  void* samples[8] = {NULL};
   dds_sample_info_t infos[8];
   const int n = dds_take(reader, samples, infos, 8, 8);
   for (int i = 0; i < n; ++i) {
-    const sensornet_EpisodeControl *c = samples[i];
-    if (!infos[i].valid_data || strcmp(c->run_id, s.run_id) != 0) continue;
+    const sensornet_EpisodeControl* c = samples[i];
+    if (!infos[i].valid_data || strcmp(c->run_id, s.book.run_id) != 0) continue;
     for (uint32_t k = 0; k < c->failed_sensors._length; ++k) {
-      if (c->failed_sensors._buffer[k] == s.sensor) s.failed = 1;  /* dead: publishes nothing */
+      if (c->failed_sensors._buffer[k] == s.sensor) s.failed = 1; /* dead: publishes nothing */
     }
     if (c->command == sensornet_RUN_SHUTDOWN) s.shutdown = 1;
     if (c->command == sensornet_EPISODE_START && s.start_count < MAX_STARTS) {
@@ -221,26 +107,33 @@ static void take_controls(dds_entity_t reader) {
 }
 
 static void usage(void) {
-  fprintf(stderr, "usage: external_sensor --run-id ID --sensor J --dim P [--domain-id D] [--seed S]\n");
+  fprintf(stderr,
+          "usage: external_sensor --run-id ID --sensor J --dim P [--domain-id D] [--seed S]\n");
   exit(2);
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   dds_domainid_t domain = DDS_DOMAIN_DEFAULT;
   s.rng = 88172645463325252ULL;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (strcmp(argv[i], "--run-id") == 0) s.run_id = argv[i + 1];
-    else if (strcmp(argv[i], "--sensor") == 0) s.sensor = (uint32_t)strtoul(argv[i + 1], NULL, 10);
-    else if (strcmp(argv[i], "--dim") == 0) s.dim = (uint32_t)strtoul(argv[i + 1], NULL, 10);
-    else if (strcmp(argv[i], "--domain-id") == 0) domain = (dds_domainid_t)strtoul(argv[i + 1], NULL, 10);
-    else if (strcmp(argv[i], "--seed") == 0) s.rng ^= strtoull(argv[i + 1], NULL, 10) * 0x9E3779B97F4A7C15ULL;
-    else usage();
+    if (strcmp(argv[i], "--run-id") == 0)
+      s.book.run_id = argv[i + 1];
+    else if (strcmp(argv[i], "--sensor") == 0)
+      s.sensor = (uint32_t)strtoul(argv[i + 1], NULL, 10);
+    else if (strcmp(argv[i], "--dim") == 0)
+      s.dim = (uint32_t)strtoul(argv[i + 1], NULL, 10);
+    else if (strcmp(argv[i], "--domain-id") == 0)
+      domain = (dds_domainid_t)strtoul(argv[i + 1], NULL, 10);
+    else if (strcmp(argv[i], "--seed") == 0)
+      s.rng ^= strtoull(argv[i + 1], NULL, 10) * 0x9E3779B97F4A7C15ULL;
+    else
+      usage();
   }
-  if (s.run_id == NULL || s.dim == 0 || s.dim > MAX_DIM) usage();
+  if (s.book.run_id == NULL || s.dim == 0 || s.dim > MAX_DIM) usage();
 
   char run[256], mine[300];
-  snprintf(run, sizeof run, "sensornet/%s", s.run_id);
-  snprintf(mine, sizeof mine, "sensornet/%s/sensors/%u", s.run_id, s.sensor);
+  snprintf(run, sizeof run, "sensornet/%s", s.book.run_id);
+  snprintf(mine, sizeof mine, "sensornet/%s/sensors/%u", s.book.run_id, s.sensor);
   const dds_entity_t participant = dds_create_participant(domain, NULL, NULL);
   if (participant < 0) {
     fprintf(stderr, "external_sensor: cannot join DDS domain: %s\n", dds_strretcode(participant));
@@ -259,27 +152,27 @@ int main(int argc, char **argv) {
   const dds_entity_t t_status = dds_create_topic(participant, &sensornet_SensorStatus_desc,
                                                  "sensornet/SensorStatus", NULL, NULL);
 
-  dds_qos_t *q = last_known(run, 1);
+  dds_qos_t* q = run_last_known_qos(run, 1);
   const dds_entity_t scenarios = dds_create_reader(participant, t_scenario, q, NULL);
   dds_delete_qos(q);
-  q = last_known(run, 16);
+  q = run_last_known_qos(run, 16);
   const dds_entity_t schedules = dds_create_reader(participant, t_schedule, q, NULL);
   dds_delete_qos(q);
-  q = last_known(run, 8);
+  q = run_last_known_qos(run, 8);
   const dds_entity_t controls = dds_create_reader(participant, t_control, q, NULL);
   dds_delete_qos(q);
 
-  q = base_qos(mine); /* Measurement: reliable, keep-all, volatile, liveliness 1 s */
+  q = run_qos(mine); /* Measurement: reliable, keep-all, volatile, liveliness 1 s */
   dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
   dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, DDS_SECS(1));
   dds_qset_writer_data_lifecycle(q, false);
   const dds_entity_t measurements = dds_create_writer(participant, t_measurement, q, NULL);
   dds_delete_qos(q);
-  q = last_known(mine, 16);
+  q = run_last_known_qos(mine, 16);
   dds_qset_writer_data_lifecycle(q, false);
   const dds_entity_t tallies = dds_create_writer(participant, t_tally, q, NULL);
   dds_delete_qos(q);
-  q = last_known(mine, 1);
+  q = run_last_known_qos(mine, 1);
   dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, DDS_SECS(1));
   dds_qset_writer_data_lifecycle(q, false);
   const dds_entity_t statuses = dds_create_writer(participant, t_status, q, NULL);
@@ -289,11 +182,16 @@ int main(int argc, char **argv) {
   int64_t next_status_ns = 0;
   double z[MAX_DIM] = {0};
   while (!s.shutdown) {
-    take_scenario(scenarios);
-    take_schedules(schedules);
+    run_book_take_scenario(&s.book, scenarios, 0, "external_sensor");
+    if (s.book.have_scenario && s.sensor >= s.book.sensors) {
+      fprintf(stderr, "external_sensor: --sensor %u: the scenario has %u sensors\n", s.sensor,
+              s.book.sensors);
+      return 2;
+    }
+    run_book_take_schedules(&s.book, schedules);
     take_controls(controls);
-    const int64_t now = wall_ns();
-    if (!s.running && !s.failed && s.have_scenario && s.start_count > 0) {
+    const int64_t now = run_wall_ns();
+    if (!s.running && !s.failed && s.book.have_scenario && s.start_count > 0) {
       s.now = s.starts[0]; /* the earliest announced: starts come in order */
       memmove(&s.starts[0], &s.starts[1], sizeof(struct start) * (size_t)(--s.start_count));
       s.running = 1;
@@ -302,16 +200,16 @@ int main(int argc, char **argv) {
     }
     if (s.running && !s.failed) {
       const double emulated = (double)(now - s.now.start_ns) * 1e-9 * s.now.time_scale;
-      while (s.next_t <= s.horizon_s && s.next_t <= emulated) {
+      while (s.next_t <= s.book.horizon_s && s.next_t <= emulated) {
         sensornet_Measurement m;
         memset(&m, 0, sizeof m);
         m.sensor_id = s.sensor;
-        m.run_id = (char *)s.run_id;
+        m.run_id = (char*)s.book.run_id;
         m.episode = s.now.episode;
         m.seq = s.seq;
         m.emulated_time_s = s.next_t;
-        m.schedule_version = in_force(s.now.episode, s.next_t)->number;
-        m.publish_wall_time_ns = wall_ns();
+        m.schedule_version = run_book_in_force(&s.book, s.now.episode, s.next_t)->number;
+        m.publish_wall_time_ns = run_wall_ns();
         m.z._length = m.z._maximum = s.dim;
         m.z._buffer = z;
         m.z._release = false;
@@ -321,16 +219,16 @@ int main(int argc, char **argv) {
         ++s.sent_total;
         s.next_t = next_arrival(s.now.episode, s.next_t);
       }
-      if (emulated >= s.horizon_s) {
+      if (emulated >= s.book.horizon_s) {
         sensornet_EpisodeTally t;
         memset(&t, 0, sizeof t);
         t.sensor_id = s.sensor;
-        t.run_id = (char *)s.run_id;
+        t.run_id = (char*)s.book.run_id;
         t.episode = s.now.episode;
         t.sent = s.seq;
         t.finished = true;
         t.process_id = (int32_t)getpid();
-        t.wall_time_ns = wall_ns();
+        t.wall_time_ns = run_wall_ns();
         (void)dds_write(tallies, &t);
         s.running = 0;
       }
@@ -340,8 +238,9 @@ int main(int argc, char **argv) {
     sensornet_SensorState state = sensornet_SENSOR_STARTING;
     if (s.running) {
       state = sensornet_SENSOR_RUNNING;
-    } else if (s.have_scenario && s.version_count > 0 && matched_readers(measurements) > 0 &&
-               matched_readers(tallies) > 0 && matched_writers(controls) > 0) {
+    } else if (s.book.have_scenario && s.book.version_count > 0 &&
+               run_matched_readers(measurements) > 0 && run_matched_readers(tallies) > 0 &&
+               run_matched_writers(controls) > 0) {
       state = sensornet_SENSOR_READY;
     }
     if (state != said || now >= next_status_ns) {

@@ -221,6 +221,11 @@ sensornet_Report reportSample(const std::string& run_id, const EpisodeResult& e,
 }
 
 nlohmann::json episodeEntryOfReport(const sensornet_Report& r, int sensor_count) {
+  if (r.complete && !std::isfinite(r.realized_cost)) {
+    throw InputError("Report of episode " + std::to_string(r.episode), "realized_cost",
+                     "a finite number in a complete episode's Report, got " +
+                         std::to_string(r.realized_cost));
+  }
   EpisodeResult e;
   e.episode = r.episode;
   e.realized_cost = r.realized_cost;

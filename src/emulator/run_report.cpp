@@ -48,6 +48,14 @@ constexpr const char* kPerEpisode = "per_episode";
 
 json numberOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
+// The number at `key`, nullopt when the entry has none or null there (not computed: an external
+// fusion center's NEES, say).
+std::optional<double> numberAt(const json& e, const char* key) {
+  const auto it = e.find(key);
+  if (it == e.end() || it->is_null()) return std::nullopt;
+  return it->get<double>();
+}
+
 // A sum of many expected counts to 12 significant digits: the summation's rounding error
 // (216 printed as 215.99999999997434) is not part of the number.
 double roundedSum(double sum) {
@@ -171,7 +179,7 @@ void RunReport::add(const json& e) {
       rejected_in_episodes_[reason] += count.get<std::uint64_t>();
     }
   }
-  episode_medians_.add(e.value("latency_median_s", 0.0));
+  if (const auto median = numberAt(e, "latency_median_s")) episode_medians_.add(*median);
   const auto received_count = static_cast<double>(sumOf(e.at("received")));
   delay_sum_s_ += e.value("network_delay_mean_s", 0.0) * received_count;
   summed_.network_delay_max_s =
@@ -182,7 +190,7 @@ void RunReport::add(const json& e) {
   const double delta = cost - cost_mean_;  // Welford's update
   cost_mean_ += delta / static_cast<double>(complete_count_);
   cost_squares_ += delta * (cost - cost_mean_);
-  realtime_sum_ += e.value("realtime_cost", cost);
+  realtime_sum_ += numberAt(e, "realtime_cost").value_or(cost);
   if (const auto received = e.find("received_realtime_cost");
       received == e.end() || received->is_number()) {  // null: not computed (overload)
     received_realtime_sum_ += received == e.end() ? e.value("realtime_cost", cost)
@@ -191,7 +199,10 @@ void RunReport::add(const json& e) {
   }
   addBracket(bracket_sum_, e.at("bracket"));
   addBracket(delivered_bracket_sum_, e.value("delivered_bracket", e.at("bracket")));
-  nees_sum_ += e.value("nees", 0.0);
+  if (const auto nees = numberAt(e, "nees")) {
+    nees_sum_ += *nees;
+    ++nees_count_;
+  }
 }
 
 void RunReport::addLatencies(const std::vector<double>& latencies_s) { latencies_.add(latencies_s); }
@@ -216,7 +227,8 @@ RunSummary RunReport::summary() const {
             : std::numeric_limits<double>::quiet_NaN();
     s.bracket_mean = {bracket_sum_.info / k, bracket_sum_.cov / k};
     s.delivered_bracket_mean = {delivered_bracket_sum_.info / k, delivered_bracket_sum_.cov / k};
-    s.nees_mean = nees_sum_ / k;
+    s.nees_mean = nees_count_ > 0 ? nees_sum_ / static_cast<double>(nees_count_)
+                                  : std::numeric_limits<double>::quiet_NaN();
     s.ci95_low = s.ci95_high = s.mean;
   }
   if (complete_count_ >= 2) {

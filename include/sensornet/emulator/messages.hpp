@@ -66,8 +66,9 @@ struct RunScenario {
 // The per_episode entry (episodeEntry) of a Report sample, for the report the launcher builds
 // from an external fusion center's Reports. What the wire does not carry is null (the
 // received-real-time cost) or zero (switch time, failed sensors, rejections, drain, backlog,
-// network delays); the latencies are the Report's. Throws InputError naming the field when a
-// count names a sensor outside [0, sensor_count) or twice.
+// network delays); the latencies are the Report's, a NEES or real-time cost that is not a number
+// is null (not computed). Throws InputError naming the field when a count names a sensor outside
+// [0, sensor_count) or twice, or a complete episode's realized cost is not finite.
 [[nodiscard]] nlohmann::json episodeEntryOfReport(const sensornet_Report& r, int sensor_count);
 
 }  // namespace sensornet::emulator

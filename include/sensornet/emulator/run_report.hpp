@@ -170,6 +170,7 @@ class RunReport {
   CostBracket bracket_sum_;
   CostBracket delivered_bracket_sum_;
   double nees_sum_ = 0.0;
+  std::uint32_t nees_count_ = 0;  // complete episodes with a NEES (an external one may have none)
   double delay_sum_s_ = 0.0;  // network_delay_mean_s times received, over every episode
   RunSummary summed_;  // its counts (sent, received, lost, ...) over every episode
   RejectionCounts rejected_in_episodes_;

@@ -19,6 +19,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -27,6 +28,7 @@
 #include <string>
 #include <thread>
 #include <vector>
+#include <yaml-cpp/yaml.h>
 
 #include "launch_fixture.hpp"
 #include "sensornet/dds/participant.hpp"
@@ -265,6 +267,81 @@ TEST_F(ExternalRoles, ASensorWrittenInCTakesItsRole) {
   EXPECT_NE(external.result().out.find("sent " + std::to_string(sent) + " measurements"),
             std::string::npos)
       << external.result().out;
+}
+
+// examples/c/external_fusion_center.c is a user's estimator: the scalar CD-KF in closed form, with
+// no code of ours, its model given on its command line, here read from the scenario file. It
+// carries the run (its Reports pace it and make the report), and beside it our fusion center
+// fuses the same measurements as the reference: two independent computations of each episode's
+// cost, which must agree to rounding (1e-9 relative; measured 2e-16), recomputed here from the
+// reference's own report file and from what the example printed.
+TEST_F(ExternalRoles, AFusionCenterWrittenInCCarriesTheRun) {
+  const LeftoverGuard guard(run_id_);
+  const fs::path scenario = fs::path(SENSORNET_SOURCE_DIR) / "examples" / "c" / "scalar.yaml";
+  const YAML::Node doc = YAML::LoadFile(scenario.string());
+  const auto scalar = [](const YAML::Node& matrix) { return matrix[0][0].as<std::string>(); };
+  std::string h, r;
+  for (const YAML::Node& sensor : doc["sensors"]) {
+    h += (h.empty() ? "" : ",") + scalar(sensor["H"]);
+    r += (r.empty() ? "" : ",") + scalar(sensor["R"]);
+  }
+  const std::string domain = std::to_string(160 + ::getpid() % 60);
+  const std::string config =
+      "file://" + (fs::path(SENSORNET_SOURCE_DIR) / "config" / "cyclonedds-loopback.xml").string();
+  ::setenv("CYCLONEDDS_URI", config.c_str(), 1);  // for the example only: ours compile theirs in
+  std::vector<std::string> argv = launchArgs(kEpisodes, "4", dir_ / "report.json",
+                                             dir_ / "logs", scenario.string());
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--external-fusion-center",
+                           "--reference-fusion", "--require", "fusion-agreement<=1e-9",
+                           "--domain-id", domain});
+  RunningProgram launcher(argv, 120s);
+  RunningProgram external(
+      {SENSORNET_EXTERNAL_FUSION_CENTER_EXAMPLE, "--run-id", run_id_, "--domain-id", domain, "--a",
+       scalar(doc["plant"]["A"]), "--q", scalar(doc["plant"]["Q"]), "--p0",
+       scalar(doc["plant"]["P0"]), "--w", scalar(doc["cost"]["W"]), "--wt",
+       scalar(doc["cost"]["WT"]), "--h", h, "--r", r},
+      120s);
+  const testing::ProcessResult& l = launcher.result();
+  const testing::ProcessResult& x = external.result();
+  EXPECT_EQ(l.exit_code, 0) << l.err;
+  EXPECT_EQ(x.exit_code, 0) << x.err;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object()) << l.err;
+  EXPECT_EQ(report.at("status"), "completed") << report.at("faults").dump();
+  EXPECT_EQ(report.at("external").at("fusion_center"), true);
+  const json& got = report.at("per_episode");
+  ASSERT_EQ(got.size(), static_cast<std::size_t>(kEpisodes)) << x.out;
+  const json reference = readJson(dir_ / "logs" / "reference-report.json");
+  ASSERT_TRUE(reference.is_object());
+  const json& ours = reference.at("per_episode");
+  ASSERT_EQ(ours.size(), got.size());
+  double largest = 0.0;
+  std::vector<int> used(doc["sensors"].size(), 0);
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    const json& e = got[k];
+    EXPECT_TRUE(e.at("complete").get<bool>()) << e.dump();
+    EXPECT_EQ(e.at("received"), e.at("sent")) << "episode " << k;
+    EXPECT_EQ(e.at("received"), ours[k].at("received")) << "episode " << k;
+    EXPECT_TRUE(e.at("nees").is_null()) << "the example computes no NEES: " << e.dump();
+    for (std::size_t j = 0; j < used.size(); ++j) used[j] += e.at("sent").at(j).get<int>();
+    // What crossed the wire is what the example computed (printed with 17 digits).
+    const double theirs = e.at("realized_cost").get<double>();
+    char printed[128];
+    std::snprintf(printed, sizeof printed, "episode %zu realized cost %.17g", k, theirs);
+    EXPECT_NE(x.out.find(printed), std::string::npos) << printed << " in\n" << x.out;
+    const double exact = ours[k].at("realized_cost").get<double>();
+    largest = std::max(largest, std::abs(theirs - exact) / exact);
+  }
+  EXPECT_LE(largest, 1e-9);
+  for (std::size_t j = 0; j < used.size(); ++j) {
+    EXPECT_GT(used[j], 0) << "sensor " << j << " never measured: the plan must use every sensor "
+                          << "for the model's order to be checked";
+  }
+  const json& comparison = report.at("reference_fusion");
+  EXPECT_EQ(comparison.at("episodes_compared"), kEpisodes);
+  EXPECT_EQ(comparison.at("max_relative_difference").get<double>(), largest);
+  EXPECT_TRUE(report.at("summary").at("nees_mean").is_null()) << report.at("summary").dump();
+  EXPECT_DOUBLE_EQ(report.at("summary").at("mean").get<double>(), meanOfComplete(got));
 }
 #endif
 
