@@ -9,6 +9,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/messages.hpp"
+#include "sensornet/emulator/run_report.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -80,6 +81,47 @@ TEST(ReportCodec, AReportWhoseCountsDoNotFitTheScenarioIsRefusedNamingTheField) 
   }
   counts[2].sensor_id = 0;  // sensor 0 twice
   EXPECT_THROW((void)episodeEntryOfReport(sample, 3), InputError);
+}
+
+// An estimator of a user's may compute no NEES (it keeps no mean): its Reports carry NaN, the
+// entries null, and the run's summary averages the NEES over the episodes that have one (null
+// when none has); a complete episode without a finite cost is refused, naming the field.
+TEST(ReportCodec, AReportWithoutNeesMakesANullNeesAndACompleteOneNeedsAFiniteCost) {
+  EpisodeResult e = resultOfThreeSensors();
+  e.complete = true;
+  e.incomplete_reason.clear();
+  e.nees = std::nan("");
+  std::vector<sensornet_SensorCounts> counts;
+  const sensornet_Report no_nees = reportSample("run-x", e, RunSummary{}, counts);
+  const json entry = episodeEntryOfReport(no_nees, 3);
+  EXPECT_TRUE(entry.at("nees").is_null());
+
+  RunReport without("run-x", "d", 3, 2);
+  without.add(entry);
+  without.add(entry);
+  EXPECT_TRUE(std::isnan(without.summary().nees_mean));
+  EXPECT_EQ(without.summary().mean, e.realized_cost);
+  EXPECT_TRUE(without.toJson("completed", json::array(), json::array())
+                  .at("summary")
+                  .at("nees_mean")
+                  .is_null());
+
+  RunReport mixed("run-x", "d", 3, 2);
+  mixed.add(entry);
+  e.nees = 2.5;
+  std::vector<sensornet_SensorCounts> more_counts;
+  mixed.add(episodeEntryOfReport(reportSample("run-x", e, RunSummary{}, more_counts), 3));
+  EXPECT_EQ(mixed.summary().nees_mean, 2.5) << "the mean of the one NEES there is";
+
+  e.realized_cost = std::nan("");
+  std::vector<sensornet_SensorCounts> bad_counts;
+  const sensornet_Report no_cost = reportSample("run-x", e, RunSummary{}, bad_counts);
+  try {
+    (void)episodeEntryOfReport(no_cost, 3);
+    FAIL() << "a complete episode without a cost was taken";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.field(), "realized_cost");
+  }
 }
 
 }  // namespace
