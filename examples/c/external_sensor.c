@@ -50,25 +50,12 @@ static struct {
 } s;
 
 /* xorshift64*: a uniform in (0, 1). */
-static double uniform(void) {
+static double uniform(void* unused) {
+  (void)unused;
   s.rng ^= s.rng >> 12;
   s.rng ^= s.rng << 25;
   s.rng ^= s.rng >> 27;
   return ((double)((s.rng * 2685821657736338717ULL) >> 11) + 0.5) / 9007199254740992.0;
-}
-
-/* The next arrival after t of a Poisson process with the piecewise-constant rate in force: the
- * rate changes only at interval edges and where a version takes effect. */
-static double next_arrival(uint32_t episode, double t) {
-  double budget = -log(uniform()); /* Exp(1) of integrated rate */
-  while (t < s.book.horizon_s) {
-    const double end = run_book_next_change(&s.book, episode, t);
-    const double rate = run_book_rate(&s.book, episode, t, s.sensor);
-    if (rate * (end - t) >= budget) return t + budget / rate;
-    budget -= rate * (end - t);
-    t = end;
-  }
-  return INFINITY;
 }
 
 static void publish_status(dds_entity_t writer, sensornet_SensorState state) {
@@ -196,7 +183,7 @@ int main(int argc, char** argv) {
       memmove(&s.starts[0], &s.starts[1], sizeof(struct start) * (size_t)(--s.start_count));
       s.running = 1;
       s.seq = 0;
-      s.next_t = next_arrival(s.now.episode, 0.0);
+      s.next_t = run_book_next_arrival(&s.book, s.now.episode, 0.0, s.sensor, uniform, NULL);
     }
     if (s.running && !s.failed) {
       const double emulated = (double)(now - s.now.start_ns) * 1e-9 * s.now.time_scale;
@@ -217,7 +204,7 @@ int main(int argc, char** argv) {
         } /* keep-all: a full history waits for the reader, nothing is dropped */
         ++s.seq;
         ++s.sent_total;
-        s.next_t = next_arrival(s.now.episode, s.next_t);
+        s.next_t = run_book_next_arrival(&s.book, s.now.episode, s.next_t, s.sensor, uniform, NULL);
       }
       if (emulated >= s.book.horizon_s) {
         sensornet_EpisodeTally t;

@@ -1,6 +1,5 @@
 #include "run_topics.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -51,13 +50,8 @@ void run_book_take_scenario(struct run_book* book, dds_entity_t reader, uint32_t
               program, book->run_id, sc->sensor_count, sensors_expected);
       exit(2);
     }
-    book->horizon_s = sc->horizon_s;
-    book->intervals = sc->intervals;
-    book->sensors = sc->sensor_count;
-    book->state_dim = sc->state_dim;
-    book->has_network =
-        strncmp(sc->yaml, "network:", 8) == 0 || strstr(sc->yaml, "\nnetwork:") != NULL;
-    book->have_scenario = 1;
+    run_book_set_scenario(book, sc->horizon_s, sc->intervals, sc->sensor_count, sc->state_dim,
+                          sc->yaml);
   }
   if (n > 0) dds_return_loan(reader, samples, n);
 }
@@ -69,50 +63,9 @@ void run_book_take_schedules(struct run_book* book, dds_entity_t reader) {
   for (int i = 0; i < n; ++i) {
     const sensornet_Schedule* sc = samples[i];
     if (!infos[i].valid_data || strcmp(sc->run_id, book->run_id) != 0) continue;
-    if (book->version_count == RUN_MAX_VERSIONS ||
-        sc->rates_hz._length != sc->intervals * sc->sensor_count) {
-      continue;
-    }
-    struct run_version* v = &book->versions[book->version_count++];
-    v->number = sc->version;
-    v->effective_episode = sc->effective_episode;
-    v->effective_time_s = sc->effective_time_s;
-    v->bracket_lower = sc->bracket_lower;
-    v->bracket_upper = sc->bracket_upper;
-    v->rates = malloc(sizeof(double) * sc->rates_hz._length);
-    memcpy(v->rates, sc->rates_hz._buffer, sizeof(double) * sc->rates_hz._length);
+    (void)run_book_add_version(book, sc->version, sc->effective_episode, sc->effective_time_s,
+                               sc->bracket_lower, sc->bracket_upper, sc->intervals,
+                               sc->sensor_count, sc->rates_hz._buffer, sc->rates_hz._length);
   }
   if (n > 0) dds_return_loan(reader, samples, n);
-}
-
-const struct run_version* run_book_in_force(const struct run_book* book, uint32_t episode,
-                                            double t) {
-  const struct run_version* best = NULL;
-  for (int i = 0; i < book->version_count; ++i) {
-    const struct run_version* v = &book->versions[i];
-    const int effective = v->effective_episode < episode ||
-                          (v->effective_episode == episode && v->effective_time_s <= t);
-    if (effective && (best == NULL || v->number > best->number)) best = v;
-  }
-  return best;
-}
-
-double run_book_rate(const struct run_book* book, uint32_t episode, double t, uint32_t j) {
-  const struct run_version* v = run_book_in_force(book, episode, t);
-  if (v == NULL) return 0.0;
-  uint32_t i = (uint32_t)(t / (book->horizon_s / book->intervals));
-  if (i >= book->intervals) i = book->intervals - 1;
-  return v->rates[i * book->sensors + j];
-}
-
-double run_book_next_change(const struct run_book* book, uint32_t episode, double t) {
-  const double width = book->horizon_s / book->intervals;
-  double end = (floor(t / width + 1e-12) + 1.0) * width;
-  for (int i = 0; i < book->version_count; ++i) {
-    const struct run_version* v = &book->versions[i];
-    if (v->effective_episode == episode && v->effective_time_s > t && v->effective_time_s < end) {
-      end = v->effective_time_s;
-    }
-  }
-  return end > book->horizon_s ? book->horizon_s : end;
 }

@@ -7,8 +7,7 @@
 //                 [--timeout 120]
 //
 // It prints "ready" once its readers exist, and exits 0 after the run's RUN_SHUTDOWN (1 on
-// timeout, 2 on bad arguments). Traffic stays on 127.0.0.1: UDPv4 only (no shared memory),
-// no multicast, the interface white list holding only the loopback address.
+// timeout, 2 on bad arguments). Traffic stays on 127.0.0.1 (fastdds_participant.hpp).
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -18,8 +17,6 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastrtps/utils/IPLocator.h>
 
 #include <chrono>
 #include <cmath>
@@ -33,14 +30,14 @@
 #include <thread>
 #include <vector>
 
+#include "fastdds_participant.hpp"
 #include "sensornet.h"
 #include "sensornetPubSubTypes.h"
 
 namespace {
 
 using namespace eprosima::fastdds::dds;
-using eprosima::fastrtps::rtps::IPLocator;
-using eprosima::fastrtps::rtps::Locator_t;
+using sensornet::interop::wallNowNs;
 using nlohmann::json;
 
 struct Options {
@@ -70,27 +67,6 @@ bool parse(int argc, char** argv, Options& o) {
     }
   }
   return argc % 2 == 1 && !o.run_id.empty() && o.domain_id >= 0 && !o.out_path.empty();
-}
-
-Locator_t loopback() {
-  Locator_t locator;
-  locator.kind = LOCATOR_KIND_UDPv4;
-  IPLocator::setIPv4(locator, 127, 0, 0, 1);
-  return locator;
-}
-
-DomainParticipantQos participantQos() {
-  DomainParticipantQos qos;
-  qos.name("fastdds_probe");
-  qos.transport().use_builtin_transports = false;
-  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
-  udp->interfaceWhiteList.push_back("127.0.0.1");
-  udp->maxInitialPeersRange = 32;  // the hubs' participant indices 0..31 (the loopback config)
-  qos.transport().user_transports.push_back(udp);
-  qos.wire_protocol().builtin.initialPeersList.push_back(loopback());
-  qos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(loopback());
-  qos.wire_protocol().default_unicast_locator_list.push_back(loopback());
-  return qos;
 }
 
 DataReaderQos readerQos(bool transient_local) {
@@ -141,15 +117,10 @@ class TopicReader {
   std::uint64_t invalid_ = 0;
 };
 
-std::int64_t wallNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 int run(const Options& o) {
   DomainParticipant* participant =
-      DomainParticipantFactory::get_instance()->create_participant(o.domain_id, participantQos());
+      DomainParticipantFactory::get_instance()->create_participant(
+      o.domain_id, sensornet::interop::loopbackParticipantQos("fastdds_probe"));
   if (participant == nullptr) throw std::runtime_error("cannot create the participant");
   // The run's partition, every sensor process's (".../sensors/<ids>") and the two Command
   // partitions; it sends its re-plan as an operator does (docs/ARCHITECTURE.md, "Partitions").

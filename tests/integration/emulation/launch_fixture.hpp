@@ -16,6 +16,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -113,5 +115,33 @@ class LaunchTest : public ::testing::Test {
   std::filesystem::path dir_;
   std::string run_id_;
 };
+
+// What must hold of a run where a participant of the user's spoke for `sensor`, drawing its own
+// arrivals (another draw than ours, as valid): the run completed, every measurement it sent was
+// fused and nothing lost, in every episode; and its total count over the run, Poisson with mean
+// the sum of the expected counts the report gives, lies within 4.5 standard deviations of it
+// (false alarm 7e-6). `printed` is what the participant printed: "sent N measurements".
+inline void expectExternalSensorTookItsRole(const nlohmann::json& report, int episodes,
+                                            std::size_t sensor, const std::string& printed) {
+  ASSERT_TRUE(report.is_object());
+  EXPECT_EQ(report.at("status"), "completed") << report.at("faults").dump();
+  const nlohmann::json& entries = report.at("per_episode");
+  ASSERT_EQ(entries.size(), static_cast<std::size_t>(episodes));
+  double expected = 0.0;
+  std::uint64_t sent = 0;
+  for (const nlohmann::json& e : entries) {
+    EXPECT_TRUE(e.at("complete").get<bool>()) << e.dump();
+    EXPECT_EQ(e.at("received").at(sensor), e.at("sent").at(sensor));
+    EXPECT_EQ(e.at("lost").at(sensor), 0);
+    sent += e.at("sent").at(sensor).get<std::uint64_t>();
+    expected += e.at("expected").at(sensor).get<double>();
+  }
+  ASSERT_GT(expected, 10.0) << "sensor " << sensor << " must be scheduled for the test to mean "
+                            << "something";
+  EXPECT_LE(std::abs(static_cast<double>(sent) - expected), 4.5 * std::sqrt(expected))
+      << "sent " << sent << ", expected " << expected;
+  EXPECT_NE(printed.find("sent " + std::to_string(sent) + " measurements"), std::string::npos)
+      << printed;
+}
 
 }  // namespace sensornet::testing

@@ -17,6 +17,7 @@ using nlohmann::json;
 using namespace std::chrono_literals;
 
 const std::string kProbe = SENSORNET_FASTDDS_PROBE;
+const std::string kFastDdsSensor = SENSORNET_FASTDDS_SENSOR;
 
 class FastDdsInterop : public LaunchTest {};
 
@@ -105,6 +106,28 @@ TEST_F(FastDdsInterop, FastDdsReadsEveryTopicAndItsReplanIsAccepted) {
     }
   }
   EXPECT_TRUE(in_report) << report["schedule_versions"].dump();
+}
+
+// A second vendor taking a role: the Fast DDS sensor (tests/interop/fastdds_sensor.cpp) speaks
+// for sensor 1 of the default scenario in a launched run, as the C example does against Cyclone:
+// the run completes with every measurement it sent fused, its count within the Poisson bounds
+// of the schedule (expectExternalSensorTookItsRole).
+TEST_F(FastDdsInterop, FastDdsSpeaksForASensor) {
+  const LeftoverGuard guard(run_id_);
+  constexpr int kEpisodes = 4;
+  const std::string domain = std::to_string(60 + ::getpid() % 100);
+  std::vector<std::string> argv = launchArgs(kEpisodes, "4");
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--external-sensors", "1", "--domain-id",
+                           domain});
+  RunningProgram launcher(argv, 120s);
+  RunningProgram sensor({kFastDdsSensor, "--run-id", run_id_, "--domain-id", domain, "--sensor",
+                         "1", "--dim", "1", "--seed", "5", "--timeout", "100"},
+                        120s);
+  const ProcessResult& r = launcher.result();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(sensor.result().exit_code, 0) << sensor.result().err;
+  expectExternalSensorTookItsRole(readJson(dir_ / "report.json"), kEpisodes, 1,
+                                  sensor.result().out);
 }
 
 }  // namespace
