@@ -1,5 +1,5 @@
 // The Python module sensornet._sensornet: LaunchedRun of sensornet::testing (launched_run.hpp)
-// for Python test suites. The package sensornet (python/sensornet/__init__.py) wraps it with
+// for Python test suites, and Participant (participant.hpp), a DDS participant of a run. The package sensornet (python/sensornet/__init__.py) wraps it with
 // keyword arguments, a context manager and the report as a dict; sensornet.pytest_plugin
 // gives the pytest fixture.
 #include <pybind11/chrono.h>
@@ -9,13 +9,15 @@
 
 #include <memory>
 
+#include "participant.hpp"
 #include "sensornet/testing/launched_run.hpp"
 
 namespace py = pybind11;
 namespace st = sensornet::testing;
 
 PYBIND11_MODULE(_sensornet, m) {
-  m.doc() = "sensornet's launch fixture (sensornet::testing::LaunchedRun)";
+  m.doc() = "sensornet's launch fixture (sensornet::testing::LaunchedRun) and a participant of a run";
+  sensornet::python::bindParticipant(m);
   py::class_<st::LaunchOptions>(m, "LaunchOptions")
       .def(py::init<>())
       .def_readwrite("program", &st::LaunchOptions::program)

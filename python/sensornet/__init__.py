@@ -9,6 +9,20 @@
 The run gets a run id and a private folder of its own and is stopped (Ctrl-C to the launcher,
 then SIGKILL of its process group) when the `with` block ends or close() is called, also when
 the test failed first. The pytest fixture is in sensornet.pytest_plugin.
+
+A participant of a run reads and writes its topics (docs/wire-protocol.md) as dicts, with the
+QoS the run's own processes use, enough to write an external sensor or a scheduler:
+
+    p = sensornet.Participant(run.run_id, domain_id=7)
+    schedules = p.reader("Schedule")                 # partition sensornet/<run id>
+    measurements = p.writer("Measurement", "sensors/1")
+    measurements.write({"sensor_id": 1, "run_id": run.run_id, "episode": 0, "seq": 0,
+                        "emulated_time_s": 0.1, "z": [0.0]})
+    for s in schedules.take(): print(s["version"], s["rates_hz"])
+
+Fields a dict leaves out are zero or empty; a field the type does not have, or a value of the
+wrong kind, raises KeyError or TypeError naming it; enums are their IDL names
+("EPISODE_START"). Cyclone finds its configuration in CYCLONEDDS_URI as usual.
 """
 
 import datetime
@@ -19,8 +33,9 @@ import shutil
 
 from ._sensornet import LaunchOptions as _LaunchOptions
 from ._sensornet import LaunchedRun as _LaunchedRun
+from ._sensornet import Participant, topic_names
 
-__all__ = ["launch", "Run", "Result", "program"]
+__all__ = ["launch", "Run", "Result", "program", "Participant", "topic_names"]
 
 
 def program():
