@@ -8,8 +8,10 @@
  * It reads the Scenario (T, N, M), the Schedule versions and EpisodeControl in the run's
  * partition sensornet/<run id>; says SENSOR_READY once it holds a scenario and a schedule and
  * its writers and control reader are matched; in each episode draws Poisson arrivals at the
- * rates of the version in force (its own random numbers: the run's costs are another draw than
- * with our agents, but as valid), publishes a Measurement at each arrival at its wall time and
+ * rates of the version in force, exactly as sensornet's agents draw them from the run seed
+ * (schedule_book.h, run_book_draw_as_ours: the run is then the same run as with our agent,
+ * costs to the bit), or with --seed S from a stream of its own (another draw, as valid);
+ * publishes a Measurement at each arrival at its wall time and
  * the EpisodeTally after T, all in partition sensornet/<run id>/sensors/<J>; and leaves on
  * RUN_SHUTDOWN. A measurement is z = 0 (p = --dim values): a driver would put its reading there.
  * The QoS are those of include/sensornet/dds/topics.hpp, which a reader checks on matching.
@@ -42,8 +44,13 @@ static struct {
   int start_count;
   int running;
   struct start now;
-  double next_t; /* emulated time of the next arrival; > T: none left */
+  double next_t; /* own draw: emulated time of the next arrival; > T: none left */
   uint64_t seq;
+  int as_ours;   /* draw the arrivals as sensornet's agents do (no --seed) */
+  double* drawn; /* as ours: the running episode's instants, and their versions */
+  uint32_t* drawn_versions;
+  size_t drawn_count;
+  int drawn_with; /* how many schedule versions the book held when they were drawn */
   int failed, shutdown;
   uint64_t sent_total;
   uint64_t rng;
@@ -56,6 +63,29 @@ static double uniform(void* unused) {
   s.rng ^= s.rng << 25;
   s.rng ^= s.rng >> 27;
   return ((double)((s.rng * 2685821657736338717ULL) >> 11) + 0.5) / 9007199254740992.0;
+}
+
+/* Draws the running episode's arrivals as ours (again when a version came: the stretches before
+ * it draw the same instants, their streams are keyed by where they start). */
+static void draw_as_ours(void) {
+  free(s.drawn);
+  free(s.drawn_versions);
+  s.drawn_count =
+      run_book_draw_as_ours(&s.book, s.now.episode, s.sensor, &s.drawn, &s.drawn_versions);
+  s.drawn_with = s.book.version_count;
+}
+
+/* The instant of the running episode's next arrival (INFINITY: none left) and its version. */
+static double next_instant(uint32_t* version) {
+  if (s.as_ours) {
+    if (s.seq >= s.drawn_count) return INFINITY;
+    *version = s.drawn_versions[s.seq];
+    return s.drawn[s.seq];
+  }
+  if (s.next_t <= s.book.horizon_s) {
+    *version = run_book_in_force(&s.book, s.now.episode, s.next_t)->number;
+  }
+  return s.next_t;
 }
 
 static void publish_status(dds_entity_t writer, sensornet_SensorState state) {
@@ -102,6 +132,7 @@ static void usage(void) {
 int main(int argc, char** argv) {
   dds_domainid_t domain = DDS_DOMAIN_DEFAULT;
   s.rng = 88172645463325252ULL;
+  s.as_ours = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (strcmp(argv[i], "--run-id") == 0)
       s.book.run_id = argv[i + 1];
@@ -111,9 +142,10 @@ int main(int argc, char** argv) {
       s.dim = (uint32_t)strtoul(argv[i + 1], NULL, 10);
     else if (strcmp(argv[i], "--domain-id") == 0)
       domain = (dds_domainid_t)strtoul(argv[i + 1], NULL, 10);
-    else if (strcmp(argv[i], "--seed") == 0)
+    else if (strcmp(argv[i], "--seed") == 0) {
       s.rng ^= strtoull(argv[i + 1], NULL, 10) * 0x9E3779B97F4A7C15ULL;
-    else
+      s.as_ours = 0;
+    } else
       usage();
   }
   if (s.book.run_id == NULL || s.dim == 0 || s.dim > MAX_DIM) usage();
@@ -175,6 +207,14 @@ int main(int argc, char** argv) {
               s.book.sensors);
       return 2;
     }
+    if (s.book.have_scenario && s.as_ours && (s.book.has_network || s.book.timetable)) {
+      fprintf(stderr,
+              "external_sensor: run %s %s; this example draws Poisson arrivals as "
+              "sensornet's agents do only without them (give --seed for a draw of its own)\n",
+              s.book.run_id,
+              s.book.has_network ? "emulates a network (network:)" : "has timetable arrivals");
+      return 2;
+    }
     run_book_take_schedules(&s.book, schedules);
     take_controls(controls);
     const int64_t now = run_wall_ns();
@@ -183,19 +223,26 @@ int main(int argc, char** argv) {
       memmove(&s.starts[0], &s.starts[1], sizeof(struct start) * (size_t)(--s.start_count));
       s.running = 1;
       s.seq = 0;
-      s.next_t = run_book_next_arrival(&s.book, s.now.episode, 0.0, s.sensor, uniform, NULL);
+      if (s.as_ours) {
+        draw_as_ours();
+      } else {
+        s.next_t = run_book_next_arrival(&s.book, s.now.episode, 0.0, s.sensor, uniform, NULL);
+      }
     }
     if (s.running && !s.failed) {
+      if (s.as_ours && s.drawn_with != s.book.version_count) draw_as_ours();
       const double emulated = (double)(now - s.now.start_ns) * 1e-9 * s.now.time_scale;
-      while (s.next_t <= s.book.horizon_s && s.next_t <= emulated) {
+      uint32_t version = 0;
+      double at;
+      while ((at = next_instant(&version)) <= s.book.horizon_s && at <= emulated) {
         sensornet_Measurement m;
         memset(&m, 0, sizeof m);
         m.sensor_id = s.sensor;
         m.run_id = (char*)s.book.run_id;
         m.episode = s.now.episode;
         m.seq = s.seq;
-        m.emulated_time_s = s.next_t;
-        m.schedule_version = run_book_in_force(&s.book, s.now.episode, s.next_t)->number;
+        m.emulated_time_s = at;
+        m.schedule_version = version;
         m.publish_wall_time_ns = run_wall_ns();
         m.z._length = m.z._maximum = s.dim;
         m.z._buffer = z;
@@ -204,7 +251,10 @@ int main(int argc, char** argv) {
         } /* keep-all: a full history waits for the reader, nothing is dropped */
         ++s.seq;
         ++s.sent_total;
-        s.next_t = run_book_next_arrival(&s.book, s.now.episode, s.next_t, s.sensor, uniform, NULL);
+        if (!s.as_ours) {
+          s.next_t =
+              run_book_next_arrival(&s.book, s.now.episode, s.next_t, s.sensor, uniform, NULL);
+        }
       }
       if (emulated >= s.book.horizon_s) {
         sensornet_EpisodeTally t;

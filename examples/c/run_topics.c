@@ -51,7 +51,7 @@ void run_book_take_scenario(struct run_book* book, dds_entity_t reader, uint32_t
       exit(2);
     }
     run_book_set_scenario(book, sc->horizon_s, sc->intervals, sc->sensor_count, sc->state_dim,
-                          sc->yaml);
+                          sc->seed, sc->yaml, sc->arrivals);
   }
   if (n > 0) dds_return_loan(reader, samples, n);
 }

@@ -28,14 +28,18 @@ struct run_book {
   int have_scenario;
   double horizon_s;
   uint32_t intervals, sensors, state_dim;
+  uint64_t seed;   /* the run seed */
   int has_network; /* the scenario's YAML has a top-level network: section */
+  int timetable;   /* arrivals are the timetable's, not Poisson (Scenario.arrivals) */
   struct run_version versions[RUN_MAX_VERSIONS];
   int version_count;
 };
 
-/* Records the scenario's shape (from a Scenario sample); `yaml` is its text. */
+/* Records the scenario (from a Scenario sample): its shape, the run seed, its YAML text and the
+ * arrival mode in force ("poisson", "timetable", empty: poisson). */
 void run_book_set_scenario(struct run_book* book, double horizon_s, uint32_t intervals,
-                           uint32_t sensors, uint32_t state_dim, const char* yaml);
+                           uint32_t sensors, uint32_t state_dim, uint64_t seed, const char* yaml,
+                           const char* arrivals);
 /* Adds a version (from a Schedule sample); refused (0) when the book is full or the rates are
  * not intervals x sensors. */
 int run_book_add_version(struct run_book* book, uint32_t number, uint32_t effective_episode,
@@ -54,6 +58,15 @@ double run_book_next_change(const struct run_book* book, uint32_t episode, doubl
  * force, from uniforms in (0, 1) that uniform(state) draws; INFINITY when none comes by T. */
 double run_book_next_arrival(const struct run_book* book, uint32_t episode, double t, uint32_t j,
                              double (*uniform)(void*), void* state);
+
+/* Sensor j's arrivals in `episode` exactly as sensornet's own agents draw them
+ * (src/emulator/sensor_timeline.cpp, core/poisson_arrivals.cpp, core/random.cpp): per stretch of
+ * one version, a xoshiro256++ stream keyed by (run seed, "em-arriv", episode, sensor, version,
+ * the stretch's start), exponential gaps restarted at each rate interval, each instant moved to
+ * the plant's tick at or before it (2^20 ticks over T). Fills malloc'ed arrays of the instants
+ * and of the version each came from, in time order; returns how many (the caller frees both). */
+size_t run_book_draw_as_ours(const struct run_book* book, uint32_t episode, uint32_t j,
+                             double** times, uint32_t** versions);
 
 #ifdef __cplusplus
 }

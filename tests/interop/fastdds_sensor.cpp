@@ -256,7 +256,8 @@ int run(const Options& o) {
         return 2;
       }
       run_book_set_scenario(&book, scenario.horizon_s(), scenario.intervals(),
-                            scenario.sensor_count(), scenario.state_dim(), scenario.yaml().c_str());
+                            scenario.sensor_count(), scenario.state_dim(), scenario.seed(),
+                            scenario.yaml().c_str(), scenario.arrivals().c_str());
     }
     sensornet::Schedule schedule;
     while (schedules->take_next_sample(&schedule, &info) == ReturnCode_t::RETCODE_OK) {

@@ -249,6 +249,50 @@ TEST_F(ExternalRoles, ASensorWrittenInCTakesItsRole) {
                                            external.result().out);
 }
 
+// Without --seed the C example draws its arrivals exactly as our agents do (keyed by the run
+// seed, examples/c/schedule_book.c, written apart from our C++): two of them speaking for sensors
+// 2 (p = 2) and 5 make the same run as our agents, every episode's cost equal to the bit to a
+// launch with our agents and the same seed. Only the measured values differ (they send z = 0),
+// which the cost does not depend on.
+TEST_F(ExternalRoles, SensorsWrittenInCDrawingAsOursMakeTheSameRun) {
+  const LeftoverGuard guard(run_id_);
+  const json expected = cleanRun();
+  ASSERT_TRUE(expected.is_object()) << "the clean run of seed 7 failed";
+  const std::string domain = std::to_string(160 + ::getpid() % 60);
+  const std::string config =
+      "file://" + (fs::path(SENSORNET_SOURCE_DIR) / "config" / "cyclonedds-loopback.xml").string();
+  ::setenv("CYCLONEDDS_URI", config.c_str(), 1);  // for the example only: ours compile theirs in
+  std::vector<std::string> argv = launchArgs(kEpisodes, "5", dir_ / "ext.json", dir_ / "ext-logs");
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--external-sensors", "2,5", "--domain-id",
+                           domain});
+  RunningProgram launcher(argv, 120s);
+  RunningProgram camera({SENSORNET_EXTERNAL_SENSOR_EXAMPLE, "--run-id", run_id_, "--domain-id",
+                         domain, "--sensor", "2", "--dim", "2"},
+                        120s);
+  RunningProgram cheap({SENSORNET_EXTERNAL_SENSOR_EXAMPLE, "--run-id", run_id_, "--domain-id",
+                        domain, "--sensor", "5", "--dim", "1"},
+                       120s);
+  const testing::ProcessResult& r = launcher.result();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(camera.result().exit_code, 0) << camera.result().err;
+  EXPECT_EQ(cheap.result().exit_code, 0) << cheap.result().err;
+  const json report = readJson(dir_ / "ext.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "completed") << report.at("faults").dump();
+  const json& got = report.at("per_episode");
+  const json& want = expected.at("per_episode");
+  ASSERT_EQ(got.size(), want.size());
+  std::uint64_t spoken = 0;
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].at("realized_cost").get<double>(), want[k].at("realized_cost").get<double>())
+        << "episode " << k;
+    EXPECT_EQ(got[k].at("received"), want[k].at("received")) << "episode " << k;
+    spoken += got[k].at("sent").at(2).get<std::uint64_t>() + got[k].at("sent").at(5).get<std::uint64_t>();
+  }
+  EXPECT_GT(spoken, 0u) << "the schedule must give sensors 2 and 5 a rate for the test to mean "
+                        << "something";
+}
+
 // examples/c/external_fusion_center.c is a user's estimator: the scalar CD-KF in closed form, with
 // no code of ours, its model given on its command line, here read from the scenario file. It
 // carries the run (its Reports pace it and make the report), and beside it our fusion center
