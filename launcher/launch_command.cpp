@@ -35,6 +35,7 @@
 #include "sensornet/dds/security.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
 #include "sensornet/emulator/junit_report.hpp"
+#include "sensornet/emulator/run_recorder.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
@@ -75,6 +76,7 @@ struct LaunchOptions {
   std::string arrivals;  // poisson or timetable; empty: the scenario's `arrivals:`
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
   std::string junit_path;  // --junit: the run and each criterion as JUnit test cases
+  std::string record_path;  // --record: every sample of the run, as received, in an MCAP file
   std::string external_sensors;  // --external-sensors: sensors a participant of the user's speaks for
   bool external_fusion_center = false;  // --external-fusion-center: a participant of the user's fuses
   bool reference_fusion = false;  // --reference-fusion: ours beside it, on the same measurements
@@ -471,6 +473,10 @@ int runLaunch(LaunchOptions options) {
     makeParentFolders(options.junit_path, "--junit");
     checkOutputFile(options.junit_path, "--junit");
   }
+  if (!options.record_path.empty()) {
+    makeParentFolders(options.record_path, "--record");
+    checkOutputFile(options.record_path, "--record");
+  }
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain, options.external_fusion_center);
@@ -517,6 +523,17 @@ int runLaunch(LaunchOptions options) {
   } catch (const std::exception& e) {
     spdlog::warn("cannot record the run in {}: {}", plan.log_dir.string(), e.what());
   }
+  // Recording starts before any process: volatile samples written before it would be lost.
+  std::unique_ptr<emulator::RunRecorder> recorder;
+  if (!options.record_path.empty()) {
+    recorder = std::make_unique<emulator::RunRecorder>(
+        progress.participant(), plan.run_id, options.record_path,
+        McapMap{{"seed", options.seed},
+                {"scenario", fs::absolute(options.scenario_path).string()},
+                {"episodes", std::to_string(options.episodes)},
+                {"domain_id", std::to_string(domain.domain_id)},
+                {"started_at", utcNow()}});
+  }
   ProcessGroup group;
   for (const ChildSpec& child : plan.children) {
     const pid_t pid = group.start(child);
@@ -551,6 +568,19 @@ int runLaunch(LaunchOptions options) {
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
+  }
+  if (recorder) {  // like the page: a recording that failed is a warning, never an exit code
+    const emulator::RecordingSummary recorded =
+        recorder->stop({{"status", std::string(wordOf(outcome.status))},
+                        {"exit_code", std::to_string(outcome.exit_code)},
+                        {"ended_at", utcNow()}});
+    if (!recorded.error.empty()) {
+      std::fprintf(stderr, "sensornet: warning: --record: recording stopped early: %s\n",
+                   recorded.error.c_str());
+    }
+    std::fprintf(stderr, "sensornet: recorded %llu samples (%llu bytes) in %s\n",
+                 static_cast<unsigned long long>(recorded.messages),
+                 static_cast<unsigned long long>(recorded.bytes), recorded.path.c_str());
   }
   if (!options.junit_path.empty()) {  // like the page: a warning, never an exit code
     const emulator::JunitRun junit{
@@ -708,6 +738,11 @@ Subcommand addLaunchCommand(CLI::App& app) {
                 "the report adds per episode its realized cost beside the external one and their "
                 "relative difference, and the criterion fusion-agreement<=X of --require checks "
                 "the largest");
+  cmd->add_option("--record", options->record_path,
+                  "record every sample of every topic of the run, as this process received it, "
+                  "in an MCAP file (message encoding cdr, schemas omgidl from idl/sensornet.idl; "
+                  "readable by standard MCAP tools; see it with `sensornet replay FILE --info`); "
+                  "the file is complete however the run ends, Ctrl-C included");
   cmd->add_option("--junit", options->junit_path,
                   "also write the run as JUnit XML for CI: a test case \"run\" that passes only "
                   "when the run completed (its message: status, exit code, faults by kind) and "

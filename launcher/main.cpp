@@ -4,6 +4,7 @@
 //   sensornet status [...]            show its sensors and schedule
 //   sensornet watch [...]             follow it live (a terminal view, or lines for a log)
 //   sensornet report REPORT [...]     the page (HTML) and CSV tables of a finished run
+//   sensornet replay RUN.mcap --info  what a recording of a run (launch --record) holds
 //   sensornet pki init DIR            the files of a secured run (--security DIR)
 //   sensornet runs [...]              the runs in the scratch folder; remove finished ones
 
@@ -12,6 +13,7 @@
 #include "launch_command.hpp"
 #include "pki_command.hpp"
 #include "replan_command.hpp"
+#include "replay_command.hpp"
 #include "report_command.hpp"
 #include "runs_command.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -32,7 +34,7 @@ int main(int argc, char** argv) {
         sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
         sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
         sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app),
-        sensornet::launcher::addRunsCommand(app)};
+        sensornet::launcher::addRunsCommand(app), sensornet::launcher::addReplayCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

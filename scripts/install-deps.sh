@@ -15,6 +15,13 @@ packages=(
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
   python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
 )
+# Node and npm: @mcap/core, the reference MCAP reader, reads recordings in the tests. A machine
+# with node from elsewhere (NodeSource's nodejs bundles npm) keeps it.
+if ! command -v node >/dev/null; then packages+=(nodejs); fi
+if ! command -v npm >/dev/null; then packages+=(npm); fi
+# Where the npm packages of the tests go (tests/CMakeLists.txt looks there).
+node_prefix=/opt/sensornet-node
+mcap_core_version=2.2.2
 
 missing=()
 for package in "${packages[@]}"; do
@@ -22,15 +29,19 @@ for package in "${packages[@]}"; do
     missing+=("$package")
   fi
 done
-if ((${#missing[@]} == 0)); then
-  exit 0
-fi
-
-echo "install-deps: installing ${missing[*]}" >&2
 sudo=()
 if [[ "$(id -u)" -ne 0 ]]; then
   sudo=(sudo)
 fi
-"${sudo[@]}" apt-get update -qq
-DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends \
-  "${missing[@]}"
+if ((${#missing[@]} > 0)); then
+  echo "install-deps: installing ${missing[*]}" >&2
+  "${sudo[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}"
+fi
+if [[ ! -f "$node_prefix/node_modules/@mcap/core/package.json" ]]; then
+  echo "install-deps: installing @mcap/core $mcap_core_version (npm) into $node_prefix" >&2
+  "${sudo[@]}" mkdir -p "$node_prefix"
+  "${sudo[@]}" npm install --prefix "$node_prefix" --no-audit --no-fund --silent \
+    "@mcap/core@$mcap_core_version"
+fi

@@ -1,0 +1,178 @@
+#include "sensornet/emulator/run_recorder.hpp"
+
+#include <dds/dds.h>
+#include <dds/ddsi/ddsi_serdata.h>
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+#include "sensornet_idl_text.hpp"  // generated: kSensornetIdlText, idl/sensornet.idl verbatim
+
+namespace sensornet::emulator {
+
+// One reader of one topic in one partition (pattern), and the MCAP channel it records into.
+struct RunRecorder::Channel {
+  std::string topic;
+  dds_entity_t reader = 0;
+  std::uint16_t id = 0;
+  std::uint64_t messages = 0;
+};
+
+namespace {
+
+// The topic's own QoS (topics.hpp), keeping every sample: a recorder drops nothing.
+template <class T>
+dds::Qos recorderQos(const std::string& partition) {
+  dds::Qos qos = dds::TopicType<T>::qos();
+  qos.keepAll();
+  if (partition.find('*') != std::string::npos) {
+    qos.partitionPattern(partition);
+  } else {
+    qos.partition(partition);
+  }
+  return qos;
+}
+
+std::string typeNameOf(const char* topic) {  // "sensornet/Measurement" -> "sensornet::Measurement"
+  const std::string t(topic);
+  return "sensornet::" + t.substr(t.find('/') + 1);
+}
+
+}  // namespace
+
+const std::string& RunRecorder::idlText() {
+  static const std::string text(kSensornetIdlText);
+  return text;
+}
+
+RunRecorder::RunRecorder(const dds::Participant& participant, const std::string& run_id,
+                         const std::filesystem::path& path, const McapMap& run_metadata)
+    : writer_(std::make_unique<McapWriter>(path, "sensornet")) {
+  summary_.path = path;
+  const std::string run = "sensornet/" + run_id;
+  const std::string sensors = sensorPartitionPattern(run);
+  const std::string launcher = commandPartition(run, CommandSender::Launcher);
+  const std::string operator_partition = commandPartition(run, CommandSender::Operator);
+  const std::string reference = referencePartition(run);
+  std::map<std::string, std::uint16_t> schemas;
+  const auto add = [&]<class T>(T*, const std::string& partition) {
+    const char* topic = dds::TopicType<T>::kName;
+    const std::string type = typeNameOf(topic);
+    if (!schemas.contains(type)) schemas[type] = writer_->addSchema(type, "omgidl", idlText());
+    auto c = std::make_unique<Channel>();
+    c->topic = topic;
+    const dds_entity_t t = dds_create_topic(participant.handle(), &dds::TopicType<T>::descriptor(),
+                                            topic, nullptr, nullptr);
+    c->reader = t < 0 ? t
+                      : dds_create_reader(participant.handle(), t,
+                                          recorderQos<T>(partition).get(), nullptr);
+    if (c->reader < 0) {
+      throw std::runtime_error(std::string("cannot record ") + topic + " in " + partition + ": " +
+                               dds_strretcode(c->reader));
+    }
+    c->id = writer_->addChannel(schemas[type], topic, "cdr", {{"partition", partition}});
+    channels_.push_back(std::move(c));
+  };
+  add(static_cast<sensornet_Scenario*>(nullptr), run);
+  add(static_cast<sensornet_Schedule*>(nullptr), run);
+  add(static_cast<sensornet_EpisodeControl*>(nullptr), run);
+  add(static_cast<sensornet_Measurement*>(nullptr), sensors);
+  add(static_cast<sensornet_EpisodeTally*>(nullptr), sensors);
+  add(static_cast<sensornet_SensorStatus*>(nullptr), sensors);
+  add(static_cast<sensornet_Report*>(nullptr), run);
+  add(static_cast<sensornet_FusionState*>(nullptr), run);
+  add(static_cast<sensornet_Report*>(nullptr), reference);
+  add(static_cast<sensornet_FusionState*>(nullptr), reference);
+  add(static_cast<sensornet_Command*>(nullptr), launcher);
+  add(static_cast<sensornet_Command*>(nullptr), operator_partition);
+  add(static_cast<sensornet_CommandReply*>(nullptr), run);
+  McapMap run_record = run_metadata;
+  run_record["run_id"] = run_id;
+  writer_->addMetadata("run", run_record);
+  thread_ = std::thread([this] { loop(); });
+}
+
+RunRecorder::~RunRecorder() {
+  try {
+    (void)stop();
+  } catch (const std::exception& e) {
+    spdlog::error("recording {}: {}", summary_.path.string(), e.what());
+  }
+}
+
+void RunRecorder::loop() {
+  while (!stopping_.load()) {
+    {
+      const std::lock_guard lock(mutex_);
+      takeAll();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+// Takes every sample each reader holds into the file; after a write error, only takes (the
+// samples must not pile up in the readers) and keeps the error for the summary.
+void RunRecorder::takeAll() {
+  constexpr std::uint32_t kBatch = 64;
+  std::array<ddsi_serdata*, kBatch> samples{};
+  std::array<dds_sample_info_t, kBatch> infos{};
+  std::vector<std::byte> bytes;
+  for (const auto& c : channels_) {
+    for (;;) {
+      const dds_return_t n = dds_takecdr(c->reader, samples.data(), kBatch, infos.data(),
+                                         DDS_ANY_STATE);
+      if (n <= 0) break;
+      const auto now = static_cast<std::uint64_t>(dds_time());
+      for (dds_return_t i = 0; i < n; ++i) {
+        ddsi_serdata* sample = samples[static_cast<std::size_t>(i)];
+        const dds_sample_info_t& info = infos[static_cast<std::size_t>(i)];
+        if (info.valid_data && writer_ && summary_.error.empty()) {
+          bytes.resize(ddsi_serdata_size(sample));
+          ddsi_serdata_to_ser(sample, 0, bytes.size(), bytes.data());
+          try {
+            writer_->write(c->id, now, static_cast<std::uint64_t>(info.source_timestamp), bytes);
+            ++c->messages;
+          } catch (const std::exception& e) {
+            summary_.error = e.what();
+            spdlog::error("recording stopped: {}", e.what());
+          }
+        }
+        ddsi_serdata_unref(sample);
+      }
+    }
+  }
+}
+
+RecordingSummary RunRecorder::stop(const McapMap& final_metadata) {
+  if (stopped_) return summary_;
+  stopping_ = true;
+  if (thread_.joinable()) thread_.join();
+  const std::lock_guard lock(mutex_);
+  stopped_ = true;
+  takeAll();
+  for (const auto& c : channels_) {
+    summary_.per_topic[c->topic] += c->messages;
+    summary_.messages += c->messages;
+    (void)dds_delete(c->reader);
+  }
+  if (summary_.error.empty()) {
+    try {
+      if (!final_metadata.empty()) writer_->addMetadata("run-end", final_metadata);
+      writer_->close();
+    } catch (const std::exception& e) {
+      summary_.error = e.what();
+    }
+  }
+  writer_.reset();  // closes what it can
+  std::error_code ec;
+  summary_.bytes = std::filesystem::file_size(summary_.path, ec);
+  return summary_;
+}
+
+}  // namespace sensornet::emulator

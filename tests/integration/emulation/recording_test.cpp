@@ -1,0 +1,158 @@
+// Recording a run (`sensornet launch --record RUN.mcap`, emulator/run_recorder.hpp), read back by
+// @mcap/core, the format's reference reader (tests/integration/recording/read_with_mcap_core.cjs,
+// installed by scripts/install-deps.sh), indexed and streamed with every CRC checked: every
+// channel has its schema (the project's IDL, omgidl), the counts per topic are what the report
+// and the schedule say were sent, the summary's statistics are right, and a run interrupted with
+// Ctrl-C still leaves a complete file. `sensornet replay --info` (our own reader) agrees.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "launch_fixture.hpp"
+
+namespace sensornet {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace std::chrono_literals;
+using testing::LeftoverGuard;
+using testing::readJson;
+using testing::RunningProgram;
+using testing::runProcess;
+
+class Recording : public testing::LaunchTest {
+ protected:
+  // What @mcap/core read, as read_with_mcap_core.cjs prints it.
+  json readWithMcapCore(const fs::path& file) {
+    const testing::ProcessResult r = runProcess(
+        {"/usr/bin/env", "NODE_PATH=" SENSORNET_NODE_MODULES, SENSORNET_NODE,
+         SENSORNET_SOURCE_DIR "/tests/integration/recording/read_with_mcap_core.cjs", file.string()},
+        60s);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.exit_code == 0 ? json::parse(r.out) : json();
+  }
+  // Message counts per (topic, partition) of what @mcap/core read, checked against its summary.
+  std::map<std::pair<std::string, std::string>, std::uint64_t> countsOf(const json& read) {
+    EXPECT_TRUE(read.at("streamDone").get<bool>());
+    EXPECT_TRUE(read.at("footer").get<bool>());
+    EXPECT_EQ(read.at("profile"), "sensornet");
+    std::map<std::pair<std::string, std::string>, std::uint64_t> counts;
+    std::uint64_t total = 0;
+    const json& stats = read.at("statistics");
+    for (const json& c : read.at("channels")) {
+      const std::string id = std::to_string(c.at("id").get<int>());
+      const std::uint64_t indexed = read.at("indexed").value(id, std::uint64_t{0});
+      EXPECT_EQ(read.at("streamed").value(id, std::uint64_t{0}), indexed) << c.dump();
+      EXPECT_EQ(stats.at("channelMessageCounts").value(id, std::uint64_t{0}), indexed) << c.dump();
+      counts[{c.at("topic").get<std::string>(), c.at("metadata").at("partition").get<std::string>()}] =
+          indexed;
+      total += indexed;
+      // Its schema: the type of its topic, from the project's IDL.
+      const std::string topic = c.at("topic").get<std::string>();
+      EXPECT_EQ(c.at("messageEncoding"), "cdr");
+      EXPECT_EQ(c.at("schema").at("encoding"), "omgidl");
+      EXPECT_EQ(c.at("schema").at("name"), "sensornet::" + topic.substr(topic.find('/') + 1));
+      EXPECT_EQ(c.at("schema").at("bytes").get<std::uintmax_t>(), idlBytes());
+    }
+    EXPECT_EQ(stats.at("messageCount").get<std::uint64_t>(), total);
+    EXPECT_EQ(stats.at("chunkCount").get<int>(), read.at("chunkIndexes").get<int>());
+    return counts;
+  }
+  static std::uintmax_t idlBytes() {
+    return fs::file_size(fs::path(SENSORNET_SOURCE_DIR) / "idl" / "sensornet.idl");
+  }
+};
+
+TEST_F(Recording, TheReferenceReaderReadsEveryTopicWithTheCountsTheReportGives) {
+  const LeftoverGuard guard(run_id_);
+  constexpr int kEpisodes = 3;
+  const fs::path file = dir_ / "run.mcap";
+  std::vector<std::string> argv = launchArgs(kEpisodes, "5");
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--record", file.string()});
+  const testing::ProcessResult r = runProcess(argv, 120s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("recorded "), std::string::npos) << r.err;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object());
+  const json read = readWithMcapCore(file);
+  ASSERT_TRUE(read.is_object());
+  const auto counts = countsOf(read);
+
+  const std::string run = "sensornet/" + run_id_;
+  const std::string sensors = run + "/sensors/*";
+  std::uint64_t sent = 0;
+  for (const json& e : report.at("per_episode")) {
+    for (const json& s : e.at("sent")) sent += s.get<std::uint64_t>();
+  }
+  const std::uint64_t sensor_count = report.at("scenario").at("sensors").get<std::uint64_t>();
+  // Every measurement sent was recorded once (no emulated network: no copies, no drops).
+  EXPECT_EQ(counts.at({"sensornet/Measurement", sensors}), sent);
+  EXPECT_EQ(counts.at({"sensornet/EpisodeTally", sensors}), kEpisodes * sensor_count);
+  EXPECT_EQ(counts.at({"sensornet/Report", run}), static_cast<std::uint64_t>(kEpisodes));
+  EXPECT_EQ(counts.at({"sensornet/Scenario", run}), 1u);
+  EXPECT_EQ(counts.at({"sensornet/Schedule", run}), report.at("schedule_versions").size());
+  // Each episode's start, and the shutdown.
+  EXPECT_EQ(counts.at({"sensornet/EpisodeControl", run}), kEpisodes + 1u);
+  EXPECT_GT(counts.at({"sensornet/SensorStatus", sensors}), sensor_count);
+  EXPECT_GT(counts.at({"sensornet/FusionState", run}), 0u);
+  EXPECT_EQ(counts.at({"sensornet/Report", run + "/reference"}), 0u);
+
+  EXPECT_EQ(read.at("metadata").at("run").at("run_id"), run_id_);
+  EXPECT_EQ(read.at("metadata").at("run").at("seed"), "7");
+  EXPECT_EQ(read.at("metadata").at("run-end").at("status"), "completed");
+
+  // Our own reader says the same.
+  const testing::ProcessResult info =
+      runProcess({testing::kLauncher, "replay", file.string(), "--info", "--json"}, 30s);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const json ours = json::parse(info.out);
+  EXPECT_EQ(ours.at("messages"), read.at("statistics").at("messageCount"));
+  for (const json& c : ours.at("channels")) {
+    EXPECT_EQ(c.at("messages").get<std::uint64_t>(),
+              counts.at({c.at("topic").get<std::string>(), c.at("partition").get<std::string>()}))
+        << c.dump();
+  }
+}
+
+TEST_F(Recording, ARunInterruptedWithCtrlCLeavesACompleteFile) {
+  const LeftoverGuard guard(run_id_);
+  const fs::path file = dir_ / "cut.mcap";
+  std::vector<std::string> argv = launchArgs(40, "2");
+  argv.insert(argv.end(), {"--no-html", "--record", file.string()});
+  RunningProgram launcher(argv, 120s);
+  ASSERT_TRUE(testing::waitUntil(
+      [&] { return testing::readJsonLines(dir_ / "report.jsonl").size() >= 1; }, 60s));
+  const std::optional<pid_t> pid = testing::processOf(run_id_, testing::kLauncher, "launch");
+  ASSERT_TRUE(pid.has_value());
+  ASSERT_EQ(::kill(*pid, SIGINT), 0);
+  const testing::ProcessResult& r = launcher.result();
+  EXPECT_EQ(r.exit_code, 1) << r.err;  // interrupted (README, "Exit status")
+  const json read = readWithMcapCore(file);
+  ASSERT_TRUE(read.is_object());
+  const auto counts = countsOf(read);
+  EXPECT_GE(counts.at({"sensornet/Report", "sensornet/" + run_id_}), 1u);
+  EXPECT_EQ(read.at("metadata").at("run-end").at("status"), "interrupted");
+}
+
+TEST_F(Recording, AFileThatIsNotARecordingIsOneLineAndExitTwo) {
+  const fs::path file = dir_ / "not.mcap";
+  std::ofstream(file) << "hello";
+  const testing::ProcessResult r =
+      runProcess({testing::kLauncher, "replay", file.string(), "--info"}, 30s);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find(file.string()), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace sensornet
