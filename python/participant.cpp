@@ -1,7 +1,8 @@
 // sensornet._sensornet.Participant: a DDS participant of one run for Python, that reads and
 // writes every topic of docs/wire-protocol.md as dicts. The samples are the C types idlc
-// generates from idl/sensornet.idl; each type is described once below, field by field (name,
-// kind, offset), and one pair of functions turns any described sample into a dict and back.
+// generates from idl/sensornet.idl, each described once, field by field, in
+// dds/sample_fields.hpp; one pair of functions here turns any described sample into a dict and
+// back.
 // Topic names, type descriptors and QoS come from include/sensornet/dds/topics.hpp, the one
 // place the run's processes take them from.
 #include "participant.hpp"
@@ -20,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "sensornet/dds/sample_fields.hpp"
 #include "sensornet/dds/topics.hpp"
 
 namespace sensornet::python {
@@ -27,193 +29,20 @@ namespace {
 
 namespace py = pybind11;
 
-enum class Kind { kU32, kI32, kU64, kI64, kF64, kBool, kString, kEnum, kSeqF64, kSeqU32, kSeqCounts, kSummary };
+using dds::EnumName;
+using dds::FieldKind;
+using dds::SampleType;
+using Field = dds::SampleField;
+using TypeInfo = dds::SampleType;
+using Kind = dds::FieldKind;
 
-struct TypeInfo;
-struct EnumName {
-  int value;
-  const char* name;
-};
-
-struct Field {
-  const char* name;
-  Kind kind;
-  std::size_t offset;
-  const std::vector<EnumName>* enum_names = nullptr;
-};
-
-struct TypeInfo {
-  const char* name;
-  std::size_t size;
-  std::vector<Field> fields;
-};
-
-template <class M>
-constexpr Kind kindOf() {
-  if constexpr (std::is_same_v<M, std::uint32_t>) return Kind::kU32;
-  if constexpr (std::is_same_v<M, std::int32_t>) return Kind::kI32;
-  if constexpr (std::is_same_v<M, std::uint64_t>) return Kind::kU64;
-  if constexpr (std::is_same_v<M, std::int64_t>) return Kind::kI64;
-  if constexpr (std::is_same_v<M, double>) return Kind::kF64;
-  if constexpr (std::is_same_v<M, bool>) return Kind::kBool;
-  if constexpr (std::is_same_v<M, char*>) return Kind::kString;
-  if constexpr (std::is_enum_v<M>) return Kind::kEnum;
-  if constexpr (std::is_same_v<M, dds_sequence_double>) return Kind::kSeqF64;
-  if constexpr (std::is_same_v<M, dds_sequence_uint32>) return Kind::kSeqU32;
-  if constexpr (std::is_same_v<M, dds_sequence_sensornet_SensorCounts>) return Kind::kSeqCounts;
-  if constexpr (std::is_same_v<M, sensornet_RunSummary>) return Kind::kSummary;
-}
-
-#define SENSORNET_FIELD(T, f) Field{#f, kindOf<decltype(T::f)>(), offsetof(T, f)}
-#define SENSORNET_ENUM(e) EnumName{sensornet_##e, #e}
-
-const std::vector<EnumName> kEpisodeCommands = {
-    SENSORNET_ENUM(EPISODE_START), SENSORNET_ENUM(EPISODE_STOP), SENSORNET_ENUM(RUN_SHUTDOWN),
-    SENSORNET_ENUM(EPISODE_SENSORS_FAILED)};
-const std::vector<EnumName> kSensorStates = {
-    SENSORNET_ENUM(SENSOR_STARTING), SENSORNET_ENUM(SENSOR_READY),
-    SENSORNET_ENUM(SENSOR_RUNNING),  SENSORNET_ENUM(SENSOR_EXCLUDED),
-    SENSORNET_ENUM(SENSOR_STOPPED),  SENSORNET_ENUM(SENSOR_FAILED)};
-const std::vector<EnumName> kCommandKinds = {
-    SENSORNET_ENUM(COMMAND_REPLAN),         SENSORNET_ENUM(COMMAND_EXCLUDE_SENSORS),
-    SENSORNET_ENUM(COMMAND_SET_BUDGET),     SENSORNET_ENUM(COMMAND_SCHEDULE_FILE),
-    SENSORNET_ENUM(COMMAND_STATUS),         SENSORNET_ENUM(COMMAND_SHUTDOWN),
-    SENSORNET_ENUM(COMMAND_SENSORS_FAILED), SENSORNET_ENUM(COMMAND_INCLUDE_SENSORS)};
-
-Field withNames(Field f, const std::vector<EnumName>& names) {
-  f.enum_names = &names;
-  return f;
-}
-
-#define F(f) SENSORNET_FIELD(T, f)
-
-const TypeInfo& countsInfo() {
-  using T = sensornet_SensorCounts;
-  static const TypeInfo info{"SensorCounts", sizeof(T),
-                             {F(sensor_id), F(received), F(expected), F(lost), F(late), F(sent),
-                              F(dropped_by_network)}};
-  return info;
-}
-
-const TypeInfo& summaryInfo() {
-  using T = sensornet_RunSummary;
-  static const TypeInfo info{
-      "RunSummary", sizeof(T),
-      {F(episodes), F(realized_mean), F(realized_ci95_low), F(realized_ci95_high),
-       F(bracket_lower_mean), F(bracket_upper_mean), F(meets_bracket), F(nees_mean), F(received),
-       F(lost), F(latency_median_s), F(latency_p99_s), F(episodes_complete), F(sent),
-       F(dropped_by_network), F(realtime_mean), F(delivered_lower_mean), F(delivered_upper_mean),
-       F(meets_delivered_bracket)}};
-  return info;
-}
+const SampleType& countsInfo() { return dds::sensorCountsType(); }
+const SampleType& summaryInfo() { return dds::runSummaryType(); }
 
 template <class T>
-const TypeInfo& infoOf();
-
-template <>
-const TypeInfo& infoOf<sensornet_Scenario>() {
-  using T = sensornet_Scenario;
-  static const TypeInfo info{"Scenario", sizeof(T),
-                             {F(run_id), F(digest), F(yaml), F(horizon_s), F(intervals),
-                              F(sensor_count), F(state_dim), F(seed), F(arrivals)}};
-  return info;
+const SampleType& infoOf() {
+  return *dds::sampleTypeOfTopic(dds::TopicType<T>::kName);
 }
-
-template <>
-const TypeInfo& infoOf<sensornet_Schedule>() {
-  using T = sensornet_Schedule;
-  static const TypeInfo info{
-      "Schedule", sizeof(T),
-      {F(run_id), F(version), F(scenario_digest), F(effective_episode), F(effective_time_s),
-       F(horizon_s), F(intervals), F(sensor_count), F(rates_hz), F(surrogate), F(bracket_lower),
-       F(bracket_upper), F(command_id), F(issued_wall_time_ns)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_EpisodeControl>() {
-  using T = sensornet_EpisodeControl;
-  static const TypeInfo info{
-      "EpisodeControl", sizeof(T),
-      {F(run_id), F(episode), withNames(F(command), kEpisodeCommands), F(start_wall_time_ns),
-       F(time_scale), F(seed), F(schedule_version), F(episodes_planned), F(aborted), F(detail),
-       F(failed_sensors), F(failed_at_s)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_EpisodeTally>() {
-  using T = sensornet_EpisodeTally;
-  static const TypeInfo info{
-      "EpisodeTally", sizeof(T),
-      {F(sensor_id), F(run_id), F(episode), F(sent), F(finished), F(write_timeouts), F(max_lag_s),
-       F(stalled_s), F(process_id), F(wall_time_ns), F(dropped_by_network),
-       F(duplicated_by_network)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_Measurement>() {
-  using T = sensornet_Measurement;
-  static const TypeInfo info{"Measurement", sizeof(T),
-                             {F(sensor_id), F(run_id), F(episode), F(seq), F(emulated_time_s),
-                              F(schedule_version), F(publish_wall_time_ns), F(z),
-                              F(network_delay_s)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_SensorStatus>() {
-  using T = sensornet_SensorStatus;
-  static const TypeInfo info{
-      "SensorStatus", sizeof(T),
-      {F(sensor_id), F(run_id), withNames(F(state), kSensorStates), F(episode),
-       F(schedule_version), F(current_rate_hz), F(sent_in_episode), F(sent_total),
-       F(write_timeouts), F(process_id), F(wall_time_ns), F(detail)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_Report>() {
-  using T = sensornet_Report;
-  static const TypeInfo info{
-      "Report", sizeof(T),
-      {F(run_id), F(episode), F(realized_cost), F(bracket_lower), F(bracket_upper),
-       F(schedule_versions), F(nees), F(counts), F(latency_median_s), F(latency_p99_s),
-       F(summary), F(complete), F(realtime_cost), F(delivered_bracket_lower),
-       F(delivered_bracket_upper), F(incomplete_reason)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_Command>() {
-  using T = sensornet_Command;
-  static const TypeInfo info{
-      "Command", sizeof(T),
-      {F(run_id), F(command_id), withNames(F(kind), kCommandKinds), F(surrogate), F(sensor_ids),
-       F(budget), F(schedule_json), F(issuer), F(issued_wall_time_ns), F(detail)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_CommandReply>() {
-  using T = sensornet_CommandReply;
-  static const TypeInfo info{
-      "CommandReply", sizeof(T),
-      {F(run_id), F(command_id), F(accepted), F(schedule_version), F(reason)}};
-  return info;
-}
-
-template <>
-const TypeInfo& infoOf<sensornet_FusionState>() {
-  using T = sensornet_FusionState;
-  static const TypeInfo info{"FusionState", sizeof(T),
-                             {F(run_id), F(episode), F(emulated_time_s), F(state_dim),
-                              F(covariance), F(schedule_version), F(wall_time_ns)}};
-  return info;
-}
-
-#undef F
 
 // --- samples to dicts and back ------------------------------------------------------------
 
@@ -240,32 +69,32 @@ py::dict dictOf(const TypeInfo& info, const void* sample);
 
 py::object valueOf(const Field& f, const void* sample) {
   switch (f.kind) {
-    case Kind::kU32: return py::int_(at<std::uint32_t>(sample, f.offset));
-    case Kind::kI32: return py::int_(at<std::int32_t>(sample, f.offset));
-    case Kind::kU64: return py::int_(at<std::uint64_t>(sample, f.offset));
-    case Kind::kI64: return py::int_(at<std::int64_t>(sample, f.offset));
-    case Kind::kF64: return py::float_(at<double>(sample, f.offset));
-    case Kind::kBool: return py::bool_(at<bool>(sample, f.offset));
-    case Kind::kString: {
+    case Kind::U32: return py::int_(at<std::uint32_t>(sample, f.offset));
+    case Kind::I32: return py::int_(at<std::int32_t>(sample, f.offset));
+    case Kind::U64: return py::int_(at<std::uint64_t>(sample, f.offset));
+    case Kind::I64: return py::int_(at<std::int64_t>(sample, f.offset));
+    case Kind::F64: return py::float_(at<double>(sample, f.offset));
+    case Kind::Bool: return py::bool_(at<bool>(sample, f.offset));
+    case Kind::String: {
       const char* s = at<const char*>(sample, f.offset);
       return py::str(s != nullptr ? s : "");
     }
-    case Kind::kEnum: {
+    case Kind::Enum: {
       const auto v = at<std::int32_t>(sample, f.offset);
       for (const EnumName& e : *f.enum_names) {
         if (e.value == v) return py::str(e.name);
       }
       return py::int_(v);  // a value this build does not name
     }
-    case Kind::kSeqF64: return listOf<dds_sequence_double, double>(at<dds_sequence_double>(sample, f.offset));
-    case Kind::kSeqU32: return listOf<dds_sequence_uint32, std::uint32_t>(at<dds_sequence_uint32>(sample, f.offset));
-    case Kind::kSeqCounts: {
+    case Kind::SeqF64: return listOf<dds_sequence_double, double>(at<dds_sequence_double>(sample, f.offset));
+    case Kind::SeqU32: return listOf<dds_sequence_uint32, std::uint32_t>(at<dds_sequence_uint32>(sample, f.offset));
+    case Kind::SeqCounts: {
       const auto s = at<dds_sequence_sensornet_SensorCounts>(sample, f.offset);
       py::list out;
       for (std::uint32_t i = 0; i < s._length; ++i) out.append(dictOf(countsInfo(), &s._buffer[i]));
       return out;
     }
-    case Kind::kSummary: return dictOf(summaryInfo(), static_cast<const char*>(sample) + f.offset);
+    case Kind::Summary: return dictOf(summaryInfo(), static_cast<const char*>(sample) + f.offset);
   }
   return py::none();
 }
@@ -328,22 +157,22 @@ void fillField(const TypeInfo& info, const Field& f, void* sample, const py::han
                Arena& arena) {
   const bool listed = py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v);
   switch (f.kind) {
-    case Kind::kU32: put(sample, f.offset, integer<std::uint32_t>(info, f, v)); return;
-    case Kind::kI32: put(sample, f.offset, integer<std::int32_t>(info, f, v)); return;
-    case Kind::kU64: put(sample, f.offset, integer<std::uint64_t>(info, f, v)); return;
-    case Kind::kI64: put(sample, f.offset, integer<std::int64_t>(info, f, v)); return;
-    case Kind::kF64: put(sample, f.offset, real(info, f, v)); return;
-    case Kind::kBool:
+    case Kind::U32: put(sample, f.offset, integer<std::uint32_t>(info, f, v)); return;
+    case Kind::I32: put(sample, f.offset, integer<std::int32_t>(info, f, v)); return;
+    case Kind::U64: put(sample, f.offset, integer<std::uint64_t>(info, f, v)); return;
+    case Kind::I64: put(sample, f.offset, integer<std::int64_t>(info, f, v)); return;
+    case Kind::F64: put(sample, f.offset, real(info, f, v)); return;
+    case Kind::Bool:
       if (!py::isinstance<py::bool_>(v)) badField(info, f, "True or False", v);
       put(sample, f.offset, v.cast<bool>());
       return;
-    case Kind::kString: {
+    case Kind::String: {
       if (!py::isinstance<py::str>(v)) badField(info, f, "a string", v);
       arena.strings.push_back(v.cast<std::string>());
       put(sample, f.offset, arena.strings.back().data());
       return;
     }
-    case Kind::kEnum: {
+    case Kind::Enum: {
       std::string names;
       for (const EnumName& e : *f.enum_names) {
         if (py::isinstance<py::str>(v) && v.cast<std::string>() == e.name) {
@@ -354,18 +183,18 @@ void fillField(const TypeInfo& info, const Field& f, void* sample, const py::han
       }
       badField(info, f, "one of " + names, v);
     }
-    case Kind::kSeqF64:
+    case Kind::SeqF64:
       if (!listed) badField(info, f, "a list of numbers", v);
       putSequence<dds_sequence_double, double>(
           sample, f.offset, v, arena, [&](const py::handle& x, double* out) { *out = real(info, f, x); });
       return;
-    case Kind::kSeqU32:
+    case Kind::SeqU32:
       if (!listed) badField(info, f, "a list of integers", v);
       putSequence<dds_sequence_uint32, std::uint32_t>(
           sample, f.offset, v, arena,
           [&](const py::handle& x, std::uint32_t* out) { *out = integer<std::uint32_t>(info, f, x); });
       return;
-    case Kind::kSeqCounts:
+    case Kind::SeqCounts:
       if (!listed) badField(info, f, "a list of dicts", v);
       putSequence<dds_sequence_sensornet_SensorCounts, sensornet_SensorCounts>(
           sample, f.offset, v, arena, [&](const py::handle& x, sensornet_SensorCounts* out) {
@@ -374,7 +203,7 @@ void fillField(const TypeInfo& info, const Field& f, void* sample, const py::han
             fill(countsInfo(), out, py::reinterpret_borrow<py::dict>(x), arena);
           });
       return;
-    case Kind::kSummary:
+    case Kind::Summary:
       if (!py::isinstance<py::dict>(v)) badField(info, f, "a dict", v);
       fill(summaryInfo(), static_cast<char*>(sample) + f.offset,
            py::reinterpret_borrow<py::dict>(v), arena);
@@ -400,7 +229,7 @@ void fill(const TypeInfo& info, void* sample, const py::dict& values, Arena& are
     fillField(info, *field, sample, value, arena);
   }
   for (const Field& f : info.fields) {  // strings are never null on the wire
-    if (f.kind == Kind::kString && at<const char*>(sample, f.offset) == nullptr) {
+    if (f.kind == Kind::String && at<const char*>(sample, f.offset) == nullptr) {
       arena.strings.emplace_back();
       put(sample, f.offset, arena.strings.back().data());
     }
