@@ -26,17 +26,22 @@ void RunInputs::attachTo(dds::WaitSet& waitset) {
 
 RunInputs::Update RunInputs::poll() {
   Update update;
-  readScenario(update);
-  readSchedules(update);
-  readControls(update);
+  for (auto& received : scenario_reader_.take(4).samples) state_.onScenario(*received.sample, update);
+  if (state_.hasScenario()) {  // kept by the reader (transient local) until the scenario is known
+    for (auto& received : schedule_reader_.take(32).samples) {
+      state_.onSchedule(*received.sample, update);
+    }
+  }
+  for (auto& received : control_reader_.take(16).samples) state_.onControl(*received.sample, update);
+  state_.releaseStarts(update);
   return update;
 }
 
-void RunInputs::readScenario(Update& update) {
-  for (auto& received : scenario_reader_.take(4).samples) {
-    if (run_) continue;  // one scenario per run
+void RunInputState::onScenario(const sensornet_Scenario& sample, Update& update) {
+  {
+    if (run_) return;  // one scenario per run
     try {
-      run_ = scenarioFromWire(*received.sample);
+      run_ = scenarioFromWire(sample);
       plant_.emplace(run_->scenario, run_->seed);
       update.scenario_arrived = true;
       spdlog::info("scenario {} received: n = {}, M = {}, T = {} s", run_->digest,
@@ -50,19 +55,19 @@ void RunInputs::readScenario(Update& update) {
   }
 }
 
-void RunInputs::readSchedules(Update& update) {
-  if (!run_) return;  // kept by the reader (transient local) until the scenario is known
-  for (auto& received : schedule_reader_.take(32).samples) {
+void RunInputState::onSchedule(const sensornet_Schedule& sample, Update& update) {
+  if (!run_) return;  // the caller holds it until the scenario is known
+  {
     try {
-      ScheduleVersion v = scheduleFromWire(*received.sample, run_->scenario, run_->digest);
+      ScheduleVersion v = scheduleFromWire(sample, run_->scenario, run_->digest);
       const auto number = v.version;
       const ScheduleBook::Outcome outcome = book_.add(std::move(v));
-      if (outcome == ScheduleBook::Outcome::Duplicate) continue;  // a restarted coordinator's
+      if (outcome == ScheduleBook::Outcome::Duplicate) return;  // a restarted coordinator's
       if (outcome == ScheduleBook::Outcome::Stale) {
         reject("stale_schedule");
         spdlog::warn("refused stale schedule version {} (have {})", number,
                      book_.latest().version);
-        continue;
+        return;
       }
       ++update.new_versions;
       spdlog::info("schedule version {} ({}) from episode {} at {} s", number,
@@ -75,9 +80,8 @@ void RunInputs::readSchedules(Update& update) {
   }
 }
 
-void RunInputs::readControls(Update& update) {
-  for (auto& received : control_reader_.take(16).samples) {
-    const sensornet_EpisodeControl& c = *received.sample;
+void RunInputState::onControl(const sensornet_EpisodeControl& c, Update& update) {
+  {
     switch (c.command) {
       case sensornet_RUN_SHUTDOWN:
         update.shutdown = true;
@@ -108,8 +112,11 @@ void RunInputs::readControls(Update& update) {
       }
     }
   }
-  // A start waits for the scenario, the schedule in force at the episode's start and the version
-  // it names (versions arrive in order, so every earlier one is in the book too).
+}
+
+// A start waits for the scenario, the schedule in force at the episode's start and the version
+// it names (versions arrive in order, so every earlier one is in the book too).
+void RunInputState::releaseStarts(Update& update) {
   std::erase_if(held_starts_, [&](const HeldStart& held) {
     const EpisodeStart& s = held.start;
     if (!run_ || book_.inForce(s.episode, 0.0) == nullptr ||

@@ -16,11 +16,13 @@
 
 namespace sensornet::emulator {
 
-// One reader of one topic in one partition (pattern), and the MCAP channel it records into.
+// One reader of one topic in one partition (pattern), and the MCAP channel of each writer it
+// received from.
 struct RunRecorder::Channel {
   std::string topic;
+  std::uint16_t schema = 0;
   dds_entity_t reader = 0;
-  std::uint16_t id = 0;
+  std::map<dds_instance_handle_t, std::uint16_t> writers;  // publication handle -> channel
   std::uint64_t messages = 0;
 };
 
@@ -37,6 +39,43 @@ dds::Qos recorderQos(const std::string& partition) {
     qos.partition(partition);
   }
   return qos;
+}
+
+std::string hexOf(const dds_guid_t& guid) {
+  static const char* digits = "0123456789abcdef";
+  std::string out;
+  for (const std::uint8_t b : guid.v) {
+    out += digits[b >> 4];
+    out += digits[b & 15];
+  }
+  return out;
+}
+
+// What the reader knows of a writer it matched: its partitions (comma-separated), its GUID and
+// its participant's; empty when the writer is gone already.
+McapMap writerMetadata(dds_entity_t reader, dds_instance_handle_t writer) {
+  McapMap m;
+  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader, writer);
+  if (endpoint == nullptr) {
+    m["partition"] = "";
+    m["writer"] = "gone before its first sample was recorded";
+    return m;
+  }
+  uint32_t count = 0;
+  char** names = nullptr;
+  std::string partitions;
+  if (dds_qget_partition(endpoint->qos, &count, &names)) {
+    for (uint32_t i = 0; i < count; ++i) {
+      partitions += (i == 0 ? "" : ",") + std::string(names[i]);
+      dds_free(names[i]);
+    }
+    dds_free(names);
+  }
+  m["partition"] = partitions;
+  m["writer"] = hexOf(endpoint->key);
+  m["participant"] = hexOf(endpoint->participant_key);
+  dds_builtintopic_free_endpoint(endpoint);
+  return m;
 }
 
 std::string typeNameOf(const char* topic) {  // "sensornet/Measurement" -> "sensornet::Measurement"
@@ -76,7 +115,7 @@ RunRecorder::RunRecorder(const dds::Participant& participant, const std::string&
       throw std::runtime_error(std::string("cannot record ") + topic + " in " + partition + ": " +
                                dds_strretcode(c->reader));
     }
-    c->id = writer_->addChannel(schemas[type], topic, "cdr", {{"partition", partition}});
+    c->schema = schemas[type];
     channels_.push_back(std::move(c));
   };
   add(static_cast<sensornet_Scenario*>(nullptr), run);
@@ -136,7 +175,17 @@ void RunRecorder::takeAll() {
           bytes.resize(ddsi_serdata_size(sample));
           ddsi_serdata_to_ser(sample, 0, bytes.size(), bytes.data());
           try {
-            writer_->write(c->id, now, static_cast<std::uint64_t>(info.source_timestamp), bytes);
+            auto channel = c->writers.find(info.publication_handle);
+            if (channel == c->writers.end()) {
+              channel = c->writers
+                            .emplace(info.publication_handle,
+                                     writer_->addChannel(c->schema, c->topic, "cdr",
+                                                         writerMetadata(c->reader,
+                                                                        info.publication_handle)))
+                            .first;
+            }
+            writer_->write(channel->second, now, static_cast<std::uint64_t>(info.source_timestamp),
+                           bytes);
             ++c->messages;
           } catch (const std::exception& e) {
             summary_.error = e.what();

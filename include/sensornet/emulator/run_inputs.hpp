@@ -32,7 +32,9 @@
 
 namespace sensornet::emulator {
 
-class RunInputs {
+// What RunInputs decides, free of DDS: it takes the three topics' samples one at a time (from
+// RunInputs' readers, or from a recording, `sensornet replay`) and says what they mean.
+class RunInputState {
  public:
   struct Update {
     bool scenario_arrived = false;
@@ -44,6 +46,41 @@ class RunInputs {
     RunEnd end;  // when shutdown
   };
 
+  void onScenario(const sensornet_Scenario& sample, Update& update);
+  void onSchedule(const sensornet_Schedule& sample, Update& update);
+  void onControl(const sensornet_EpisodeControl& sample, Update& update);
+  // Releases the starts held back until the scenario and the versions they name are there.
+  void releaseStarts(Update& update);
+
+  [[nodiscard]] bool hasScenario() const { return run_.has_value(); }
+  [[nodiscard]] const RunScenario& run() const { return *run_; }
+  [[nodiscard]] const Scenario& scenario() const { return run_->scenario; }
+  [[nodiscard]] const EmulatedPlant& plant() const { return *plant_; }
+  [[nodiscard]] const ScheduleBook& book() const { return book_; }
+  [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return last_started_; }
+  [[nodiscard]] const std::set<int>& failedSensors() const { return failed_sensors_; }
+  [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const { return rejected_; }
+
+ private:
+  void reject(const char* reason) { ++rejected_[reason]; }
+  std::optional<RunScenario> run_;
+  std::optional<EmulatedPlant> plant_;
+  ScheduleBook book_;
+  struct HeldStart {
+    EpisodeStart start;
+    std::uint64_t seed = 0;               // must be the run's
+    std::uint32_t schedule_version = 0;   // the book must hold it before the start goes out
+  };
+  std::vector<HeldStart> held_starts_;
+  std::optional<std::uint32_t> last_started_;
+  std::set<int> failed_sensors_;
+  std::map<std::string, std::uint64_t> rejected_;
+};
+
+class RunInputs {
+ public:
+  using Update = RunInputState::Update;
+
   explicit RunInputs(const dds::Participant& participant);
 
   // Attaches the three topics' read conditions with the tokens kScenarioToken.. + 2.
@@ -53,27 +90,25 @@ class RunInputs {
   // Takes what arrived on the three topics.
   [[nodiscard]] Update poll();
 
-  [[nodiscard]] bool hasScenario() const { return run_.has_value(); }
-  [[nodiscard]] const RunScenario& run() const { return *run_; }
-  [[nodiscard]] const Scenario& scenario() const { return run_->scenario; }
-  [[nodiscard]] const EmulatedPlant& plant() const { return *plant_; }
-  [[nodiscard]] const ScheduleBook& book() const { return book_; }
+  [[nodiscard]] bool hasScenario() const { return state_.hasScenario(); }
+  [[nodiscard]] const RunScenario& run() const { return state_.run(); }
+  [[nodiscard]] const Scenario& scenario() const { return state_.scenario(); }
+  [[nodiscard]] const EmulatedPlant& plant() const { return state_.plant(); }
+  [[nodiscard]] const ScheduleBook& book() const { return state_.book(); }
   // The last episode handed out in Update::starts.
-  [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return last_started_; }
+  [[nodiscard]] std::optional<std::uint32_t> lastStarted() const { return state_.lastStarted(); }
   // Every sensor the coordinator has said is dead (from starts and failure notices).
-  [[nodiscard]] const std::set<int>& failedSensors() const { return failed_sensors_; }
+  [[nodiscard]] const std::set<int>& failedSensors() const { return state_.failedSensors(); }
   // True once the EpisodeControl reader matched a writer (the coordinator's): before that an
   // episode's announcement may be missed, since a late joiner gets only the latest control.
   [[nodiscard]] bool controlMatched() const { return control_reader_.matchedWriters() > 0; }
   // Samples refused, by reason: malformed scenario or schedule, stale schedule, bad episode
   // control.
-  [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const { return rejected_; }
+  [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const {
+    return state_.rejected();
+  }
 
  private:
-  void readScenario(Update& update);
-  void readSchedules(Update& update);
-  void readControls(Update& update);
-
   dds::Topic<sensornet_Scenario> scenario_topic_;
   dds::Topic<sensornet_Schedule> schedule_topic_;
   dds::Topic<sensornet_EpisodeControl> control_topic_;
@@ -83,20 +118,7 @@ class RunInputs {
   dds::ReadCondition scenario_ready_;
   dds::ReadCondition schedule_ready_;
   dds::ReadCondition control_ready_;
-
-  std::optional<RunScenario> run_;
-  std::optional<EmulatedPlant> plant_;
-  ScheduleBook book_;
-  struct HeldStart {
-    EpisodeStart start;
-    std::uint64_t seed = 0;               // must be the run's
-    std::uint32_t schedule_version = 0;   // the book must hold it before the start goes out
-  };
-  void reject(const char* reason) { ++rejected_[reason]; }
-  std::vector<HeldStart> held_starts_;
-  std::optional<std::uint32_t> last_started_;
-  std::set<int> failed_sensors_;
-  std::map<std::string, std::uint64_t> rejected_;
+  RunInputState state_;
 };
 
 }  // namespace sensornet::emulator

@@ -5,7 +5,10 @@
 // Cyclone received it (CDR with its encapsulation header: message encoding "cdr"), on a channel
 // per topic and partition whose schema is the project's IDL (schema encoding "omgidl", name
 // "sensornet::<Type>"), so that standard MCAP tools decode it without our code; log time is the
-// receipt (wall clock), publish time the writer's source timestamp. The readers keep every
+// receipt (wall clock), publish time the writer's source timestamp. There is a channel per topic
+// and writer, made at the writer's first sample, whose metadata are the writer's partition (the
+// one the sample came in: for a sensor topic it names the sensors the writer speaks for), its
+// GUID and its participant's; a topic nobody wrote has no channel. The readers keep every
 // sample (reliable, keep-all; transient-local where the topic is, so what was written before the
 // recorder joined is there too). A thread of its own takes what arrived every few milliseconds.
 //
