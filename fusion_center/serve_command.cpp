@@ -26,6 +26,7 @@
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
+#include "sensornet/emulator/fusion_center_events.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
@@ -196,40 +197,6 @@ emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
   return config;
 }
 
-emulator::EpisodeTally tallyOf(const sensornet_EpisodeTally& t, emulator::WriterId writer) {
-  emulator::EpisodeTally out;
-  out.sensor = t.sensor_id;
-  out.run_id = std::string(dds::viewString(t.run_id));
-  out.episode = t.episode;
-  out.count = {t.sent, t.dropped_by_network, t.duplicated_by_network};
-  out.max_lag_s = t.max_lag_s;
-  out.stalled_s = t.stalled_s;
-  out.wall_time_ns = t.wall_time_ns;
-  out.writer = writer;
-  return out;
-}
-
-emulator::SensorStatus statusOf(const sensornet_SensorStatus& s, emulator::WriterId writer) {
-  using State = emulator::SensorProcessState;
-  emulator::SensorStatus out;
-  out.sensor = s.sensor_id;
-  out.run_id = std::string(dds::viewString(s.run_id));
-  out.episode = s.episode;
-  switch (s.state) {
-    case sensornet_SENSOR_STARTING: out.state = State::Starting; break;
-    case sensornet_SENSOR_READY: out.state = State::Ready; break;
-    case sensornet_SENSOR_RUNNING: out.state = State::Running; break;
-    case sensornet_SENSOR_EXCLUDED: out.state = State::Excluded; break;
-    case sensornet_SENSOR_STOPPED: out.state = State::Stopped; break;
-    case sensornet_SENSOR_FAILED: out.state = State::Failed; break;
-  }
-  out.sent_in_episode = s.sent_in_episode;
-  out.process_id = s.process_id;
-  out.wall_time_ns = s.wall_time_ns;
-  out.writer = writer;
-  return out;
-}
-
 class FusionCenter {
  public:
   explicit FusionCenter(const ServeOptions& options)
@@ -337,8 +304,7 @@ class FusionCenter {
       const std::size_t count = measurement_reader_.takeEach(
           kBatch,
           [&](const sensornet_Measurement& m, const dds::SampleInfo& info) {
-            arrivals.push_back(arrivalOf(m, received_ns));
-            arrivals.back().writer = info.publication;
+            arrivals.push_back(emulator::arrivalOfSample(m, received_ns, info.publication));
           },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
             if (info.instance_state == dds::InstanceState::NoWriters) {
@@ -350,34 +316,16 @@ class FusionCenter {
     if (!arrivals.empty() && inbox_.push(arrivals)) waitset_.wake();
   }
 
-  // Touches nothing but the sample: safe in the receive thread.
-  [[nodiscard]] static Arrival arrivalOf(const sensornet_Measurement& m, std::int64_t received_ns) {
-    Arrival a;
-    emulator::FusedMeasurement& fused = a.measurement;
-    fused.sensor = static_cast<int>(m.sensor_id);
-    fused.seq = m.seq;
-    fused.time_s = m.emulated_time_s;
-    fused.version = m.schedule_version;
-    const auto z = dds::viewSequence(m.z);
-    fused.z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(z.size()));
-    fused.publish_wall_ns = m.publish_wall_time_ns;
-    fused.receive_wall_ns = received_ns;
-    fused.network_delay_s = m.network_delay_s;
-    a.episode = m.episode;
-    a.run_id = std::string(dds::viewString(m.run_id));
-    return a;
-  }
-
   void readTallies(std::int64_t now) {
     if (!core_.hasScenario()) return;  // kept by the reader (transient local) until then
     for (auto& received : tally_reader_.take(64).samples) {
-      core_.onTally(tallyOf(*received.sample, received.info.publication), now);
+      core_.onTally(emulator::tallyOfSample(*received.sample, received.info.publication), now);
     }
   }
 
   void readStatuses(std::int64_t now) {
     for (auto& received : status_reader_.take(64).samples) {
-      core_.onStatus(statusOf(*received.sample, received.info.publication), now);
+      core_.onStatus(emulator::statusOfSample(*received.sample, received.info.publication), now);
     }
   }
 
@@ -386,13 +334,9 @@ class FusionCenter {
   void readReplies(std::int64_t now) {
     for (auto& received : reply_reader_.take(64).samples) {
       const sensornet_CommandReply& r = *received.sample;
-      const std::string_view reason = dds::viewString(r.reason);
-      if (r.accepted || dds::viewString(r.run_id) != options_.run.run_id ||
-          reason.substr(0, emulator::kNotPermitted.size()) != emulator::kNotPermitted) {
-        continue;
+      if (const auto why = emulator::refusalByRight(r, options_.run.run_id)) {
+        core_.onCommandRefused(r.command_id, *why, now);
       }
-      core_.onCommandRefused(r.command_id, std::string(reason.substr(emulator::kNotPermitted.size())),
-                             now);
     }
   }
 

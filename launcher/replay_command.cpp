@@ -1,21 +1,30 @@
 #include "replay_command.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "output_file.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/recording_replay.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/mcap.hpp"
+#include "sensornet/io/output_path.hpp"
 
 namespace sensornet::launcher {
 namespace {
+
+namespace fs = std::filesystem;
 
 struct ReplayOptions {
   std::string path;
   bool info = false;
   bool json = false;
+  std::string report;  // the replay's report; default beside the recording: RUN.replay.json
 };
 
 std::string utcOf(std::uint64_t ns) {
@@ -102,27 +111,83 @@ int runInfo(const ReplayOptions& options) {
   return kExitOk;
 }
 
+std::string costText(const std::optional<double>& cost) {
+  if (!cost) return "-";
+  char text[40];
+  std::snprintf(text, sizeof text, "%.17g", *cost);
+  return text;
+}
+
+// Re-fuses the recording offline and compares each episode's cost with the recorded run's.
+int runOffline(const ReplayOptions& options) {
+  const McapReader file(options.path);
+  fs::path report = options.report;
+  if (report.empty()) report = fs::path(options.path).replace_extension(".replay.json");
+  makeParentFolders(report, "--report");
+  checkOutputFile(report, "--report");
+  spdlog::set_level(spdlog::level::warn);  // the fusion center's progress lines are the live run's
+  const emulator::ReplayResult r = emulator::replayRecording(file, options.path, report);
+  std::size_t compared = 0, equal = 0;
+  nlohmann::json episodes = nlohmann::json::array();
+  for (const emulator::ReplayedEpisode& e : r.episodes) {
+    const bool both = e.replayed_cost && e.recorded_cost;
+    const bool same = both && *e.replayed_cost == *e.recorded_cost;  // to the bit
+    compared += both ? 1 : 0;
+    equal += same ? 1 : 0;
+    episodes.push_back({{"episode", e.episode},
+                        {"replayed_cost", e.replayed_cost ? nlohmann::json(*e.replayed_cost) : nullptr},
+                        {"recorded_cost", e.recorded_cost ? nlohmann::json(*e.recorded_cost) : nullptr},
+                        {"complete", e.complete},
+                        {"equal", same}});
+    if (!options.json) {
+      std::printf("episode %u: replayed %s, recorded %s%s\n", e.episode,
+                  costText(e.replayed_cost).c_str(), costText(e.recorded_cost).c_str(),
+                  !both ? "" : same ? " (equal)" : " (DIFFERENT)");
+    }
+  }
+  const bool reproduced = compared == r.episodes.size() && equal == compared && compared > 0;
+  if (options.json) {
+    std::printf("%s\n", nlohmann::json({{"recording", options.path},
+                                         {"run_id", r.run_id},
+                                         {"status", std::string(wordOf(r.status))},
+                                         {"report", report.string()},
+                                         {"measurements_fused", r.samples_fused},
+                                         {"episodes", episodes},
+                                         {"reproduced", reproduced}})
+                             .dump()
+                             .c_str());
+  } else {
+    std::printf("run %s replayed from %s: %s, %llu measurements fused; %zu of %zu episodes "
+                "equal the recording to the bit\nreport: %s\n",
+                r.run_id.c_str(), options.path.c_str(), std::string(wordOf(r.status)).c_str(),
+                static_cast<unsigned long long>(r.samples_fused), equal, r.episodes.size(),
+                report.c_str());
+  }
+  // The replay says whether it reproduced the recording: any episode off, or without both
+  // costs, is exit 1.
+  return reproduced ? kExitOk : kExitFailure;
+}
+
 }  // namespace
 
 Subcommand addReplayCommand(CLI::App& app) {
   auto options = std::make_shared<ReplayOptions>();
   CLI::App* cmd = app.add_subcommand(
       "replay",
-      "Read a recording of a run (sensornet launch --record RUN.mcap). With --info: what it "
-      "holds, like `mcap info` (run metadata, time span, per topic and partition the schema and "
-      "message count). Re-fusing a recording is not built yet. Example:\n  sensornet replay "
-      "run.mcap --info");
+      "Re-fuse a recording of a run (sensornet launch --record RUN.mcap) offline: its samples "
+      "in recorded order, at their recorded receipt times, through the fusion center's own "
+      "decisions; prints per episode the replayed realized cost beside the recorded run's and "
+      "writes the replay's report (default RUN.replay.json). Exit 0 when every episode equals "
+      "the recording to the bit, 1 when one does not, 2 on a bad file. With --info: what the "
+      "recording holds, like `mcap info`. Examples:\n  sensornet replay run.mcap\n  sensornet "
+      "replay run.mcap --info");
   cmd->add_option("RECORDING", options->path, "an MCAP file of sensornet launch --record")
       ->required();
   cmd->add_flag("--info", options->info, "print what the recording holds");
-  cmd->add_flag("--json", options->json, "with --info: one JSON line instead of the table");
-  return {cmd, [options] {
-            if (!options->info) {
-              throw InputError("sensornet replay", "--info",
-                               "--info (re-fusing a recording is not built yet)");
-            }
-            return runInfo(*options);
-          }};
+  cmd->add_option("--report", options->report,
+                  "write the replay's report here (default: beside the recording, RUN.replay.json)");
+  cmd->add_flag("--json", options->json, "one JSON line instead of the text");
+  return {cmd, [options] { return options->info ? runInfo(*options) : runOffline(*options); }};
 }
 
 }  // namespace sensornet::launcher

@@ -1,9 +1,12 @@
 #pragma once
-// `sensornet replay RUN.mcap --info`: what a recording (`sensornet launch --record`) holds, like
-// `mcap info`: its run metadata, the time span, and per channel (topic and partition) the schema
-// and the message count, with the summary's statistics checked against the messages read. A file
-// that is not a complete MCAP (damaged, cut short) is one line naming the file and what is
-// wrong, exit 2. Re-fusing a recording (offline and live replay) is not built yet.
+// `sensornet replay RUN.mcap`: re-fuses a recording (`sensornet launch --record`) offline
+// (emulator/recording_replay.hpp), prints per episode the replayed cost beside the recorded one
+// and writes the replay's report; exit 0 when every episode equals the recording to the bit.
+// `--info`: what a recording holds, like `mcap info`: its run metadata, the time span, and per
+// channel (topic and writer partition) the schema and the message count, with the summary's
+// statistics checked against the messages read. A file that is not a complete MCAP (damaged,
+// cut short) is one line naming the file and what is wrong, exit 2. Not built yet: republishing
+// a recording live (--live).
 
 #include "sensornet/io/command_line.hpp"
 

@@ -1,0 +1,74 @@
+#include "sensornet/emulator/fusion_center_events.hpp"
+
+#include <Eigen/Core>
+#include <string_view>
+
+#include "sensornet/dds/wire.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+
+namespace sensornet::emulator {
+
+// Touches nothing but the sample: safe in Cyclone's receive thread.
+MeasurementArrival arrivalOfSample(const sensornet_Measurement& m, std::int64_t received_ns,
+                                   WriterId writer) {
+  MeasurementArrival a;
+  FusedMeasurement& fused = a.measurement;
+  fused.sensor = static_cast<int>(m.sensor_id);
+  fused.seq = m.seq;
+  fused.time_s = m.emulated_time_s;
+  fused.version = m.schedule_version;
+  const auto z = dds::viewSequence(m.z);
+  fused.z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(z.size()));
+  fused.publish_wall_ns = m.publish_wall_time_ns;
+  fused.receive_wall_ns = received_ns;
+  fused.network_delay_s = m.network_delay_s;
+  a.episode = m.episode;
+  a.run_id = std::string(dds::viewString(m.run_id));
+  a.writer = writer;
+  return a;
+}
+
+EpisodeTally tallyOfSample(const sensornet_EpisodeTally& t, WriterId writer) {
+  EpisodeTally out;
+  out.sensor = t.sensor_id;
+  out.run_id = std::string(dds::viewString(t.run_id));
+  out.episode = t.episode;
+  out.count = {t.sent, t.dropped_by_network, t.duplicated_by_network};
+  out.max_lag_s = t.max_lag_s;
+  out.stalled_s = t.stalled_s;
+  out.wall_time_ns = t.wall_time_ns;
+  out.writer = writer;
+  return out;
+}
+
+SensorStatus statusOfSample(const sensornet_SensorStatus& s, WriterId writer) {
+  using State = SensorProcessState;
+  SensorStatus out;
+  out.sensor = s.sensor_id;
+  out.run_id = std::string(dds::viewString(s.run_id));
+  out.episode = s.episode;
+  switch (s.state) {
+    case sensornet_SENSOR_STARTING: out.state = State::Starting; break;
+    case sensornet_SENSOR_READY: out.state = State::Ready; break;
+    case sensornet_SENSOR_RUNNING: out.state = State::Running; break;
+    case sensornet_SENSOR_EXCLUDED: out.state = State::Excluded; break;
+    case sensornet_SENSOR_STOPPED: out.state = State::Stopped; break;
+    case sensornet_SENSOR_FAILED: out.state = State::Failed; break;
+  }
+  out.sent_in_episode = s.sent_in_episode;
+  out.process_id = s.process_id;
+  out.wall_time_ns = s.wall_time_ns;
+  out.writer = writer;
+  return out;
+}
+
+std::optional<std::string> refusalByRight(const sensornet_CommandReply& r, const std::string& run_id) {
+  const std::string_view reason = dds::viewString(r.reason);
+  if (r.accepted || dds::viewString(r.run_id) != run_id ||
+      reason.substr(0, kNotPermitted.size()) != kNotPermitted) {
+    return std::nullopt;
+  }
+  return std::string(reason.substr(kNotPermitted.size()));
+}
+
+}  // namespace sensornet::emulator
