@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -27,6 +28,8 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
 #include "sensornet/emulator/fusion_center_events.hpp"
+#include "sensornet/emulator/fusion_metrics.hpp"
+#include "sensornet/io/metrics_server.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
@@ -57,7 +60,14 @@ struct ServeOptions {
   bool json = false;
   bool resume = false;           // restarted by the launcher: go on from the episode log
   bool reference = false;        // beside an external fusion center: write in P/reference
+  std::string metrics_address;   // --metrics: serve /metrics (Prometheus) here while the run lives
 };
+
+// After the final report, /metrics stays up this long, so that a scraper polling every second
+// gets the final counters.
+constexpr auto kMetricsLinger = 2s;
+// How often the metrics are rebuilt while the run lives (wall).
+constexpr auto kMetricsPeriod = 250ms;
 
 // The Report instances (one per episode) kept registered for late joiners: the latest ones.
 constexpr std::size_t kReportsKept = 64;
@@ -201,6 +211,9 @@ class FusionCenter {
  public:
   explicit FusionCenter(const ServeOptions& options)
       : options_(options),
+        metrics_(options.metrics_address.empty()
+                     ? nullptr
+                     : std::make_unique<MetricsServer>(options.metrics_address)),
         domain_(options.run.domainConfig()),
         participant_(domain_),
         inputs_(participant_),
@@ -249,7 +262,12 @@ class FusionCenter {
   int run() {
     spdlog::info("fusion center of run {} waiting for the scenario", options_.run.run_id);
     std::optional<emulator::RunEnd> end;
+    auto metrics_due = std::chrono::steady_clock::now();
     while (!end && !emulator::stopRequested()) {
+      if (metrics_ && std::chrono::steady_clock::now() >= metrics_due) {
+        metrics_->publish(emulator::fusionCenterMetrics(core_, inputs_.book()));
+        metrics_due = std::chrono::steady_clock::now() + kMetricsPeriod;
+      }
       (void)waitset_.wait(10ms);
       const std::int64_t now = wallNowNs();
       inbox_.drainInto(drained_);
@@ -264,6 +282,10 @@ class FusionCenter {
     const emulator::RunStatus status =
         core_.finish(end, inputs_.rejected(), utcNow(), wallNowNs());
     carryOut();
+    if (metrics_) {
+      metrics_->publish(emulator::fusionCenterMetrics(core_, inputs_.book()));
+      std::this_thread::sleep_for(kMetricsLinger);
+    }
     (void)report_writer_.waitForAcks(2s);
     spdlog::info("run {}: {}", options_.run.run_id, wordOf(status));
     // The report carries the run's status; the exit code says whether this process did its job
@@ -410,6 +432,7 @@ class FusionCenter {
   }
 
   ServeOptions options_;
+  std::unique_ptr<MetricsServer> metrics_;  // --metrics; made first: a bad address is bad input
   dds::Domain domain_;
   dds::Participant participant_;
   emulator::RunInputs inputs_;
@@ -483,6 +506,11 @@ Subcommand addServeCommand(CLI::App& app) {
                 "--reference-fusion): fuse the same measurements, write the report file, and "
                 "publish Report and FusionState in partition <partition>/reference, where the "
                 "coordinator does not pace on them");
+  cmd->add_option("--metrics", options->metrics_address,
+                  "serve the run's live metrics in the Prometheus text format at "
+                  "http://HOST:PORT/metrics (HOST a numeric IPv4 address: 127.0.0.1 keeps it on "
+                  "this host); kept up 2 s after the final report so a scraper gets the last "
+                  "values");
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");
   cmd->add_flag("--resume", options->resume,
                 "restarted after a death (the launcher adds it): start the report from the "

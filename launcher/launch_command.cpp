@@ -36,6 +36,7 @@
 #include "sensornet/emulator/hosts_file.hpp"
 #include "sensornet/emulator/junit_report.hpp"
 #include "sensornet/emulator/run_recorder.hpp"
+#include "sensornet/io/metrics_server.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
@@ -77,6 +78,7 @@ struct LaunchOptions {
   std::string require;  // --require criteria (run_requirements.hpp), checked after the run
   std::string junit_path;  // --junit: the run and each criterion as JUnit test cases
   std::string record_path;  // --record: every sample of the run, as received, in an MCAP file
+  std::string metrics_address;  // --metrics: our fusion center serves /metrics (Prometheus) here
   std::string external_sensors;  // --external-sensors: sensors a participant of the user's speaks for
   bool external_fusion_center = false;  // --external-fusion-center: a participant of the user's fuses
   bool reference_fusion = false;  // --reference-fusion: ours beside it, on the same measurements
@@ -191,8 +193,12 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   const std::vector<std::string> flags = runFlags(options, domain);
 
   if (!options.external_fusion_center) {
-    plan.children.push_back(childSpec(kFusionCenter,
-                                      {programs.fusion_center, "serve", "--report", plan.report_path},
+    std::vector<std::string> serve = {programs.fusion_center, "serve", "--report",
+                                      plan.report_path.string()};
+    if (!options.metrics_address.empty()) {
+      serve.insert(serve.end(), {"--metrics", options.metrics_address});
+    }
+    plan.children.push_back(childSpec(kFusionCenter, serve,
                                       roleFlags(flags, options, dds::SecurityRole::FusionCenter),
                                       plan.log_dir));
   } else if (options.reference_fusion) {
@@ -477,6 +483,13 @@ int runLaunch(LaunchOptions options) {
     makeParentFolders(options.record_path, "--record");
     checkOutputFile(options.record_path, "--record");
   }
+  if (!options.metrics_address.empty()) {
+    if (options.external_fusion_center) {
+      throw InputError("--metrics", "",
+                       "our fusion center, which serves them (not --external-fusion-center)");
+    }
+    (void)MetricsServer(options.metrics_address);  // bad or busy: refused now, one line
+  }
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
   const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain, options.external_fusion_center);
@@ -743,6 +756,12 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "in an MCAP file (message encoding cdr, schemas omgidl from idl/sensornet.idl; "
                   "readable by standard MCAP tools; see it with `sensornet replay FILE --info`); "
                   "the file is complete however the run ends, Ctrl-C included");
+  cmd->add_option("--metrics", options->metrics_address,
+                  "serve the run's live metrics for Prometheus at http://HOST:PORT/metrics "
+                  "(text format 0.0.4; HOST numeric IPv4, e.g. 127.0.0.1:9464 to stay on this "
+                  "host): per sensor sent/received/lost/dropped/late, rejections, episodes, the "
+                  "running mean cost and its interval, the latest schedule's version, bracket and "
+                  "rates, latency as a histogram, faults by kind; up until 2 s after the run");
   cmd->add_option("--junit", options->junit_path,
                   "also write the run as JUnit XML for CI: a test case \"run\" that passes only "
                   "when the run completed (its message: status, exit code, faults by kind) and "

@@ -14,6 +14,7 @@ packages=(
   openssl libssl-dev  # secured runs: `sensornet pki init` runs openssl; certificates checked with libcrypto
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
   python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
+  prometheus  # its server scrapes a run's /metrics in a test; promtool checks the exposition
 )
 # Node and npm: @mcap/core, the reference MCAP reader, reads recordings in the tests. A machine
 # with node from elsewhere (NodeSource's nodejs bundles npm) keeps it.

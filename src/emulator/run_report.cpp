@@ -291,10 +291,20 @@ void LatencyHistogram::add(double latency_s) {
   const std::size_t bin = binOf(latency_s);
   ++counts_[bin];
   ++count_;
+  sum_ += latency_s;
   smallest_ = std::min(smallest_, latency_s);
   largest_ = std::max(largest_, latency_s);
   lowest_bin_ = std::min(lowest_bin_, bin);
   highest_bin_ = std::max(highest_bin_, bin);
+}
+
+std::uint64_t LatencyHistogram::countAtMost(double latency_s) const {
+  if (count_ == 0 || latency_s < smallest_) return 0;
+  if (latency_s >= largest_) return count_;
+  const std::size_t bin = binOf(latency_s);
+  std::uint64_t n = 0;
+  for (std::size_t b = lowest_bin_; b < bin && b <= highest_bin_; ++b) n += counts_[b];
+  return n;
 }
 
 void LatencyHistogram::add(const std::vector<double>& latencies_s) {

@@ -65,7 +65,11 @@ class LatencyHistogram {
   void add(double latency_s);
   void add(const std::vector<double>& latencies_s);
   [[nodiscard]] std::uint64_t count() const noexcept { return count_; }
+  [[nodiscard]] double sum() const noexcept { return sum_; }
   [[nodiscard]] double quantile(double q) const;
+  // How many latencies are at most `latency_s` (a Prometheus bucket): those of the fine bins
+  // wholly below it, exact but for the fine bin it falls in (kLatencyQuantileRelativeError).
+  [[nodiscard]] std::uint64_t countAtMost(double latency_s) const;
   // The report's coarse histogram, exactly as latencyHistogram() of the same samples.
   [[nodiscard]] nlohmann::json toJson() const;
 
@@ -78,6 +82,7 @@ class LatencyHistogram {
   std::size_t highest_bin_ = 0;
   double smallest_ = 0.0;
   double largest_ = 0.0;
+  double sum_ = 0.0;
 };
 
 struct RunSummary {
@@ -121,6 +126,12 @@ inline constexpr const char* kRestartedReason = "fusion_center_restarted";
 
 class RunReport {
  public:
+  // One sensor's counts over every episode reported.
+  struct SensorTotals {
+    std::uint64_t sent = 0, received = 0, lost = 0, dropped_by_network = 0, late = 0,
+                  wrong_version = 0;
+    double expected = 0.0;
+  };
   // Without `episode_log`, holds every entry (for small reports and tests); with it, holds none:
   // `per_episode` is read back from the log (where every added entry was appended) when the
   // report is written.
@@ -135,6 +146,8 @@ class RunReport {
   // Samples refused outside any episode (other runs, malformed schedules, ...), by reason.
   void countRejected(const std::string& reason, std::uint64_t count = 1);
   [[nodiscard]] RunSummary summary() const;
+  [[nodiscard]] const std::vector<SensorTotals>& sensorTotals() const { return sensor_totals_; }
+  [[nodiscard]] const LatencyHistogram& latencies() const { return latencies_; }
   // The whole report. `schedule_versions`: the versions of the run (scheduleVersionsJson);
   // `faults`: a list of {kind, process, sensor, episode, emulated_time_s, detail}.
   [[nodiscard]] nlohmann::json toJson(const std::string& status, const nlohmann::json& faults,
@@ -174,11 +187,7 @@ class RunReport {
   double delay_sum_s_ = 0.0;  // network_delay_mean_s times received, over every episode
   RunSummary summed_;  // its counts (sent, received, lost, ...) over every episode
   RejectionCounts rejected_in_episodes_;
-  struct SensorTotals {
-    std::uint64_t sent = 0, received = 0, lost = 0, dropped_by_network = 0, late = 0,
-                  wrong_version = 0;
-    double expected = 0.0;
-  };
+
   std::vector<SensorTotals> sensor_totals_;
   LatencyHistogram latencies_;
   LatencyHistogram episode_medians_;  // the fallback without latencies
