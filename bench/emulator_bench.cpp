@@ -52,6 +52,10 @@
 //   emulator_bench turnaround [rounds = 3] [episodes at time scale 1000,100,10 = 1000,200,30]
 //   emulator_bench overload [total rates/s, comma-separated = 30000,45000,60000,90000,...]
 //   emulator_bench security [rounds = 3] [total rates/s = 10000,40000]
+//   emulator_bench recording [rounds = 3] [total rates/s = 10000,40000]
+//               (issue 26) one overload episode plain, with the fusion center's --metrics, and
+//               recorded (a RunRecorder in the bench's process): latency median, fusion center
+//               CPU per measurement, kept up; medians over rounds and ratios to plain.
 //   emulator_bench memory [episodes = 5000] [checkpoint = 1000]
 //               (issue 15) `sensornet launch` of the default scenario at --time-scale 1000:
 //               VmRSS of the launcher and of each process it started after `checkpoint`
@@ -86,6 +90,7 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_recorder.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"
@@ -698,17 +703,33 @@ std::string joined(const std::vector<long long>& values) {
 
 // One episode of the loosened default scenario at `total_rate_hz` shared equally by 6 sensors in
 // two processes; nullopt (after saying why) if the run produced no report.
-// `extra`: flags every process gets (--security DIR).
+// `extra`: flags every process gets (--security DIR); `fusion_extra`: the fusion center's only
+// (--metrics ADDR); `record`: a recording of the run (RunRecorder in this process, as `sensornet
+// launch --record` runs one in the launcher), made before any process starts.
 std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate_hz,
-                                       const std::vector<std::string>& extra = {}) {
+                                       const std::vector<std::string>& extra = {},
+                                       const std::vector<std::string>& fusion_extra = {},
+                                       bool record = false) {
   Processes processes(fs::temp_directory_path() / run);
+  std::optional<sensornet::dds::Domain> record_domain;
+  std::optional<sensornet::dds::Participant> record_participant;
+  std::optional<sensornet::emulator::RunRecorder> recorder;
+  if (record) {
+    sensornet::emulator::RunOptions options;
+    options.run_id = run;
+    record_domain.emplace(options.domainConfig());
+    record_participant.emplace(*record_domain);
+    recorder.emplace(*record_participant, run, processes.dir() / "run.mcap", sensornet::McapMap{});
+  }
   const fs::path scenario = writeOverloadScenario(processes.dir());
   const fs::path schedule = writeConstantSchedule(processes.dir(), total_rate_hz / 6.0);
   const fs::path report = processes.dir() / "report.json";
   std::vector<std::pair<std::string, BackgroundProcess*>> watched;
   BackgroundProcess& fusion = processes.start(
       "fusion_center",
-      withFlags({kFusionCenter, "serve", "--run-id", run, "--report", report.string()}, extra));
+      withFlags(withFlags({kFusionCenter, "serve", "--run-id", run, "--report", report.string()},
+                          extra),
+                fusion_extra));
   watched.emplace_back("fusion_center", &fusion);
   for (const char* block : {"0-2", "3-5"}) {
     watched.emplace_back(
@@ -921,6 +942,58 @@ void security(int rounds, const std::vector<double>& rates) {
   }
 }
 
+// (issue 26) What recording and live metrics cost: per round and rate, one overload episode
+// plain, with --metrics on the fusion center (it rebuilds and serves its exposition every
+// 250 ms; nothing scrapes it: the build is the cost), and recorded (one more reader of every
+// topic, in this process, writing the MCAP file). Latency median, the fusion center's CPU per
+// measurement and whether it keeps up; medians over rounds and the ratios to plain.
+void recordingCost(int rounds, const std::vector<double>& rates) {
+  std::printf("recording: plain against --metrics and against a recording, %d rounds\n", rounds);
+  struct Variant {
+    const char* name;
+    std::vector<std::string> fusion_extra;
+    bool record;
+  };
+  const std::vector<Variant> variants = {{"plain", {}, false},
+                                         {"metrics", {"--metrics", "127.0.0.1:0"}, false},
+                                         {"recorded", {}, true}};
+  std::map<std::pair<double, std::string>, std::vector<double>> latency, cpu;
+  std::map<std::pair<double, std::string>, int> kept;
+  for (int round = 0; round < rounds; ++round) {
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      for (const Variant& v : variants) {
+        const int tag = round * 100 + static_cast<int>(i);
+        const auto o = overloadRun(runId(std::string("rec-") + v.name, tag), rates[i], {},
+                                   v.fusion_extra, v.record);
+        if (!o) return;
+        const std::pair key{rates[i], std::string(v.name)};
+        latency[key].push_back(o->median_us);
+        cpu[key].push_back(fusionCpuPerMeasurementUs(*o));
+        kept[key] += o->keepsUp() ? 1 : 0;
+        std::printf("  round %d %.0f/s %-8s: %s, received %lld, lost %lld, latency median %.0f us, "
+                    "p99 %.0f us, fusion center CPU %.1f us/measurement -> %s\n",
+                    round, rates[i], v.name, o->status.c_str(), o->received_total, o->lost_total,
+                    o->median_us, o->p99_us, fusionCpuPerMeasurementUs(*o),
+                    o->keepsUp() ? "keeps up" : "does not keep up");
+        std::fflush(stdout);
+      }
+    }
+  }
+  std::printf("recording, medians of %d rounds (busy machine: other builds and benches run):\n",
+              rounds);
+  for (const double rate : rates) {
+    const double base_latency = median(latency[{rate, "plain"}]);
+    const double base_cpu = median(cpu[{rate, "plain"}]);
+    for (const Variant& v : variants) {
+      const std::pair key{rate, std::string(v.name)};
+      std::printf("  %.0f/s %-8s: latency median %.0f us (%.2fx), fusion center CPU %.1f "
+                  "us/measurement (%.2fx), kept up in %d/%d rounds\n",
+                  rate, v.name, median(latency[key]), median(latency[key]) / base_latency,
+                  median(cpu[key]), median(cpu[key]) / base_cpu, kept[key], rounds);
+    }
+  }
+}
+
 // The programs of a turnaround run: this build's, or SENSORNET_BENCH_PROGRAMS=<build dir>'s.
 struct Programs {
   std::string coordinator = kCoordinator;
@@ -1096,6 +1169,15 @@ int main(int argc, char** argv) {
       return 2;
     }
     security(argc > 2 ? std::max(1, std::atoi(argv[2])) : 3, rates);
+    return 0;
+  }
+  if (what == "recording") {  // emulator_bench recording [rounds = 3] [total rates/s]
+    const std::vector<double> rates = parseRates(argc > 3 ? argv[3] : "10000,40000");
+    if (rates.empty()) {
+      std::fprintf(stderr, "emulator_bench recording: expected rates such as 10000,40000\n");
+      return 2;
+    }
+    recordingCost(argc > 2 ? std::max(1, std::atoi(argv[2])) : 3, rates);
     return 0;
   }
   if (what == "memory") {  // emulator_bench memory [episodes = 5000] [checkpoint = 1000]
