@@ -14,12 +14,17 @@ packages=(
   openssl libssl-dev  # secured runs: `sensornet pki init` runs openssl; certificates checked with libcrypto
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
   python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
-  prometheus  # its server scrapes a run's /metrics in a test; promtool checks the exposition
 )
-# Node and npm: @mcap/core, the reference MCAP reader, reads recordings in the tests. A machine
-# with node from elsewhere (NodeSource's nodejs bundles npm) keeps it.
-if ! command -v node >/dev/null; then packages+=(nodejs); fi
-if ! command -v npm >/dev/null; then packages+=(npm); fi
+# --tests (scripts/test.sh): also what only the tests use. Prometheus' server scrapes a run's
+# /metrics and promtool checks the exposition; @mcap/core (npm), the reference MCAP reader, reads
+# recordings. A machine with node from elsewhere (NodeSource's nodejs bundles npm) keeps it.
+for_tests=false
+if [[ "${1:-}" == "--tests" ]]; then for_tests=true; fi
+if $for_tests; then
+  packages+=(prometheus)
+  if ! command -v node >/dev/null; then packages+=(nodejs); fi
+  if ! command -v npm >/dev/null; then packages+=(npm); fi
+fi
 # Where the npm packages of the tests go (tests/CMakeLists.txt looks there).
 node_prefix=/opt/sensornet-node
 mcap_core_version=2.2.2
@@ -40,9 +45,18 @@ if ((${#missing[@]} > 0)); then
   DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends \
     "${missing[@]}"
 fi
-if [[ ! -f "$node_prefix/node_modules/@mcap/core/package.json" ]]; then
+if $for_tests && [[ ! -f "$node_prefix/node_modules/@mcap/core/package.json" ]]; then
   echo "install-deps: installing @mcap/core $mcap_core_version (npm) into $node_prefix" >&2
   "${sudo[@]}" mkdir -p "$node_prefix"
-  "${sudo[@]}" npm install --prefix "$node_prefix" --no-audit --no-fund --silent \
-    "@mcap/core@$mcap_core_version"
+  for attempt in 1 2; do  # the registry is the network's: one retry
+    if "${sudo[@]}" npm install --prefix "$node_prefix" --no-audit --no-fund --silent \
+      "@mcap/core@$mcap_core_version"; then
+      break
+    fi
+    if ((attempt == 2)); then
+      echo "install-deps: error: npm could not install @mcap/core (see above)" >&2
+      exit 1
+    fi
+    sleep 5
+  done
 fi

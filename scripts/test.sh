@@ -5,7 +5,7 @@
 #   scripts/test.sh --all        both, one after the other (what CI runs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
+scripts/install-deps.sh --tests
 
 run_suite() {
   local build_dir=$1
