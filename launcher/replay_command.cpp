@@ -10,7 +10,9 @@
 
 #include "output_file.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/live_replay.hpp"
 #include "sensornet/emulator/recording_replay.hpp"
+#include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/mcap.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -25,7 +27,29 @@ struct ReplayOptions {
   bool info = false;
   bool json = false;
   std::string report;  // the replay's report; default beside the recording: RUN.replay.json
+  bool live = false;   // republish into a new run instead of fusing here
+  emulator::RunOptions run;  // --live: the new run
+  double time_scale = 1.0;
+  double ready_timeout_s = 30.0;
 };
+
+int runLive(const ReplayOptions& options) {
+  if (options.run.run_id.empty()) {
+    throw InputError("sensornet replay --live", "--run-id", "the new run's id (a fresh one)");
+  }
+  const McapReader file(options.path);
+  std::fprintf(stderr,
+               "sensornet: republishing %s as run %s at %gx the recorded pace; start its fusion "
+               "center now (fusion_center serve --run-id %s, or your own)\n",
+               options.path.c_str(), options.run.run_id.c_str(), options.time_scale,
+               options.run.run_id.c_str());
+  const emulator::LiveReplayResult r =
+      emulator::replayLive(file, options.path, options.run, options.time_scale,
+                           options.ready_timeout_s);
+  std::printf("run %s replayed live from %s: %llu samples in %.2f s\n", options.run.run_id.c_str(),
+              options.path.c_str(), static_cast<unsigned long long>(r.written), r.wall_s);
+  return kExitOk;
+}
 
 std::string utcOf(std::uint64_t ns) {
   const auto seconds = static_cast<std::time_t>(ns / 1'000'000'000ULL);
@@ -187,7 +211,23 @@ Subcommand addReplayCommand(CLI::App& app) {
   cmd->add_option("--report", options->report,
                   "write the replay's report here (default: beside the recording, RUN.replay.json)");
   cmd->add_flag("--json", options->json, "one JSON line instead of the text");
-  return {cmd, [options] { return options->info ? runInfo(*options) : runOffline(*options); }};
+  cmd->add_flag("--live", options->live,
+                "republish the recorded run's own traffic (scenario, schedules, episode controls, "
+                "every sensor's measurements, tallies and statuses) into the new run --run-id at "
+                "the recorded timing, for a fusion center of that run (ours or yours) to fuse");
+  emulator::addRunOptions(*cmd, options->run, false);
+  cmd->add_option("--time-scale", options->time_scale,
+                  "with --live: how much faster than recorded (2: twice as fast)")
+      ->capture_default_str()
+      ->check(positiveNumber(1e6));
+  cmd->add_option("--ready-timeout", options->ready_timeout_s,
+                  "with --live: seconds to wait for a fusion center to read the measurements")
+      ->capture_default_str()
+      ->check(positiveNumber(3600));
+  return {cmd, [options] {
+            if (options->live) return runLive(*options);
+            return options->info ? runInfo(*options) : runOffline(*options);
+          }};
 }
 
 }  // namespace sensornet::launcher

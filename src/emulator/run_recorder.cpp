@@ -4,6 +4,7 @@
 #include <dds/ddsi/ddsi_serdata.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstddef>
@@ -157,43 +158,59 @@ void RunRecorder::loop() {
 
 // Takes every sample each reader holds into the file; after a write error, only takes (the
 // samples must not pile up in the readers) and keeps the error for the summary.
+// Takes every sample each reader holds into the file; after a write error, only takes (the
+// samples must not pile up in the readers) and keeps the error for the summary. What one pass
+// took from all readers is written in the order of the writers' source timestamps (one host's
+// clock), not reader by reader: so a sensor's last tally goes before the coordinator's
+// RUN_SHUTDOWN that followed it, as they were sent.
 void RunRecorder::takeAll() {
   constexpr std::uint32_t kBatch = 64;
   std::array<ddsi_serdata*, kBatch> samples{};
   std::array<dds_sample_info_t, kBatch> infos{};
-  std::vector<std::byte> bytes;
+  struct Taken {
+    std::int64_t source_ns;
+    Channel* reader;
+    dds_instance_handle_t writer;
+    std::vector<std::byte> bytes;
+  };
+  std::vector<Taken> taken;
   for (const auto& c : channels_) {
     for (;;) {
       const dds_return_t n = dds_takecdr(c->reader, samples.data(), kBatch, infos.data(),
                                          DDS_ANY_STATE);
       if (n <= 0) break;
-      const auto now = static_cast<std::uint64_t>(dds_time());
       for (dds_return_t i = 0; i < n; ++i) {
         ddsi_serdata* sample = samples[static_cast<std::size_t>(i)];
         const dds_sample_info_t& info = infos[static_cast<std::size_t>(i)];
         if (info.valid_data && writer_ && summary_.error.empty()) {
-          bytes.resize(ddsi_serdata_size(sample));
-          ddsi_serdata_to_ser(sample, 0, bytes.size(), bytes.data());
-          try {
-            auto channel = c->writers.find(info.publication_handle);
-            if (channel == c->writers.end()) {
-              channel = c->writers
-                            .emplace(info.publication_handle,
-                                     writer_->addChannel(c->schema, c->topic, "cdr",
-                                                         writerMetadata(c->reader,
-                                                                        info.publication_handle)))
-                            .first;
-            }
-            writer_->write(channel->second, now, static_cast<std::uint64_t>(info.source_timestamp),
-                           bytes);
-            ++c->messages;
-          } catch (const std::exception& e) {
-            summary_.error = e.what();
-            spdlog::error("recording stopped: {}", e.what());
-          }
+          Taken t{info.source_timestamp, c.get(), info.publication_handle,
+                  std::vector<std::byte>(ddsi_serdata_size(sample))};
+          ddsi_serdata_to_ser(sample, 0, t.bytes.size(), t.bytes.data());
+          taken.push_back(std::move(t));
         }
         ddsi_serdata_unref(sample);
       }
+    }
+  }
+  std::stable_sort(taken.begin(), taken.end(),
+                   [](const Taken& a, const Taken& b) { return a.source_ns < b.source_ns; });
+  const auto now = static_cast<std::uint64_t>(dds_time());
+  for (Taken& t : taken) {
+    if (!summary_.error.empty()) break;
+    Channel& c = *t.reader;
+    try {
+      auto channel = c.writers.find(t.writer);
+      if (channel == c.writers.end()) {
+        channel = c.writers
+                      .emplace(t.writer, writer_->addChannel(c.schema, c.topic, "cdr",
+                                                             writerMetadata(c.reader, t.writer)))
+                      .first;
+      }
+      writer_->write(channel->second, now, static_cast<std::uint64_t>(t.source_ns), t.bytes);
+      ++c.messages;
+    } catch (const std::exception& e) {
+      summary_.error = e.what();
+      spdlog::error("recording stopped: {}", e.what());
     }
   }
 }

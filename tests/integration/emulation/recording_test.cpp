@@ -231,6 +231,44 @@ TEST_F(Recording, AnOfflineReplayEqualsTheRecordedRunToTheBit) {
   }
 }
 
+// Live replay (`sensornet replay RUN.mcap --live --run-id NEW`): the recorded run's own traffic
+// republished into a new run at twice the recorded pace. Our fusion center of the new run gives
+// every episode's cost equal to the bit to the recorded run's report, every episode complete,
+// every recorded measurement received (its received counts are the recorded run's sent counts).
+TEST_F(Recording, ALiveReplayIsTheRecordedRunForAFusionCenterOfANewRun) {
+  const LeftoverGuard guard(run_id_);
+  const fs::path file = dir_ / "live.mcap";
+  std::vector<std::string> argv = launchArgs(3, "4", dir_ / "recorded.json", dir_ / "rec-logs");
+  argv.insert(argv.end(), {"--seed", "13", "--no-html", "--record", file.string()});
+  const testing::ProcessResult recorded_run = runProcess(argv, 120s);
+  ASSERT_EQ(recorded_run.exit_code, 0) << recorded_run.err;
+  const json recorded = readJson(dir_ / "recorded.json");
+  ASSERT_TRUE(recorded.is_object());
+
+  const std::string replayed_run = run_id_ + "-live";
+  const LeftoverGuard replay_guard(replayed_run);
+  RunningProgram fusion({SENSORNET_FUSION_CENTER, "serve", "--run-id", replayed_run, "--report",
+                         (dir_ / "live.json").string()},
+                        120s);
+  const testing::ProcessResult replay = runProcess(
+      {testing::kLauncher, "replay", file.string(), "--live", "--run-id", replayed_run,
+       "--time-scale", "2"},
+      120s);
+  EXPECT_EQ(replay.exit_code, 0) << replay.err;
+  EXPECT_EQ(fusion.result().exit_code, 0) << fusion.result().err;
+  const json live = readJson(dir_ / "live.json");
+  ASSERT_TRUE(live.is_object());
+  EXPECT_EQ(live.at("status"), "completed") << live.at("faults").dump();
+  const json& want = recorded.at("per_episode");
+  const json& got = live.at("per_episode");
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].at("realized_cost"), want[k].at("realized_cost")) << "episode " << k;
+    EXPECT_EQ(got[k].at("received"), want[k].at("sent")) << "episode " << k;
+    EXPECT_TRUE(got[k].at("complete").get<bool>()) << got[k].dump();
+  }
+}
+
 TEST_F(Recording, AFileThatIsNotARecordingIsOneLineAndExitTwo) {
   const fs::path file = dir_ / "not.mcap";
   std::ofstream(file) << "hello";
