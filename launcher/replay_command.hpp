@@ -5,8 +5,8 @@
 // `--info`: what a recording holds, like `mcap info`: its run metadata, the time span, and per
 // channel (topic and writer partition) the schema and the message count, with the summary's
 // statistics checked against the messages read. A file that is not a complete MCAP (damaged,
-// cut short) is one line naming the file and what is wrong, exit 2. Not built yet: republishing
-// a recording live (--live).
+// cut short) is one line naming the file and what is wrong, exit 2. `--live --run-id NEW`:
+// republishes the recording into a new run for its fusion center (emulator/live_replay.hpp).
 
 #include "sensornet/io/command_line.hpp"
 
