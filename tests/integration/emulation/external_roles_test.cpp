@@ -303,12 +303,6 @@ TEST_F(ExternalRoles, AFusionCenterWrittenInCCarriesTheRun) {
   const LeftoverGuard guard(run_id_);
   const fs::path scenario = fs::path(SENSORNET_SOURCE_DIR) / "examples" / "c" / "scalar.yaml";
   const YAML::Node doc = YAML::LoadFile(scenario.string());
-  const auto scalar = [](const YAML::Node& matrix) { return matrix[0][0].as<std::string>(); };
-  std::string h, r;
-  for (const YAML::Node& sensor : doc["sensors"]) {
-    h += (h.empty() ? "" : ",") + scalar(sensor["H"]);
-    r += (r.empty() ? "" : ",") + scalar(sensor["R"]);
-  }
   const std::string domain = std::to_string(160 + ::getpid() % 60);
   const std::string config =
       "file://" + (fs::path(SENSORNET_SOURCE_DIR) / "config" / "cyclonedds-loopback.xml").string();
@@ -319,12 +313,10 @@ TEST_F(ExternalRoles, AFusionCenterWrittenInCCarriesTheRun) {
                            "--reference-fusion", "--require", "fusion-agreement<=1e-9",
                            "--domain-id", domain});
   RunningProgram launcher(argv, 120s);
-  RunningProgram external(
-      {SENSORNET_EXTERNAL_FUSION_CENTER_EXAMPLE, "--run-id", run_id_, "--domain-id", domain, "--a",
-       scalar(doc["plant"]["A"]), "--q", scalar(doc["plant"]["Q"]), "--p0",
-       scalar(doc["plant"]["P0"]), "--w", scalar(doc["cost"]["W"]), "--wt",
-       scalar(doc["cost"]["WT"]), "--h", h, "--r", r},
-      120s);
+  std::vector<std::string> example = {SENSORNET_EXTERNAL_FUSION_CENTER_EXAMPLE, "--run-id",
+                                      run_id_, "--domain-id", domain};
+  for (const std::string& a : testing::scalarModelArgs(scenario)) example.push_back(a);
+  RunningProgram external(example, 120s);
   const testing::ProcessResult& l = launcher.result();
   const testing::ProcessResult& x = external.result();
   EXPECT_EQ(l.exit_code, 0) << l.err;

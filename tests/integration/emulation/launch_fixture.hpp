@@ -25,6 +25,7 @@
 #include <string>
 #include <thread>
 #include <vector>
+#include <yaml-cpp/yaml.h>
 
 #include "emulation_fixture.hpp"
 #include "support/background_process.hpp"
@@ -142,6 +143,21 @@ inline void expectExternalSensorTookItsRole(const nlohmann::json& report, int ep
       << "sent " << sent << ", expected " << expected;
   EXPECT_NE(printed.find("sent " + std::to_string(sent) + " measurements"), std::string::npos)
       << printed;
+}
+
+// The model flags of examples/c/external_fusion_center (a scalar plant) read from a scalar
+// scenario file: --a --q --p0 --w --wt, and --h, --r with one value per sensor.
+inline std::vector<std::string> scalarModelArgs(const std::filesystem::path& scenario) {
+  const YAML::Node doc = YAML::LoadFile(scenario.string());
+  const auto scalar = [](const YAML::Node& matrix) { return matrix[0][0].as<std::string>(); };
+  std::string h, r;
+  for (const YAML::Node& sensor : doc["sensors"]) {
+    h += (h.empty() ? "" : ",") + scalar(sensor["H"]);
+    r += (r.empty() ? "" : ",") + scalar(sensor["R"]);
+  }
+  return {"--a", scalar(doc["plant"]["A"]), "--q", scalar(doc["plant"]["Q"]), "--p0",
+          scalar(doc["plant"]["P0"]), "--w", scalar(doc["cost"]["W"]), "--wt",
+          scalar(doc["cost"]["WT"]), "--h", h, "--r", r};
 }
 
 }  // namespace sensornet::testing
