@@ -296,23 +296,7 @@ class FusionCenter {
  private:
   // Hands what the run announced to the core; the run's end on RUN_SHUTDOWN.
   std::optional<emulator::RunEnd> follow(std::int64_t now) {
-    const emulator::RunInputs::Update update = inputs_.poll();
-    if (update.scenario_arrived) {
-      const emulator::RunScenario& run = inputs_.run();
-      core_.onScenario({run.scenario, run.digest, run.seed}, now);
-    }
-    if (update.new_versions > 0) {
-      const auto& versions = inputs_.book().versions();
-      core_.onScheduleVersions({versions.end() - static_cast<std::ptrdiff_t>(update.new_versions),
-                                versions.end()},
-                               now);
-    }
-    for (const emulator::EpisodeStart& start : update.starts) core_.onEpisodeStart(start, now);
-    for (const emulator::SensorFailure& failure : update.failures) {
-      core_.onSensorFailure(failure, now);
-    }
-    if (update.shutdown) return update.end;
-    return std::nullopt;
+    return emulator::feedInputs(core_, inputs_.state(), inputs_.poll(), now);
   }
 
   // In Cyclone's receive thread, as measurements are delivered: takes them, stamps their arrival

@@ -71,4 +71,21 @@ std::optional<std::string> refusalByRight(const sensornet_CommandReply& r, const
   return std::string(reason.substr(kNotPermitted.size()));
 }
 
+std::optional<RunEnd> feedInputs(FusionCenterCore& core, const RunInputState& inputs,
+                                 const RunInputState::Update& update, std::int64_t now) {
+  if (update.scenario_arrived) {
+    const RunScenario& run = inputs.run();
+    core.onScenario({run.scenario, run.digest, run.seed}, now);
+  }
+  if (update.new_versions > 0) {
+    const auto& versions = inputs.book().versions();
+    core.onScheduleVersions(
+        {versions.end() - static_cast<std::ptrdiff_t>(update.new_versions), versions.end()}, now);
+  }
+  for (const EpisodeStart& start : update.starts) core.onEpisodeStart(start, now);
+  for (const SensorFailure& failure : update.failures) core.onSensorFailure(failure, now);
+  if (update.shutdown) return update.end;
+  return std::nullopt;
+}
+
 }  // namespace sensornet::emulator

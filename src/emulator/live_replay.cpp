@@ -18,6 +18,7 @@
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/sample_fields.hpp"
 #include "sensornet/dds/topics.hpp"
+#include "sensornet/emulator/recording_replay.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -51,13 +52,6 @@ const std::map<std::string, TopicEntry>& replayedTopics() {
   return topics;
 }
 
-std::string runIdOf(const McapReader& file, const std::string& source) {
-  for (const auto& [name, values] : file.metadata()) {
-    if (name == "run" && values.contains("run_id")) return values.at("run_id");
-  }
-  throw InputError(source, "metadata run.run_id", "a recording of sensornet launch --record");
-}
-
 // The run id field of every type is a char* named run_id.
 void renameRun(const dds::SampleType& type, void* sample, const std::string& run_id) {
   for (const dds::SampleField& f : type.fields) {
@@ -75,7 +69,7 @@ void renameRun(const dds::SampleType& type, void* sample, const std::string& run
 
 LiveReplayResult replayLive(const McapReader& file, const std::string& source,
                             const RunOptions& new_run, double time_scale, double ready_timeout_s) {
-  const std::string old_run = "sensornet/" + runIdOf(file, source);
+  const std::string old_run = "sensornet/" + recordedRunId(file, source);
   const std::string new_partition = "sensornet/" + new_run.run_id;
   dds::Domain domain(new_run.domainConfig());
   dds::Participant participant(domain);
@@ -154,10 +148,8 @@ LiveReplayResult replayLive(const McapReader& file, const std::string& source,
     if (w == writers.end()) continue;
     const std::string& topic = file.channels().at(m.channel_id).topic;
     const dds::SampleType& type = *dds::sampleTypeOfTopic(topic);
-    std::vector<std::max_align_t> storage((type.size + sizeof(std::max_align_t) - 1) /
-                                          sizeof(std::max_align_t));
-    void* sample = storage.data();
-    dds::decodeCdr(type, m.data, sample, source + ", message " + std::to_string(i));
+    dds::DecodedSample decoded(type, m.data, source + ", message " + std::to_string(i));
+    void* sample = decoded.data();
     renameRun(type, sample, new_run.run_id);
     if (topic == "sensornet/EpisodeControl") {
       auto* c = static_cast<sensornet_EpisodeControl*>(sample);
@@ -195,7 +187,6 @@ LiveReplayResult replayLive(const McapReader& file, const std::string& source,
     }
     dds_return_t rc = DDS_RETCODE_TIMEOUT;
     while (rc == DDS_RETCODE_TIMEOUT) rc = dds_write(w->second, sample);
-    dds::freeSampleContents(type, sample);
     if (rc != DDS_RETCODE_OK) {
       throw std::runtime_error("cannot write " + topic + ": " + dds_strretcode(rc));
     }

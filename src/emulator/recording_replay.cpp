@@ -51,26 +51,6 @@ class RecordedWriters final : public WriterFacts {
   std::uint32_t measurement_writers_ = 0;
 };
 
-// A decoded sample of any topic type, freed with its contents.
-class Decoded {
- public:
-  Decoded(const dds::SampleType& type, std::span<const std::byte> bytes, const std::string& source)
-      : type_(type), storage_((type.size + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t)) {
-    dds::decodeCdr(type, bytes, storage_.data(), source);
-  }
-  ~Decoded() { dds::freeSampleContents(type_, storage_.data()); }
-  Decoded(const Decoded&) = delete;
-  Decoded& operator=(const Decoded&) = delete;
-  template <class T>
-  [[nodiscard]] const T& as() const {
-    return *reinterpret_cast<const T*>(storage_.data());
-  }
-
- private:
-  const dds::SampleType& type_;
-  std::vector<std::max_align_t> storage_;  // zeroed: what decodeCdr expects
-};
-
 std::string utcNow() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm utc{};
@@ -80,7 +60,9 @@ std::string utcNow() {
   return text;
 }
 
-std::string runIdOf(const McapReader& file, const std::string& source) {
+}  // namespace
+
+std::string recordedRunId(const McapReader& file, const std::string& source) {
   for (const auto& [name, values] : file.metadata()) {
     if (name == "run" && values.contains("run_id")) return values.at("run_id");
   }
@@ -88,12 +70,10 @@ std::string runIdOf(const McapReader& file, const std::string& source) {
                    "a recording of sensornet launch --record (its run metadata names the run)");
 }
 
-}  // namespace
-
 ReplayResult replayRecording(const McapReader& file, const std::string& source,
                              const std::filesystem::path& report_path) {
   ReplayResult result;
-  result.run_id = runIdOf(file, source);
+  result.run_id = recordedRunId(file, source);
   const std::string run = "sensornet/" + result.run_id;
 
   RecordedWriters writers(run);
@@ -143,18 +123,7 @@ ReplayResult replayRecording(const McapReader& file, const std::string& source,
   };
   const auto follow = [&](RunInputState::Update& update, std::int64_t now) {
     inputs.releaseStarts(update);
-    if (update.scenario_arrived) {
-      const RunScenario& r = inputs.run();
-      core.onScenario({r.scenario, r.digest, r.seed}, now);
-    }
-    if (update.new_versions > 0) {
-      const auto& versions = inputs.book().versions();
-      core.onScheduleVersions(
-          {versions.end() - static_cast<std::ptrdiff_t>(update.new_versions), versions.end()}, now);
-    }
-    for (const EpisodeStart& start : update.starts) core.onEpisodeStart(start, now);
-    for (const SensorFailure& failure : update.failures) core.onSensorFailure(failure, now);
-    if (update.shutdown) end = update.end;
+    if (auto run_end = feedInputs(core, inputs, update, now)) end = std::move(run_end);
   };
 
   std::vector<std::size_t> held_schedules;  // schedules before the scenario, by message index
@@ -163,7 +132,7 @@ ReplayResult replayRecording(const McapReader& file, const std::string& source,
     const auto type = types.find(m.channel_id);
     if (type == types.end()) return;
     const std::string where = source + ", message " + std::to_string(index);
-    const Decoded sample(*type->second, m.data, where);
+    const dds::DecodedSample sample(*type->second, m.data, where);
     const WriterId writer = m.channel_id + 1U;
     const std::string topic = type->second->topic;
     RunInputState::Update update;

@@ -38,78 +38,72 @@ RunInputs::Update RunInputs::poll() {
 }
 
 void RunInputState::onScenario(const sensornet_Scenario& sample, Update& update) {
-  {
-    if (run_) return;  // one scenario per run
-    try {
-      run_ = scenarioFromWire(sample);
-      plant_.emplace(run_->scenario, run_->seed);
-      update.scenario_arrived = true;
-      spdlog::info("scenario {} received: n = {}, M = {}, T = {} s", run_->digest,
-                   run_->scenario.stateDim(), run_->scenario.sensorCount(),
-                   run_->scenario.horizon_s);
-    } catch (const InputError& error) {
-      reject("malformed_scenario");
-      run_.reset();
-      spdlog::warn("rejected a scenario sample: {}", error.what());
-    }
+  if (run_) return;  // one scenario per run
+  try {
+    run_ = scenarioFromWire(sample);
+    plant_.emplace(run_->scenario, run_->seed);
+    update.scenario_arrived = true;
+    spdlog::info("scenario {} received: n = {}, M = {}, T = {} s", run_->digest,
+                 run_->scenario.stateDim(), run_->scenario.sensorCount(),
+                 run_->scenario.horizon_s);
+  } catch (const InputError& error) {
+    reject("malformed_scenario");
+    run_.reset();
+    spdlog::warn("rejected a scenario sample: {}", error.what());
   }
 }
 
 void RunInputState::onSchedule(const sensornet_Schedule& sample, Update& update) {
   if (!run_) return;  // the caller holds it until the scenario is known
-  {
-    try {
-      ScheduleVersion v = scheduleFromWire(sample, run_->scenario, run_->digest);
-      const auto number = v.version;
-      const ScheduleBook::Outcome outcome = book_.add(std::move(v));
-      if (outcome == ScheduleBook::Outcome::Duplicate) return;  // a restarted coordinator's
-      if (outcome == ScheduleBook::Outcome::Stale) {
-        reject("stale_schedule");
-        spdlog::warn("refused stale schedule version {} (have {})", number,
-                     book_.latest().version);
-        return;
-      }
-      ++update.new_versions;
-      spdlog::info("schedule version {} ({}) from episode {} at {} s", number,
-                   book_.latest().surrogate, book_.latest().effective_episode,
-                   book_.latest().effective_time_s);
-    } catch (const InputError& error) {
-      reject("malformed_schedule");
-      spdlog::warn("rejected a schedule sample: {}", error.what());
+  try {
+    ScheduleVersion v = scheduleFromWire(sample, run_->scenario, run_->digest);
+    const auto number = v.version;
+    const ScheduleBook::Outcome outcome = book_.add(std::move(v));
+    if (outcome == ScheduleBook::Outcome::Duplicate) return;  // a restarted coordinator's
+    if (outcome == ScheduleBook::Outcome::Stale) {
+      reject("stale_schedule");
+      spdlog::warn("refused stale schedule version {} (have {})", number,
+                   book_.latest().version);
+      return;
     }
+    ++update.new_versions;
+    spdlog::info("schedule version {} ({}) from episode {} at {} s", number,
+                 book_.latest().surrogate, book_.latest().effective_episode,
+                 book_.latest().effective_time_s);
+  } catch (const InputError& error) {
+    reject("malformed_schedule");
+    spdlog::warn("rejected a schedule sample: {}", error.what());
   }
 }
 
 void RunInputState::onControl(const sensornet_EpisodeControl& c, Update& update) {
-  {
-    switch (c.command) {
-      case sensornet_RUN_SHUTDOWN:
-        update.shutdown = true;
-        update.end = {c.episodes_planned, c.aborted, std::string(dds::viewString(c.detail))};
-        break;
-      case sensornet_EPISODE_STOP:
-        update.stops.push_back(c.episode);
-        break;
-      case sensornet_EPISODE_START: {
-        std::set<int> failed;
-        for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
-          failed.insert(static_cast<int>(id));
-        }
-        held_starts_.push_back(
-            {{c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned, failed},
-             c.seed,
-             c.schedule_version});
-        break;
+  switch (c.command) {
+    case sensornet_RUN_SHUTDOWN:
+      update.shutdown = true;
+      update.end = {c.episodes_planned, c.aborted, std::string(dds::viewString(c.detail))};
+      break;
+    case sensornet_EPISODE_STOP:
+      update.stops.push_back(c.episode);
+      break;
+    case sensornet_EPISODE_START: {
+      std::set<int> failed;
+      for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
+        failed.insert(static_cast<int>(id));
       }
-      case sensornet_EPISODE_SENSORS_FAILED: {
-        SensorFailure failure{c.episode, c.failed_at_s, {}, std::string(dds::viewString(c.detail))};
-        for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
-          failure.sensors.insert(static_cast<int>(id));
-          failed_sensors_.insert(static_cast<int>(id));
-        }
-        update.failures.push_back(std::move(failure));
-        break;
+      held_starts_.push_back(
+          {{c.episode, {c.start_wall_time_ns, c.time_scale}, c.episodes_planned, failed},
+           c.seed,
+           c.schedule_version});
+      break;
+    }
+    case sensornet_EPISODE_SENSORS_FAILED: {
+      SensorFailure failure{c.episode, c.failed_at_s, {}, std::string(dds::viewString(c.detail))};
+      for (const std::uint32_t id : dds::viewSequence(c.failed_sensors)) {
+        failure.sensors.insert(static_cast<int>(id));
+        failed_sensors_.insert(static_cast<int>(id));
       }
+      update.failures.push_back(std::move(failure));
+      break;
     }
   }
 }

@@ -214,9 +214,7 @@ void McapWriter::write(std::uint16_t channel_id, std::uint64_t log_time_ns,
   Out m;
   m.u16(channel_id).u32(sequences_[channel_id]++).u64(log_time_ns).u64(publish_time_ns).raw(data);
   const auto rec = record(kMessage, m);
-  if (chunk_index_.empty() && chunk_start_ns_ == 0 && chunk_end_ns_ == 0) {
-    chunk_start_ns_ = chunk_end_ns_ = log_time_ns;
-  }
+  if (chunk_index_.empty()) chunk_start_ns_ = chunk_end_ns_ = log_time_ns;  // its first message
   chunk_index_[channel_id].emplace_back(log_time_ns, chunk_.size());
   chunk_.insert(chunk_.end(), rec.begin(), rec.end());
   chunk_start_ns_ = std::min(chunk_start_ns_, log_time_ns);

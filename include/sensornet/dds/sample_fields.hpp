@@ -11,6 +11,7 @@
 //   freeSampleContents(type, &m);
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <string_view>
@@ -58,5 +59,30 @@ void decodeCdr(const SampleType& type, std::span<const std::byte> bytes, void* s
                const std::string& source);
 // Frees what decodeCdr allocated in `sample` (and zeroes those fields).
 void freeSampleContents(const SampleType& type, void* sample);
+
+// A decoded sample of any topic type, in storage of its own, freed with its contents.
+class DecodedSample {
+ public:
+  DecodedSample(const SampleType& type, std::span<const std::byte> bytes, const std::string& source)
+      : type_(type), storage_((type.size + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t)) {
+    decodeCdr(type, bytes, storage_.data(), source);
+  }
+  ~DecodedSample() { freeSampleContents(type_, storage_.data()); }
+  DecodedSample(const DecodedSample&) = delete;
+  DecodedSample& operator=(const DecodedSample&) = delete;
+  [[nodiscard]] void* data() { return storage_.data(); }
+  template <class T>
+  [[nodiscard]] T& as() {
+    return *reinterpret_cast<T*>(storage_.data());
+  }
+  template <class T>
+  [[nodiscard]] const T& as() const {
+    return *reinterpret_cast<const T*>(storage_.data());
+  }
+
+ private:
+  const SampleType& type_;
+  std::vector<std::max_align_t> storage_;  // zeroed, as decodeCdr expects
+};
 
 }  // namespace sensornet::dds

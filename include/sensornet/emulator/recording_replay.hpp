@@ -40,6 +40,9 @@ struct ReplayResult {
   std::uint64_t samples_read = 0;    // every message of the file
 };
 
+// The run id a recording's `run` metadata names; InputError naming the file when it has none.
+[[nodiscard]] std::string recordedRunId(const McapReader& file, const std::string& source);
+
 [[nodiscard]] ReplayResult replayRecording(const McapReader& file, const std::string& source,
                                            const std::filesystem::path& report_path);
 

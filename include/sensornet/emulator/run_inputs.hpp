@@ -90,6 +90,7 @@ class RunInputs {
   // Takes what arrived on the three topics.
   [[nodiscard]] Update poll();
 
+  [[nodiscard]] const RunInputState& state() const { return state_; }
   [[nodiscard]] bool hasScenario() const { return state_.hasScenario(); }
   [[nodiscard]] const RunScenario& run() const { return state_.run(); }
   [[nodiscard]] const Scenario& scenario() const { return state_.scenario(); }
