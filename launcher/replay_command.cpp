@@ -203,8 +203,10 @@ Subcommand addReplayCommand(CLI::App& app) {
       "decisions; prints per episode the replayed realized cost beside the recorded run's and "
       "writes the replay's report (default RUN.replay.json). Exit 0 when every episode equals "
       "the recording to the bit, 1 when one does not, 2 on a bad file. With --info: what the "
-      "recording holds, like `mcap info`. Examples:\n  sensornet replay run.mcap\n  sensornet "
-      "replay run.mcap --info");
+      "recording holds, like `mcap info`. With --live --run-id NEW: republish it into a new run "
+      "at the recorded pace, for that run's fusion center (ours or yours). Examples:\n  "
+      "sensornet replay run.mcap\n  sensornet replay run.mcap --info\n  sensornet replay "
+      "run.mcap --live --run-id again --time-scale 2");
   cmd->add_option("RECORDING", options->path, "an MCAP file of sensornet launch --record")
       ->required();
   cmd->add_flag("--info", options->info, "print what the recording holds");
