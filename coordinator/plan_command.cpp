@@ -138,6 +138,7 @@ int runPlan(const PlanOptions& options) {
                           {"delivered_bracket", toJson(delivered)},
                           {"network_aware", options.network_aware},
                           {"iterations", plan.iterations},
+                          {"substeps", plan.substeps},
                           {"solve_seconds", plan.solve_seconds},
                           {"status", plan.status},
                           {"out", options.out_path}};
@@ -162,9 +163,11 @@ int runPlan(const PlanOptions& options) {
                  plan.objective, plan.objective_half_width, plan.status.c_str(), plan.iterations,
                  plan.episodes, plan.solve_seconds);
   } else {
-    std::fprintf(summary, "surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s\n",
+    std::fprintf(summary,
+                 "surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s, %d RK4 "
+                 "steps per interval\n",
                  surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
-                 plan.solve_seconds);
+                 plan.solve_seconds, plan.substeps);
   }
   std::fprintf(summary, "bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n",
                plan.bracket.info, plan.bracket.cov);
@@ -228,7 +231,8 @@ Subcommand addPlanCommand(CLI::App& app) {
   cmd->add_flag("--json", options->json,
                 "print {\"surrogate\", \"objective\", \"bracket\", \"delivered_bracket\" "
                 "(of what the network delivers in episode 0), \"network_aware\", \"iterations\", "
-                "\"solve_seconds\", \"status\"} as one JSON line");
+                "\"substeps\" (RK4 steps per interval of the planner's transcription), "
+                "\"solve_seconds\", \"status\", \"kkt_residual\"} as one JSON line");
   return {cmd, [options, max_seconds] {
             options->max_seconds_given = max_seconds->count() > 0;
             return runPlan(*options);

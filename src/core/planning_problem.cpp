@@ -1,6 +1,5 @@
 #include "planning_problem.hpp"
 
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -8,48 +7,10 @@
 namespace sensornet::planning {
 namespace {
 
-// An upper bound on the total rate Σ_j λ_j that the polytope allows the sensors in service:
-// b_i / min_j C_ij of a row that weighs every one of them (the budget), else Σ_j λ̄_j.
-double totalRateBound(const RatePolytope& polytope) {
-  const Eigen::MatrixXd& C = polytope.constraints().C;
-  const Eigen::VectorXd& b = polytope.constraints().b;
-  const Eigen::VectorXd max_rates = polytope.maxRates();
-  double bound = std::numeric_limits<double>::infinity();
-  double sum = 0.0;
-  for (Eigen::Index i = 0; i < C.rows(); ++i) {
-    double smallest = std::numeric_limits<double>::infinity();
-    for (Eigen::Index j = 0; j < C.cols(); ++j) {
-      if (!polytope.isExcluded(static_cast<int>(j))) smallest = std::min(smallest, C(i, j));
-    }
-    if (smallest > 0.0) bound = std::min(bound, b(i) / smallest);
-  }
-  if (std::isfinite(bound)) return bound;
-  for (Eigen::Index j = 0; j < C.cols(); ++j) {
-    if (!polytope.isExcluded(static_cast<int>(j)) && std::isfinite(max_rates(j))) sum += max_rates(j);
-  }
-  return sum;
-}
-
-// RK4 steps per interval: the request's, or more where the surrogate's flow is stiff for the
-// interval length. Its linearization has eigenvalues of size at most 2 ||A|| (the Lyapunov part)
-// plus the total rate (each measurement term's derivative is at most λ_j in norm), and classical
-// RK4 is stable on the negative real axis for h |μ| < 2.78, so a step keeps h (2 ||A|| + Σ λ)
-// <= 2. Coarse intervals with high rates (T = 2 in 4 intervals, budget 12) otherwise overflow.
-int substepsFor(const Scenario& scenario, const PlanRequest& request,
-                const RatePolytope& polytope) {
-  const double interval = scenario.horizon_s / scenario.intervals;
-  const double norm_a = Eigen::JacobiSVD<Eigen::MatrixXd>(scenario.plant.A).singularValues()(0);
-  const double stiffness = 2.0 * norm_a +
-                           totalRateBound(polytope);
-  const double needed = std::ceil(interval * stiffness / 2.0);
-  if (!std::isfinite(needed)) return request.substeps;
-  return std::max(request.substeps, static_cast<int>(std::min(needed, 1000.0)));
-}
-
-TranscriptionOptions transcriptionOptions(const Scenario& scenario, const PlanRequest& request,
-                                          const RatePolytope& polytope) {
+// The request's RK4 steps per interval as given: planSchedule chooses them (planner.cpp).
+TranscriptionOptions transcriptionOptions(const PlanRequest& request) {
   TranscriptionOptions options;
-  options.substeps = substepsFor(scenario, request, polytope);
+  options.substeps = request.substeps;
   options.start_time = request.start_time;
   options.start_covariance = request.start_covariance;
   options.delivery = request.delivery;
@@ -61,7 +22,7 @@ TranscriptionOptions transcriptionOptions(const Scenario& scenario, const PlanRe
 PlanningProblem::PlanningProblem(const Scenario& scenario, const PlanRequest& request,
                                  SurrogateForm form)
     : polytope_(scenario.constraints, request.excluded_sensors),
-      transcription_(form, scenario, transcriptionOptions(scenario, request, polytope_)),
+      transcription_(form, scenario, transcriptionOptions(request)),
       first_interval_(transcription_.firstInterval()),
       rate_unit_(1.0),
       rates_(Eigen::MatrixXd::Zero(scenario.intervals, scenario.sensorCount())) {

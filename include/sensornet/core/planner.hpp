@@ -20,9 +20,11 @@
 //   const PlanResult replanned = planSchedule(scenario, request);
 //
 // Method (bench/README.md has the measurements behind the choices): single shooting over the
-// rates only; the surrogate is integrated by a fixed number of RK4 steps per interval with the
-// exact discrete adjoint gradient (surrogate_transcription.hpp). The default optimizer is a
-// projected quasi-Newton method (L-BFGS on the binding face, spectral projected gradient as the
+// rates only; the surrogate is integrated by RK4 steps per interval with the exact discrete
+// adjoint gradient (surrogate_transcription.hpp), as many steps as make the transcription's cost
+// agree with the accurate rollout's within 1e-2 relative at the start point and at the solution
+// (doubled from PlanRequest::substeps, at most 256; PlanResult::substeps says how many). The
+// default optimizer is a projected quasi-Newton method (L-BFGS on the binding face, spectral projected gradient as the
 // fallback) whose iterates are all feasible; IPOPT with a limited-memory Hessian is the
 // alternative (PlanMethod::Ipopt). The returned schedule is projected onto the admissible set
 // (rate_polytope.hpp), so it is feasible to rounding, and then scored with the ACCURATE
@@ -110,8 +112,9 @@ struct PlanRequest {
   double tolerance = 1e-6;
   int max_iterations = 500;
   double max_seconds = 120.0;  // wall time of the solve (mc: of the whole plan)
-  // RK4 steps per interval of the transcription, at least (bench/README.md: 2 suffice on the
-  // paper's family); more where the rates and A make the flow stiff for the interval length.
+  // RK4 steps per interval of the transcription to start from (2 suffice on the paper's
+  // family); the planner doubles them until its cost agrees with the accurate rollout's within
+  // 1e-2 relative at the start point and at the solution, up to 256 (bench/CONVERGENCE.md).
   int substeps = 2;
   PlanMethod method = PlanMethod::ProjectedGradient;
   // Optional; called after every solver iteration from the calling thread. Returning false
@@ -133,6 +136,10 @@ struct PlanResult {
   long long episodes = 0;             // MonteCarlo only: episodes simulated in all stages
   CostBracket bracket;                  // info and cov of `schedule` over [start_time, T]
   double discretized_objective = 0.0;   // the same cost under the planner's RK4 transcription
+  // RK4 steps per interval of that transcription (PlanRequest::substeps, doubled as needed). If
+  // it is 256, discretized_objective may still differ from objective by more than 1e-2.
+  // MonteCarlo: 0 (no transcription is solved).
+  int substeps = 0;
   int iterations = 0;
   int evaluations = 0;  // cost-and-gradient evaluations of the transcription
   double solve_seconds = 0.0;
@@ -156,7 +163,8 @@ struct PlanResult {
 [[nodiscard]] PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request);
 
 // The first-order measure of PlanResult::kkt_residual for any schedule, computed with the
-// discretized gradient of `form` (exposed for tests and diagnostics).
+// discretized gradient of `form` at request.substeps RK4 steps per interval, as given (pass a
+// plan's PlanResult::substeps to reproduce its kkt_residual). Exposed for tests and diagnostics.
 [[nodiscard]] double kktResidual(const Scenario& scenario, const RateSchedule& schedule,
                                  SurrogateForm form, const PlanRequest& request);
 
