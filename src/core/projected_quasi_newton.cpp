@@ -112,28 +112,43 @@ class BindingFace {
     return out;
   }
 
-  // Moves the free rates of `direction` so that it keeps the binding rows binding when its
-  // held rates move too: the rate a held sensor gives up goes to the free ones (the least
-  // change in the span of the rows' normals), as the multipliers in the reduced gradient
-  // assume. Without it, sending rates to zero under a tight budget only leaves budget unused.
-  // Only where one row binds (the paper's budget): with two binding rows (scenarios/default.yaml,
-  // bandwidth and a shared link) it made the info plan stall at residual 4e-6 after 500
-  // iterations, for a reason not yet understood; without it there, 98 iterations.
-  void keepRowsBinding(MatrixXd& direction) const {
+  // Moves the free rates of `direction` so that x + direction lies on every binding row,
+  // C_i (x + d) = b_i, by the least change in the span of the rows' normals. Two things need it.
+  // The rate a held sensor gives up goes to the free ones, as the multipliers in the reduced
+  // gradient assume (without it, sending rates to zero under a tight budget only leaves budget
+  // unused); what it gives up is its rate, not the push -max(x, σ r): a push of a rate already
+  // at zero is clipped by the projection and frees nothing. (Counting the push instead put the
+  // step outside the rows wherever a zero rate was pushed, the projection bent it into ascent,
+  // and the default scenario's plans, whose intervals have two binding rows, stalled: the reason
+  // this was once done for a single binding row only.) And a row counts as binding while its
+  // slack is within ε, which shrinks with the KKT residual: a tangent direction never used that
+  // slack while the residual's projected-gradient step does, so the residual stayed at the
+  // largest such slack over rateUnit, and ε with it. The default scenario's cov plan without
+  // sensor 1, warm-started from the plan with it, stopped there after 500 iterations (residual
+  // 1.3e-3: slacks up to 1.5e-2 held as binding under ε = 1.2e-2; bench/CONVERGENCE.md).
+  void moveOntoBindingRows(const MatrixXd& x, MatrixXd& direction) const {
     const MatrixXd& C = problem_.C();
     for (const Interval& interval : intervals_) {
-      if (interval.rows.size() != 1 || interval.basis.cols() == 0) continue;
-      Eigen::VectorXd load = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(interval.rows.size()));
+      if (interval.rows.empty() || interval.basis.cols() == 0) continue;
+      // What the free rates must add along each row: its slack, less what the other rates'
+      // changes add (the free part of d is tangent, N_F' d_F = 0).
+      Eigen::VectorXd missing(static_cast<Eigen::Index>(interval.rows.size()));
       for (std::size_t r = 0; r < interval.rows.size(); ++r) {
         const Eigen::Index row = interval.rows[r];
-        load(static_cast<Eigen::Index>(r)) =
-            C.row(row).dot(direction.row(interval.k)) -
-            compactRow(C.row(row), interval).dot(compactRow(direction.row(interval.k), interval));
+        double others = 0.0;
+        for (Eigen::Index j = 0; j < C.cols(); ++j) {
+          if (std::binary_search(interval.free.begin(), interval.free.end(), static_cast<int>(j))) {
+            continue;
+          }
+          others += C(row, j) * std::max(direction(interval.k, j), -x(interval.k, j));
+        }
+        const double slack = problem_.b()(row) - C.row(row).dot(x.row(interval.k));
+        missing(static_cast<Eigen::Index>(r)) = std::max(slack, 0.0) - others;
       }
-      if (load.isZero(0.0)) continue;
-      // Δ = Q1 z with N_F' Δ = -load (least squares when the rows are dependent).
+      if (missing.isZero(0.0)) continue;
+      // Δ = Q1 z with N_F' Δ = missing (least squares when the rows are dependent).
       const MatrixXd system = interval.normals.transpose() * interval.basis;
-      const Eigen::VectorXd z = system.colPivHouseholderQr().solve(-load);
+      const Eigen::VectorXd z = system.colPivHouseholderQr().solve(missing);
       const Eigen::VectorXd shift = interval.basis * z;
       for (std::size_t f = 0; f < interval.free.size(); ++f) {
         direction(interval.k, interval.free[f]) += shift(static_cast<Eigen::Index>(f));
@@ -172,15 +187,6 @@ class BindingFace {
     Eigen::Index offset = 0;  // of its free rates in a compact vector
     Eigen::ColPivHouseholderQR<MatrixXd> qr;
   };
-
-  template <typename Row>
-  static Eigen::VectorXd compactRow(const Row& row, const Interval& interval) {
-    Eigen::VectorXd out(static_cast<Eigen::Index>(interval.free.size()));
-    for (std::size_t f = 0; f < interval.free.size(); ++f) {
-      out(static_cast<Eigen::Index>(f)) = row(interval.free[f]);
-    }
-    return out;
-  }
 
   static Eigen::VectorXd gather(const MatrixXd& v, const Interval& interval) {
     Eigen::VectorXd out(static_cast<Eigen::Index>(interval.free.size()));
@@ -437,7 +443,7 @@ class ProjectedQuasiNewton {
     for (const BindingFace::Push& push : face.zeroPushes()) {
       direction(push.k, push.j) = -std::max(current_.x(push.k, push.j), sigma_ * push.reduced);
     }
-    face.keepRowsBinding(direction);
+    face.moveOntoBindingRows(current_.x, direction);
     return arcSearch(direction);
   }
 

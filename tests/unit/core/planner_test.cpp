@@ -7,6 +7,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 
 #include "sensornet/core/input_error.hpp"
@@ -237,7 +238,11 @@ TEST(Planner, ReturnsFeasibleFirstOrderOptimalSchedulesForBothSurrogates) {
                               surrogate == PlanSurrogate::Information
                                   ? SurrogateForm::Information
                                   : SurrogateForm::Covariance,
-                              request),
+                              [&] {
+                                PlanRequest at_plan = request;
+                                at_plan.substeps = plan.substeps;  // the plan's transcription
+                                return at_plan;
+                              }()),
                   plan.kkt_residual, 1e-12);
       const CostBracket uniform = computeBracket(s, uniformSchedule(s));
       const double planned = plan.objective;
@@ -257,10 +262,8 @@ TEST(Planner, ReturnsFeasibleFirstOrderOptimalSchedulesForBothSurrogates) {
 // step of the default two per interval (h = 0.25) times the stiffness (up to 2||A|| + 12) is far
 // outside RK4's stability interval and the covariance-form transcription overflowed at the
 // uniform start ("failed: no finite cost at the start point"). Both forms must converge to a
-// finite transcription cost near the accurate rollout's. Near, not to O(h^4): on intervals this
-// coarse the information form's transcription is 7% off (its -YQY term is stiff where Y grows
-// with the rates; the step rule bounds only what keeps the step stable), the covariance form's
-// 0.15%.
+// finite transcription cost that agrees with the accurate rollout's within the planner's 1e-2
+// (the information form needs 16 steps for it here, 22% off at 2).
 TEST(Planner, ConvergesOnCoarseIntervalsWithHighRates) {
   Scenario s;
   s.horizon_s = 2.0;
@@ -281,8 +284,124 @@ TEST(Planner, ConvergesOnCoarseIntervalsWithHighRates) {
     EXPECT_EQ(plan.status, "optimal") << describe(surrogate);
     expectFeasibleAndStationary(s, plan, 1e-6);
     ASSERT_TRUE(std::isfinite(plan.discretized_objective)) << describe(surrogate);
-    EXPECT_NEAR(plan.discretized_objective, plan.objective, 0.1 * plan.objective)
+    EXPECT_NEAR(plan.discretized_objective, plan.objective, 1e-2 * plan.objective)
         << describe(surrogate);
+  }
+}
+
+// scenarios/default.yaml (core tests read no files): 4 states, 6 sensors, two constraint rows
+// (the total bandwidth and a link the camera and the doppler share), a running weight.
+Scenario planarTargetScenario() {
+  Scenario s;
+  s.horizon_s = 3.0;
+  s.intervals = 30;
+  s.plant.A = (MatrixXd(4, 4) << 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -0.5, 0, 0, 0, 0, -0.5).finished();
+  s.plant.Q = VectorXd((VectorXd(4) << 0, 0, 1, 1).finished()).asDiagonal();
+  s.plant.P0 = VectorXd((VectorXd(4) << 100, 100, 10, 10).finished()).asDiagonal();
+  const auto row = [](std::initializer_list<double> h) {
+    MatrixXd m(1, 4);
+    int j = 0;
+    for (const double v : h) m(0, j++) = v;
+    return m;
+  };
+  const auto noise = [](double r) { return MatrixXd::Constant(1, 1, r); };
+  s.sensors.push_back({row({1, 0, 0, 0}), noise(1.0)});
+  s.sensors.push_back({row({0, 1, 0, 0}), noise(1.0)});
+  s.sensors.push_back({(MatrixXd(2, 4) << 1, 0, 0, 0, 0, 1, 0, 0).finished(),
+                       (MatrixXd(2, 2) << 4.0, 1.0, 1.0, 4.0).finished()});
+  s.sensors.push_back({(MatrixXd(2, 4) << 0, 0, 1, 0, 0, 0, 0, 1).finished(),
+                       0.5 * MatrixXd::Identity(2, 2)});
+  s.sensors.push_back({row({0.7071, 0.7071, 0, 0}), noise(2.0)});
+  s.sensors.push_back({row({1, 0, 0, 0}), noise(10.0)});
+  s.cost.W = VectorXd((VectorXd(4) << 1, 1, 0, 0).finished()).asDiagonal();
+  s.cost.WT = MatrixXd::Identity(4, 4);
+  s.constraints.C = (MatrixXd(2, 6) << 1, 1, 1, 1, 1, 1, 0, 0, 2, 1, 0, 0).finished();
+  s.constraints.b = (VectorXd(2) << 12.0, 6.0).finished();
+  return s;
+}
+
+// The relative gap between a transcription's cost of `rates` and the accurate rollout's.
+double transcriptionGap(const Scenario& s, SurrogateForm form, int substeps,
+                        const RateSchedule& schedule) {
+  TranscriptionOptions options;
+  options.substeps = substeps;
+  SurrogateTranscription transcription(form, s, options);
+  const double accurate = rollout(form, s, schedule).cost;
+  return std::abs(transcription.cost(schedule.rates()) - accurate) / std::abs(accurate);
+}
+
+// The planner takes as many RK4 steps per interval as make its transcription agree with the
+// accurate rollout within 1e-2 at the start point and at the solution, and no more than twice
+// as many as needed (it doubles from 2). A 2-state cov plan at a 400 Hz budget (P0 = 0.1 I, the
+// scenario of tests/integration/emulation/network_test.cpp) has no finite cost at 2 steps from
+// the uniform start; the default scenario's info plan is 25% off at 2 steps (<W, Y^-1> falls
+// from 100 within the first interval), agrees at the uniform start at 8 steps but not at its
+// solution, so it is re-solved at 16.
+TEST(Planner, DoublesTheRk4StepsUntilTheTranscriptionAgreesWithTheAccurateRollout) {
+  Scenario tight;
+  tight.horizon_s = 1.0;
+  tight.intervals = 10;
+  tight.plant.A = (MatrixXd(2, 2) << -0.5, 1.0, 0.0, -0.2).finished();
+  tight.plant.Q = 0.5 * MatrixXd::Identity(2, 2);
+  tight.plant.P0 = 0.1 * MatrixXd::Identity(2, 2);
+  tight.sensors.push_back({(MatrixXd(1, 2) << 1, 0).finished(), MatrixXd::Constant(1, 1, 0.5)});
+  tight.sensors.push_back({(MatrixXd(1, 2) << 0, 1).finished(), MatrixXd::Constant(1, 1, 0.5)});
+  tight.sensors.push_back({(MatrixXd(1, 2) << 1, 1).finished(), MatrixXd::Constant(1, 1, 1.0)});
+  tight.cost.W = MatrixXd::Identity(2, 2);
+  tight.cost.WT = MatrixXd::Identity(2, 2);
+  tight.constraints.C = MatrixXd::Ones(1, 3);
+  tight.constraints.b = VectorXd::Constant(1, 400.0);
+  {
+    TranscriptionOptions two;
+    two.substeps = 2;
+    SurrogateTranscription coarse(SurrogateForm::Covariance, tight, two);
+    ASSERT_FALSE(std::isfinite(coarse.cost(uniformSchedule(tight).rates())));
+  }
+  const Scenario planar = planarTargetScenario();
+  struct Case {
+    const Scenario* scenario;
+    PlanSurrogate surrogate;
+  };
+  for (const Case c :
+       {Case{&tight, PlanSurrogate::Covariance}, Case{&planar, PlanSurrogate::Information}}) {
+    PlanRequest request;
+    request.surrogate = c.surrogate;
+    const PlanResult plan = planSchedule(*c.scenario, request);
+    const SurrogateForm form = formOf(c.surrogate);
+    expectFeasibleAndStationary(*c.scenario, plan, 1e-6);
+    EXPECT_NEAR(plan.discretized_objective, plan.objective, 1e-2 * plan.objective);
+    ASSERT_GT(plan.substeps, 2) << describe(c.surrogate);
+    // Half as many steps disagree at the uniform start or at the returned plan.
+    const int half = plan.substeps / 2;
+    const double half_gap =
+        std::max(transcriptionGap(*c.scenario, form, half, uniformSchedule(*c.scenario)),
+                 transcriptionGap(*c.scenario, form, half, plan.schedule));
+    EXPECT_TRUE(!(half_gap <= 1e-2)) << describe(c.surrogate) << ": " << half_gap;
+    EXPECT_LE(transcriptionGap(*c.scenario, form, plan.substeps, plan.schedule), 1e-2);
+  }
+}
+
+// Taking a sensor out of service and re-planning from the schedule in force (the full plan,
+// projected: the sensor's rates go to 0 and leave slack in the rows) converges, to the optimum
+// that the default start reaches. With the direction tangent to the binding face, rows with a
+// slack inside the active width ε stayed slack; the residual's unit step would fill them, so
+// the residual stayed at the largest slack and ε with it: 500 iterations, residual 1.3e-3, for
+// the cov plan warm-started from the cov plan (bench/CONVERGENCE.md).
+TEST(Planner, ConvergesFromTheScheduleInForceWhenASensorIsTakenOut) {
+  const Scenario s = planarTargetScenario();
+  for (const auto surrogate : {PlanSurrogate::Covariance, PlanSurrogate::Information}) {
+    PlanRequest request;
+    request.surrogate = surrogate;
+    const PlanResult in_force = planSchedule(s, request);
+    request.excluded_sensors = {1};
+    const PlanResult fresh = planSchedule(s, request);
+    request.warm_start = in_force.schedule;
+    const PlanResult warm = planSchedule(s, request);
+    expectFeasibleAndStationary(s, fresh, 1e-6);
+    expectFeasibleAndStationary(s, warm, 1e-6);
+    EXPECT_TRUE(warm.schedule.rates().col(1).isZero(0.0));
+    // Both stationary to 1e-6 in rate units: the costs agree far below this (about 1e-7 here).
+    EXPECT_NEAR(warm.objective, fresh.objective, 1e-5 * fresh.objective) << describe(surrogate);
   }
 }
 
