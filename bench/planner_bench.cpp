@@ -14,19 +14,38 @@
 //   planner_bench --scale [--instances 3] [--max-seconds 60] [--only pqn|ipopt] [--n N] [--m M]
 //                         [--each] [--markdown]
 // --each adds one line per instance (J/trP0 to 10 digits, residual, iterations, time).
+//
+// Convergence mode (issue 29, "every plan converges, or says what it has"): every info and cov
+// plan of the Fig. 1 instances (sensor sweep and state sweep, --instances per point, default 1)
+// and of the scenario files given (run from the repository root: scenarios/*.yaml by default),
+// from the default start and from --random-starts random feasible starts, with the planner's
+// defaults (500 iterations, tolerance 1e-6); for the scenario files also without sensor 1,
+// warm-started from their full info and cov plans (the live re-planning after a sensor fault).
+// A plan passes when kkt_residual <= tolerance, or when it ends with another status and its
+// accurate surrogate cost is no worse than its start's.
+//   planner_bench --convergence [--instances 1] [--random-starts 2] [--max-iterations 500]
+//                               [--scenarios a.yaml,b.yaml] [--each] [--markdown]
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
+#include <map>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "sensornet/core/monte_carlo.hpp"
 #include "sensornet/core/planner.hpp"
+#include "sensornet/core/random.hpp"
+#include "sensornet/core/rate_polytope.hpp"
 #include "sensornet/core/scenario.hpp"
+#include "sensornet/core/surrogate.hpp"
 #include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/io/scenario_file.hpp"
 
 namespace {
 
@@ -58,7 +77,11 @@ struct Options {
   double max_seconds = 60.0;  // per solve, scale mode
   std::string only_method;    // scale mode: "pqn" or "ipopt" alone (empty: both)
   int only_m = 0;             // scale mode: just the rows with this M (0: all)
-  bool each = false;          // scale mode: also one line per instance (J to 10 digits)
+  bool each = false;          // scale and convergence modes: also one line per plan
+  bool convergence = false;
+  int random_starts = 2;      // convergence mode
+  int max_iterations = sensornet::PlanRequest{}.max_iterations;  // convergence mode
+  std::vector<std::string> scenario_files;  // convergence mode (empty: scenarios/*.yaml)
 };
 
 struct Column {  // one surrogate at one sweep point, over the instances
@@ -295,6 +318,190 @@ void runScale(const Options& options) {
   }
 }
 
+// ---- Convergence mode -------------------------------------------------------------------------
+
+// One planning problem of the sweep: a scenario, the sensors taken out, the starts to try.
+struct ConvergenceCase {
+  std::string group;  // the table row it counts in
+  std::string name;
+  sensornet::Scenario scenario;
+  std::vector<int> excluded;
+  std::vector<std::pair<std::string, std::optional<sensornet::RateSchedule>>> starts;
+};
+
+struct ConvergenceRow {  // one group and form, over its plans
+  int plans = 0, converged = 0, stated_no_worse = 0, failed = 0;
+  std::map<std::string, int> statuses;
+  std::vector<double> iterations, seconds;
+  double kkt_max = 0.0;
+  int substeps_max = 0;
+};
+
+// Random feasible rates: each planned row uniform in [0, λ̄_j] per sensor, projected onto the
+// admissible rates (so that some rows are tight, some not, some rates zero).
+sensornet::RateSchedule randomFeasibleStart(const sensornet::Scenario& scenario,
+                                            const std::vector<int>& excluded, std::uint64_t seed) {
+  const sensornet::RatePolytope polytope(scenario.constraints, excluded);
+  const Eigen::VectorXd max_rates = polytope.maxRates();
+  sensornet::Rng rng = sensornet::Rng::keyed(seed, 29);
+  Eigen::MatrixXd rates(scenario.intervals, scenario.sensorCount());
+  for (int k = 0; k < scenario.intervals; ++k) {
+    Eigen::VectorXd row(scenario.sensorCount());
+    for (int j = 0; j < scenario.sensorCount(); ++j) {
+      const double top = std::isfinite(max_rates(j)) ? max_rates(j) : 1.0;
+      row(j) = rng.uniform() * top;
+    }
+    rates.row(k) = polytope.project(row).transpose();
+  }
+  return sensornet::RateSchedule(scenario.horizon_s, rates);
+}
+
+std::vector<ConvergenceCase> convergenceCases(const Options& options) {
+  std::vector<ConvergenceCase> cases;
+  const auto addStarts = [&options](ConvergenceCase& c, std::uint64_t seed) {
+    c.starts.emplace_back("default", std::nullopt);
+    for (int r = 0; r < options.random_starts; ++r) {
+      c.starts.emplace_back("random " + std::to_string(r),
+                            randomFeasibleStart(c.scenario, c.excluded, seed + 97u * (r + 1u)));
+    }
+  };
+  const auto addInstances = [&](int n, int m) {
+    for (int i = 0; i < options.instances; ++i) {
+      sensornet::RandomPlantSpec spec;
+      spec.state_dim = n;
+      spec.sensor_count = m;
+      spec.seed = 1000u * static_cast<std::uint64_t>(n) + 10u * static_cast<std::uint64_t>(m) +
+                  static_cast<std::uint64_t>(i);
+      ConvergenceCase c{"n=" + std::to_string(n) + " M=" + std::to_string(m),
+                        "instance " + std::to_string(i),
+                        sensornet::generateRandomScenario(spec),
+                        {},
+                        {}};
+      addStarts(c, spec.seed);
+      cases.push_back(std::move(c));
+    }
+  };
+  for (int m = 30; m <= 100; m += 10) addInstances(5, m);
+  for (int n = 2; n <= 20; n += 2) addInstances(n, 30);
+
+  std::vector<std::string> files = options.scenario_files;
+  if (files.empty()) {
+    for (const auto& entry : std::filesystem::directory_iterator("scenarios")) {
+      if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
+    }
+    std::sort(files.begin(), files.end());
+  }
+  for (const std::string& file : files) {
+    const sensornet::Scenario scenario = sensornet::loadScenarioFile(file);
+    const std::string base = std::filesystem::path(file).filename().string();
+    ConvergenceCase full{base, base, scenario, {}, {}};
+    addStarts(full, 4242u);
+    cases.push_back(full);
+    if (scenario.sensorCount() < 2) continue;
+    // Sensor 1 out, warm-started from the schedules in force before (the full plans).
+    ConvergenceCase without{base + " without sensor 1", base, scenario, {1}, {}};
+    addStarts(without, 4343u);
+    for (const PlanSurrogate s : {PlanSurrogate::Information, PlanSurrogate::Covariance}) {
+      sensornet::PlanRequest request;
+      request.surrogate = s;
+      without.starts.emplace_back(std::string("warm ") + std::string(sensornet::describe(s)),
+                                  sensornet::planSchedule(scenario, request).schedule);
+    }
+    cases.push_back(std::move(without));
+  }
+  return cases;
+}
+
+void runConvergence(const Options& options) {
+  std::printf("planner_bench --convergence: %d instance(s) per Fig. 1 point, default start and %d "
+              "random feasible starts, %d iterations, tolerance %.0e\n",
+              options.instances, options.random_starts, options.max_iterations,
+              options.tolerance);
+  std::vector<std::string> order;
+  std::map<std::string, ConvergenceRow> rows;
+  for (const ConvergenceCase& c : convergenceCases(options)) {
+    for (const PlanSurrogate surrogate : {PlanSurrogate::Information, PlanSurrogate::Covariance}) {
+      const std::string key = c.group + " | " + std::string(sensornet::describe(surrogate));
+      if (rows.find(key) == rows.end()) order.push_back(key);
+      ConvergenceRow& row = rows[key];
+      const auto form = sensornet::formOf(surrogate);
+      for (const auto& [start_name, start] : c.starts) {
+        sensornet::PlanRequest request;
+        request.surrogate = surrogate;
+        request.excluded_sensors = c.excluded;
+        request.tolerance = options.tolerance;
+        request.max_iterations = options.max_iterations;
+        request.warm_start = start;
+        const sensornet::PlanResult plan = sensornet::planSchedule(c.scenario, request);
+        // The start as the planner sees it (the warm start projected, excluded sensors at 0;
+        // the uniform rates without one): the plan of no iterations.
+        sensornet::PlanRequest at_start = request;
+        at_start.max_iterations = 0;
+        const sensornet::PlanResult start_plan = sensornet::planSchedule(c.scenario, at_start);
+        const double start_cost = sensornet::rollout(form, c.scenario, start_plan.schedule).cost;
+        const bool converged = plan.kkt_residual <= options.tolerance;
+        const bool no_worse = plan.objective <= start_cost * (1.0 + 1e-12);
+        ++row.plans;
+        ++row.statuses[plan.status];
+        row.converged += converged ? 1 : 0;
+        row.stated_no_worse += !converged && no_worse ? 1 : 0;
+        row.failed += !converged && !no_worse ? 1 : 0;
+        row.iterations.push_back(plan.iterations);
+        row.seconds.push_back(plan.solve_seconds);
+        row.kkt_max = std::max(row.kkt_max, plan.kkt_residual);
+        row.substeps_max = std::max(row.substeps_max, plan.substeps);
+        if (options.each || !converged) {
+          std::printf("  %s %s %s from %s: %s, kkt %.2e, %d iterations, %d substeps, J %.10g "
+                      "(start %.10g)%s\n",
+                      c.group.c_str(), c.name.c_str(), std::string(sensornet::describe(surrogate)).c_str(),
+                      start_name.c_str(), plan.status.c_str(), plan.kkt_residual, plan.iterations,
+                      plan.substeps, plan.objective, start_cost,
+                      converged ? "" : (no_worse ? "  [not converged, no worse]" : "  [WORSE]"));
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+  if (options.markdown) {
+    std::printf("\n| case | form | plans | converged | stated, no worse | worse | statuses | "
+                "kkt max | it median | it max | s max | substeps max |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  } else {
+    std::printf("\n%-34s %-4s | %5s %5s %5s %5s | %-28s | %8s %6s %6s %7s %4s\n", "case", "form",
+                "plans", "conv", "nowrs", "worse", "statuses", "kkt max", "it med", "it max",
+                "s max", "rk4");
+  }
+  int plans = 0, converged = 0, failed = 0;
+  for (const std::string& key : order) {
+    const ConvergenceRow& row = rows[key];
+    std::ostringstream statuses;
+    for (const auto& [status, count] : row.statuses) {
+      statuses << (statuses.tellp() > 0 ? ", " : "") << status << " " << count;
+    }
+    const std::string group = key.substr(0, key.find(" | "));
+    const std::string form = key.substr(key.find(" | ") + 3);
+    const double it_max = *std::max_element(row.iterations.begin(), row.iterations.end());
+    const double s_max = *std::max_element(row.seconds.begin(), row.seconds.end());
+    if (options.markdown) {
+      std::printf("| %s | %s | %d | %d | %d | %d | %s | %.1e | %.0f | %.0f | %.2f | %d |\n",
+                  group.c_str(), form.c_str(), row.plans, row.converged, row.stated_no_worse,
+                  row.failed, statuses.str().c_str(), row.kkt_max, median(row.iterations), it_max,
+                  s_max, row.substeps_max);
+    } else {
+      std::printf("%-34s %-4s | %5d %5d %5d %5d | %-28s | %8.1e %6.0f %6.0f %7.2f %4d\n",
+                  group.c_str(), form.c_str(), row.plans, row.converged, row.stated_no_worse,
+                  row.failed, statuses.str().c_str(), row.kkt_max, median(row.iterations), it_max,
+                  s_max, row.substeps_max);
+    }
+    plans += row.plans;
+    converged += row.converged;
+    failed += row.failed;
+  }
+  std::printf("\n%d plans: %d converged (kkt <= %.0e), %d ended otherwise no worse than their "
+              "start, %d worse than their start\n",
+              plans, converged, options.tolerance, plans - converged - failed, failed);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -335,18 +542,36 @@ int main(int argc, char** argv) {
       options.only_method = value();
     } else if (arg == "--each") {
       options.each = true;
+    } else if (arg == "--convergence") {
+      options.convergence = true;
+    } else if (arg == "--random-starts") {
+      options.random_starts = std::max(0, std::atoi(value().c_str()));
+    } else if (arg == "--max-iterations") {
+      options.max_iterations = std::max(0, std::atoi(value().c_str()));
+    } else if (arg == "--scenarios") {
+      std::stringstream list(value());
+      for (std::string file; std::getline(list, file, ',');) {
+        if (!file.empty()) options.scenario_files.push_back(file);
+      }
     } else {
       std::fprintf(stderr,
                    "usage: planner_bench [--sweep sensors|states|both] [--instances K] "
                    "[--mc-runs R] [--method pqn|ipopt] [--tolerance T] [--substeps S] [--n N] [--markdown]\n"
                    "       planner_bench --scale [--instances K] [--max-seconds S] "
-                   "[--only pqn|ipopt] [--n N] [--m M] [--each] [--markdown]\n");
+                   "[--only pqn|ipopt] [--n N] [--m M] [--each] [--markdown]\n"
+                   "       planner_bench --convergence [--instances K] [--random-starts R] "
+                   "[--max-iterations I] [--scenarios a.yaml,b.yaml] [--each] [--markdown]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
   if (options.sweep != "sensors" && options.sweep != "states" && options.sweep != "both") {
     std::fprintf(stderr, "planner_bench: --sweep expects sensors, states or both\n");
     return 2;
+  }
+  if (options.convergence) {
+    if (options.instances == 0) options.instances = 1;
+    runConvergence(options);
+    return 0;
   }
   if (options.scale) {
     if (options.instances == 0) options.instances = 3;
