@@ -51,6 +51,7 @@ struct ServeOptions {
   std::string state_path;  // the journal (empty: none)
   bool resume = false;     // start from the journal
   bool json = false;
+  double replan_every = 0.0;  // --replan-every (0: open loop)
 };
 
 // ---- codecs: wire samples to the core's events, its controls to wire samples ---------------
@@ -413,6 +414,15 @@ int runServe(ServeOptions options) {
     throw InputError(options.scenario_path, "network",
                      "a network: section (--network-aware plans for the rates it delivers)");
   }
+  if (options.replan_every > 0.0) {
+    if (options.surrogate != PlanSurrogate::Information &&
+        options.surrogate != PlanSurrogate::Covariance) {
+      throw InputError("--replan-every", "--surrogate",
+                       "info or cov (the closed loop re-plans with the run's surrogate, within "
+                       "the switch margin), got " + std::string(describe(options.surrogate)));
+    }
+    options.core.replan_every_s = options.replan_every;
+  }
   options.core.run_id = options.run.run_id;
   // The journal is written before anything is published: with --resume, none means the last
   // coordinator died before it announced anything, and the run starts afresh (chaos seed 69).
@@ -477,6 +487,12 @@ Subcommand addServeCommand(CLI::App& app) {
   cmd->add_option("--switch-margin", options->core.switch_margin_s,
                   "wall seconds between a live re-plan and the time it takes effect")
       ->capture_default_str()
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  cmd->add_option("--replan-every", options->replan_every,
+                  "closed loop: at each multiple of DT emulated seconds of every episode, "
+                  "re-plan the rest of it from the fused covariance with the run's --surrogate "
+                  "(info or cov), taking effect --switch-margin later; every episode starts "
+                  "with the open-loop plan again (a receding horizon). Default: open loop")
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--episode-gap", options->core.episode_gap_s,
                   "wall seconds between one episode's end and the next one's start (the next "

@@ -83,6 +83,7 @@ struct LaunchOptions {
   bool external_fusion_center = false;  // --external-fusion-center: a participant of the user's fuses
   bool reference_fusion = false;  // --reference-fusion: ours beside it, on the same measurements
   double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator
+  double replan_every_s = 0.0;    // --replan-every, passed to the coordinator (0: open loop)
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
@@ -251,6 +252,9 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
     coordinator.insert(coordinator.end(), {"--arrivals", options.arrivals});
   }
   coordinator.insert(coordinator.end(), {"--ready-timeout", formatNumber(options.ready_timeout_s)});
+  if (options.replan_every_s > 0.0) {
+    coordinator.insert(coordinator.end(), {"--replan-every", formatNumber(options.replan_every_s)});
+  }
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator),
                                     roleFlags(flags, options, dds::SecurityRole::Coordinator),
                                     plan.log_dir));
@@ -465,6 +469,11 @@ int runLaunch(LaunchOptions options) {
   if (options.network_aware == "yes" && !scenario.network) {
     throw InputError(options.scenario_path, "network",
                      "a network: section for --network-aware yes (the scenario has none)");
+  }
+  if (options.replan_every_s > 0.0 && options.surrogate != "info" && options.surrogate != "cov") {
+    throw InputError("--replan-every", "--surrogate",
+                     "info or cov (the closed loop re-plans with the run's surrogate), got " +
+                         options.surrogate);
   }
   const std::vector<int> external = externalSensors(options, scenario.sensorCount());
   LaunchPlan plan = planLaunch(options, scenario, programs, domain, hosts ? &*hosts : nullptr);
@@ -705,6 +714,13 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "seconds the coordinator waits for every sensor (yours with --external-sensors "
                   "too) and the fusion center before it gives up and the run fails")
       ->capture_default_str()
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  cmd->add_option("--replan-every", options->replan_every_s,
+                  "closed loop: the coordinator re-plans the rest of every episode from the "
+                  "fused covariance at each multiple of DT emulated seconds (with --surrogate, "
+                  "info or cov; taking effect a switch margin later), and every episode starts "
+                  "with the open-loop plan again. Offline: fusion_center evaluate --replan-every. "
+                  "Default: open loop")
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "

@@ -142,3 +142,56 @@ std::vector<double> drawSensorArrivals(const RateSchedule& schedule, int sensor,
 }
 
 }  // namespace sensornet
+
+namespace sensornet {
+
+TimeChangedArrivals::TimeChangedArrivals(int sensors, std::uint64_t seed, std::uint64_t episode,
+                                         double t0)
+    : now_(t0) {
+  clocks_.reserve(static_cast<std::size_t>(std::max(0, sensors)));
+  for (int j = 0; j < sensors; ++j) {
+    Clock clock{Rng::keyed(seed, kTimeChangeStream, episode, static_cast<std::uint64_t>(j))};
+    clock.next_point = clock.rng.exponential(1.0);
+    clocks_.push_back(std::move(clock));
+  }
+}
+
+void TimeChangedArrivals::drawUntil(const RateSchedule& schedule, double t1,
+                                    std::vector<Arrival>& out) {
+  checkWindow(schedule, now_, t1, "time-changed arrivals");
+  if (schedule.sensorCount() != static_cast<int>(clocks_.size())) {
+    throw InputError("time-changed arrivals", "schedule",
+                     std::to_string(clocks_.size()) + " sensors, got " +
+                         std::to_string(schedule.sensorCount()));
+  }
+  out.clear();
+  for (int k = firstInterval(schedule, now_); k < schedule.intervals(); ++k) {
+    const double from = std::max(now_, schedule.intervalStart(k));
+    const double to = clippedIntervalEnd(schedule, k, t1);
+    if (from >= t1) break;
+    if (!(to > from)) continue;
+    for (std::size_t j = 0; j < clocks_.size(); ++j) {
+      Clock& c = clocks_[j];
+      const double rate = schedule.rate(k, static_cast<int>(j));
+      if (!(rate >= 0.0) || !std::isfinite(rate)) {
+        throw InputError("time-changed arrivals",
+                         "rates[" + std::to_string(k) + "][" + std::to_string(j) + "]",
+                         "a finite rate >= 0, got " + std::to_string(rate));
+      }
+      if (rate == 0.0) continue;
+      const double top = c.integrated + rate * (to - from);
+      while (c.next_point < top) {
+        const double t = from + (c.next_point - c.integrated) / rate;
+        if (t < to) out.push_back(Arrival{t, static_cast<int>(j)});
+        c.next_point += c.rng.exponential(1.0);
+      }
+      c.integrated = top;
+    }
+  }
+  now_ = t1;
+  std::sort(out.begin(), out.end(), [](const Arrival& a, const Arrival& b) {
+    return a.time < b.time || (a.time == b.time && a.sensor < b.sensor);
+  });
+}
+
+}  // namespace sensornet

@@ -4,6 +4,8 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace sensornet {
 namespace {
@@ -96,6 +98,32 @@ double studentTQuantile(double p, double df) {
     t = next;
   }
   return p > 0.5 ? t : -t;
+}
+
+SampleMean sampleMean(std::span<const double> sample) {
+  SampleMean s;
+  if (sample.empty()) return s;
+  const double n = static_cast<double>(sample.size());
+  for (const double x : sample) s.mean += x / n;
+  if (sample.size() < 2) {
+    s.ci95 = std::numeric_limits<double>::infinity();
+    return s;
+  }
+  double squares = 0.0;
+  for (const double x : sample) squares += (x - s.mean) * (x - s.mean);
+  s.std_dev = std::sqrt(squares / (n - 1.0));
+  s.ci95 = studentTQuantile(0.975, n - 1.0) * s.std_dev / std::sqrt(n);
+  return s;
+}
+
+SampleMean pairedDifference(std::span<const double> a, std::span<const double> b) {
+  if (a.size() != b.size()) {
+    throw std::invalid_argument("pairedDifference: samples of " + std::to_string(a.size()) +
+                                " and " + std::to_string(b.size()) + " values");
+  }
+  std::vector<double> d(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
+  return sampleMean(d);
 }
 
 }  // namespace sensornet

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 #include <utility>
 
@@ -10,6 +11,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/network.hpp"
+#include "sensornet/io/command_line.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 
 namespace sensornet::emulator {
@@ -254,6 +256,7 @@ void CoordinatorCore::tickAwaitingPeers(std::int64_t now_ns) {
 // report of the oldest is in, so a stalled fusion center holds the run back by one episode.
 void CoordinatorCore::tickRunning(std::int64_t now_ns) {
   announceAhead(now_ns);
+  replanOnCadence(now_ns);
   while (!outstanding_.empty()) {
     current_episode_ = outstanding_.front().episode;
     if (!reported_.count(current_episode_)) break;
@@ -516,6 +519,50 @@ void CoordinatorCore::announceFailure(const std::string& detail, std::int64_t no
   c.detail = detail;
   c.failed_sensors = failedIds();
   act(PublishControl{std::move(c)});
+}
+
+// --replan-every DT: at the first tick at or after each k DT of the running episode at which a
+// fused covariance of the episode is known, the rest of it is planned again from that
+// covariance (Replanner::replanTail). An instant passed while the coordinator could not act (a
+// stall, a resume, no fused covariance yet) is served once, late; the instants it skipped are
+// not made up for.
+void CoordinatorCore::replanOnCadence(std::int64_t now_ns) {
+  if (!config_.replan_every_s || stopping_ || !abort_detail_.empty()) return;
+  const Outstanding* running = runningEpisode(now_ns);
+  if (running == nullptr) return;
+  const double every = *config_.replan_every_s;
+  const double t = running->clock.emulatedAt(now_ns);
+  if (!cadence_ || cadence_->episode != running->episode) cadence_ = Cadence{running->episode, 1};
+  const int reached = static_cast<int>(std::floor(t / every));
+  if (reached < cadence_->next || reached * every >= run_.scenario.horizon_s) return;
+  if (!(fused_ && fused_->episode == running->episode)) {
+    if (!cadence_->waiting_logged) {
+      log(info, fmt::format("closed loop: no fused covariance of episode {} yet at {} s; "
+                            "re-planning as soon as one comes",
+                            running->episode, formatNumber(t)));
+      cadence_->waiting_logged = true;
+    }
+    return;
+  }
+  cadence_->next = reached + 1;
+  try {
+    const Replan r = replanner_.replanTail(book_, moment(now_ns), 0);
+    if (r.versions.empty()) {
+      log(info, "closed loop at " + formatNumber(t) + " s of episode " +
+                    std::to_string(running->episode) + ": no tail, " + r.summary);
+      return;
+    }
+    for (const ScheduleVersion& v : r.versions) book_.add(v);
+    saveState();
+    for (const ScheduleVersion& v : r.versions) act(PublishVersion{v});
+    log(info, "closed loop at " + formatNumber(t) + " s of episode " +
+                  std::to_string(running->episode) + ": " + r.summary);
+    if (!r.caveat.empty()) log(warn, "closed loop: " + r.caveat);
+  } catch (const InputError& error) {
+    log(warn, fmt::format("closed loop at {} s of episode {}: no tail published ({}); the "
+                          "schedule in force stays",
+                          formatNumber(t), running->episode, error.what()));
+  }
 }
 
 // ---- the switch moment --------------------------------------------------------------------

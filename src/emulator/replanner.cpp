@@ -224,9 +224,19 @@ Replan Replanner::replanAsIs(const ScheduleBook& book, const RunMoment& now,
   return plan(settings_, book, now, command_id);
 }
 
+Replan Replanner::replanTail(const ScheduleBook& book, const RunMoment& now,
+                             std::uint64_t command_id) const {
+  // Before the tail goes in, the latest version is the one in force from the next episode on:
+  // the run's open-loop plan (or an operator's change of it), which every episode starts with.
+  const RateSchedule open_loop = book.latest().schedule;
+  Replan r = plan(settings_, book, now, command_id, &open_loop);
+  if (r.versions.size() < 2) r.versions.clear();  // no tail: nothing changes
+  return r;
+}
+
 // The mid-episode version (when one is possible) and the full-horizon one; see the header.
 Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const RunMoment& now,
-                       std::uint64_t command_id) const {
+                       std::uint64_t command_id, const RateSchedule* next_episodes) const {
   const Scenario planned_for = plannedFor(settings);
   const std::string surrogate(describe(settings.surrogate));
   const auto notInThisEpisode = [&now](const char* why) {
@@ -251,8 +261,11 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
                              settings, "mid-episode", command_id);
     }
   }
-  const Chosen full_plan = choosePlan(planned_for, planRequest(settings, book),
-                                      book.latest().schedule, settings, "full-horizon", command_id);
+  const Chosen full_plan =
+      next_episodes != nullptr
+          ? Chosen{*next_episodes, "the open-loop plan again", ""}
+          : choosePlan(planned_for, planRequest(settings, book), book.latest().schedule, settings,
+                       "full-horizon", command_id);
 
   Replan r;
   std::uint32_t number = book.latest().version;

@@ -59,6 +59,39 @@ class ArrivalSampler {
   std::vector<int> last_active_sensor_;     // per interval, the largest j with λ_kj > 0
 };
 
+// Arrivals by time change, the common random numbers of the Monte Carlo planner
+// (mc_planner.hpp): sensor j's arrivals are the points of ONE unit-rate Poisson process, keyed by
+// (seed, kTimeChangeStream, episode, j), mapped through the inverse of its integrated rate
+// Λ_j(t) = ∫_{t0}^t λ_j. That is the exact Poisson law for any rates, and two schedules (or a
+// schedule and a closed-loop policy) run on the same keys see the same underlying randomness.
+// Drawn piece by piece: the rates of a piece may be chosen after the arrivals before it were
+// seen (a closed loop), which the construction allows because the points beyond Λ_j(t) are
+// untouched until the clock gets there.
+//
+//   TimeChangedArrivals arrivals(M, seed, episode, /*t0=*/0.0);
+//   arrivals.drawUntil(open_loop, 1.0, buffer);   // [0, 1.0) under the open-loop plan
+//   arrivals.drawUntil(replanned, T, buffer);     // [1.0, T) under the re-planned tail
+inline constexpr std::uint64_t kTimeChangeStream = 0x6d632d756e697470ULL;  // "mc-unitp"
+
+class TimeChangedArrivals {
+ public:
+  TimeChangedArrivals(int sensors, std::uint64_t seed, std::uint64_t episode, double t0 = 0.0);
+
+  // Replaces `out` with the arrivals in [now(), t1) under `schedule`'s rates there, sorted by
+  // time (then sensor), and moves now() to t1. Requires now() <= t1 <= horizon (InputError).
+  void drawUntil(const RateSchedule& schedule, double t1, std::vector<Arrival>& out);
+  [[nodiscard]] double now() const { return now_; }
+
+ private:
+  struct Clock {
+    Rng rng;
+    double next_point = 0.0;  // the next unit-rate point, in Λ_j units
+    double integrated = 0.0;  // Λ_j(now)
+  };
+  std::vector<Clock> clocks_;
+  double now_;
+};
+
 // All sensors' arrivals in [t0, t1), sorted by time (superposition: total rate per interval,
 // exponential gaps restarted at interval boundaries, sensor picked with probability λ_j/Σλ).
 [[nodiscard]] std::vector<Arrival> drawArrivals(const RateSchedule& schedule, Rng& rng, double t0,

@@ -75,6 +75,9 @@ struct CoordinatorConfig {
   double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
   FailurePolicy on_sensor_failure = FailurePolicy::Replan;
   bool network_aware = false;  // plans for the rates the scenario's network: delivers
+  // Closed loop (closed_loop.hpp): re-plan the tail of every episode from the fused covariance
+  // at each multiple of this many emulated seconds; absent: open loop.
+  std::optional<double> replan_every_s;
   // Wall time between every peer being ready and the first announcement: the last discovery
   // settles (the others' readers match the coordinator's writers).
   std::chrono::nanoseconds settle = std::chrono::milliseconds(100);
@@ -265,6 +268,7 @@ class CoordinatorCore {
   Answer onSensorsFailed(const CommandEvent& c, std::int64_t now_ns);
   Answer replanAmongSurvivors(const CommandEvent& c, std::int64_t now_ns);
   void announceFailure(const std::string& detail, std::int64_t now_ns);
+  void replanOnCadence(std::int64_t now_ns);
 
   [[nodiscard]] const Outstanding* runningEpisode(std::int64_t now_ns) const;
   [[nodiscard]] const Outstanding* pendingEpisode(std::int64_t now_ns) const;
@@ -292,6 +296,14 @@ class CoordinatorCore {
   std::optional<std::uint32_t> awaited_;  // whose report fusion_heard_ns_ is counted for
   StallWatch stall_watch_;
   std::optional<FusedCovariance> fused_;
+  // --replan-every: the episode whose instants are being served and the next instant's index
+  // (k of k DT).
+  struct Cadence {
+    std::uint32_t episode = 0;
+    int next = 1;
+    bool waiting_logged = false;  // "no fused covariance yet", once per episode
+  };
+  std::optional<Cadence> cadence_;
   std::uint32_t current_episode_ = 0;  // whose report is awaited
   std::uint32_t next_episode_ = 0;     // to announce next
   std::deque<Outstanding> outstanding_;  // announced, not reported, in order (at most two)

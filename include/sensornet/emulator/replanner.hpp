@@ -142,10 +142,21 @@ class Replanner {
   // Plans again with the settings in force (after noteFailed: without the failed sensors).
   [[nodiscard]] Replan replanAsIs(const ScheduleBook& book, const RunMoment& now,
                                   std::uint64_t command_id) const;
+  // Closed loop (--replan-every): the rest of the running episode planned from its fused
+  // covariance as above, and from the next episode the version in force there before (the
+  // open-loop plan every episode starts with), copied under a new number so that it follows the
+  // tail. No versions when the tail cannot be planned now (no fused covariance of the episode
+  // yet, the episode ends within the margin, planning outlasted it); InputError as for any
+  // plan the planner does not certify and that is no better than the schedule in force.
+  [[nodiscard]] Replan replanTail(const ScheduleBook& book, const RunMoment& now,
+                                  std::uint64_t command_id) const;
 
  private:
+  // next_episodes: the schedule of the version from the next episode (null: plan it, over the
+  // whole horizon from P0).
   [[nodiscard]] Replan plan(ReplanSettings settings, const ScheduleBook& book, const RunMoment& now,
-                            std::uint64_t command_id) const;
+                            std::uint64_t command_id,
+                            const RateSchedule* next_episodes = nullptr) const;
   [[nodiscard]] PlanRequest planRequest(const ReplanSettings& settings,
                                         const ScheduleBook& book) const;
   struct Chosen {

@@ -241,6 +241,80 @@ TEST_F(PoissonArrivals, WindowNotOnIntervalBoundariesHasCountsOfTheIntegratedRat
   }
 }
 
+// Time change, drawn in pieces as a closed loop does: [0, 0.3) and [0.3, 1.7) under the
+// fixture's schedule, then [1.7, 2.5) under a second schedule (the "re-planned tail"). Counts
+// per sensor and interval must be Poisson with the rates in force, the piece boundaries
+// (0.3 and 1.7 cut intervals 0 and 3) included.
+TEST_F(PoissonArrivals, TimeChangedArrivalsDrawnInPiecesHavePoissonCounts) {
+  const RateSchedule tail(2.5, (Eigen::MatrixXd(5, 3) << 9.0, 9.0, 9.0,  //
+                                9.0, 9.0, 9.0,                           //
+                                9.0, 9.0, 9.0,                           //
+                                0.5, 3.0, 5.0,                           //
+                                4.0, 0.0, 1.0)
+                                   .finished());
+  // Expected counts per sensor in [1.5, 2.0) (0.2 s of interval 3 before the switch, 0.3 s
+  // after) and in [2.0, 2.5) under the tail.
+  std::vector<std::vector<int>> interval3(3, std::vector<int>(kEpisodes, 0));
+  std::vector<std::vector<int>> interval4(3, std::vector<int>(kEpisodes, 0));
+  std::vector<std::vector<int>> interval0(3, std::vector<int>(kEpisodes, 0));
+  std::vector<Arrival> piece;
+  for (int e = 0; e < kEpisodes; ++e) {
+    TimeChangedArrivals arrivals(3, kSeed, static_cast<std::uint64_t>(e));
+    const std::pair<const RateSchedule*, double> pieces[] = {
+        {&schedule_, 0.3}, {&schedule_, 1.7}, {&tail, 2.5}};
+    double from = 0.0;
+    for (const auto& [schedule, to] : pieces) {
+      arrivals.drawUntil(*schedule, to, piece);
+      EXPECT_EQ(arrivals.now(), to);
+      for (std::size_t i = 0; i < piece.size(); ++i) {
+        ASSERT_GE(piece[i].time, from);
+        ASSERT_LT(piece[i].time, to);
+        if (i > 0) {
+          ASSERT_LE(piece[i - 1].time, piece[i].time);
+        }
+        const int k = schedule_.intervalAt(piece[i].time);
+        if (k == 0) ++interval0[piece[i].sensor][e];
+        if (k == 3) ++interval3[piece[i].sensor][e];
+        if (k == 4) ++interval4[piece[i].sensor][e];
+      }
+      from = to;
+    }
+  }
+  for (int j = 0; j < 3; ++j) {
+    const ChiSquare first = poissonGoodnessOfFit(interval0[j], 0.5 * schedule_.rate(0, j));
+    const double split = 0.2 * schedule_.rate(3, j) + 0.3 * tail.rate(3, j);
+    const ChiSquare switched = poissonGoodnessOfFit(interval3[j], split);
+    EXPECT_LT(first.statistic, first.critical()) << "interval 0, sensor " << j;
+    EXPECT_LT(switched.statistic, switched.critical()) << "interval 3, sensor " << j;
+    if (tail.rate(4, j) == 0.0) {
+      EXPECT_EQ(*std::max_element(interval4[j].begin(), interval4[j].end()), 0);
+    } else {
+      const ChiSquare last = poissonGoodnessOfFit(interval4[j], 0.5 * tail.rate(4, j));
+      EXPECT_LT(last.statistic, last.critical()) << "interval 4, sensor " << j;
+    }
+  }
+}
+
+// Common random numbers: drawn in pieces under one schedule, the points are those of one draw
+// over the whole window (the same unit-rate points, the same map), to rounding.
+TEST_F(PoissonArrivals, TimeChangedArrivalsInPiecesEqualOneDrawOfTheWhole) {
+  for (int e = 0; e < 50; ++e) {
+    TimeChangedArrivals whole(3, kSeed, static_cast<std::uint64_t>(e));
+    TimeChangedArrivals pieces(3, kSeed, static_cast<std::uint64_t>(e));
+    std::vector<Arrival> all, part, joined;
+    whole.drawUntil(schedule_, 2.5, all);
+    for (const double to : {0.13, 0.5, 1.61, 2.5}) {
+      pieces.drawUntil(schedule_, to, part);
+      joined.insert(joined.end(), part.begin(), part.end());
+    }
+    ASSERT_EQ(joined.size(), all.size()) << "episode " << e;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      EXPECT_EQ(joined[i].sensor, all[i].sensor);
+      EXPECT_NEAR(joined[i].time, all[i].time, 1e-12);
+    }
+  }
+}
+
 TEST_F(PoissonArrivals, ArrivalsAreSortedAndInsideTheHalfOpenWindow) {
   const double windows[][2] = {{0.0, 2.5}, {0.3, 1.7}, {1.0, 1.5}, {2.2, 2.5}, {0.7, 0.7}};
   for (const auto& w : windows) {

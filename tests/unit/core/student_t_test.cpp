@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <vector>
 
 namespace sensornet {
 namespace {
@@ -55,6 +56,36 @@ TEST(StudentT, RefusesProbabilitiesOutsideTheOpenUnitInterval) {
   EXPECT_THROW((void)studentTQuantile(0.0, 3.0), std::invalid_argument);
   EXPECT_THROW((void)studentTQuantile(1.0, 3.0), std::invalid_argument);
   EXPECT_THROW((void)studentTQuantile(0.5, 0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sensornet
+
+namespace sensornet {
+namespace {
+
+// Against values worked by hand with the tabled quantiles t_{0.975,4} = 2.7764451 and
+// t_{0.975,1} = 12.7062047.
+TEST(SampleMean, IsTheMeanTheSampleDeviationAndTheTInterval) {
+  const std::vector<double> x{1.0, 2.0, 3.0, 4.0, 5.0};
+  const SampleMean s = sampleMean(x);
+  EXPECT_DOUBLE_EQ(s.mean, 3.0);
+  EXPECT_NEAR(s.std_dev, std::sqrt(2.5), 1e-15);
+  EXPECT_NEAR(s.ci95, 2.7764451 * std::sqrt(2.5) / std::sqrt(5.0), 1e-6);
+  const std::vector<double> one{7.0};
+  EXPECT_EQ(sampleMean(one).mean, 7.0);
+  EXPECT_TRUE(std::isinf(sampleMean(one).ci95));
+  EXPECT_EQ(sampleMean(std::vector<double>{}).mean, 0.0);
+}
+
+TEST(SampleMean, PairedDifferenceIsThatOfTheDifferences) {
+  const std::vector<double> a{1.0, 4.0};
+  const std::vector<double> b{0.0, 1.0};  // differences 1 and 3
+  const SampleMean d = pairedDifference(a, b);
+  EXPECT_DOUBLE_EQ(d.mean, 2.0);
+  EXPECT_NEAR(d.std_dev, std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(d.ci95, 12.7062047, 1e-6);
+  EXPECT_THROW((void)pairedDifference(a, std::vector<double>{1.0}), std::invalid_argument);
 }
 
 }  // namespace

@@ -676,5 +676,96 @@ TEST_F(CoordinatorCommands, ACommandFromASenderWithoutTheRightIsRefused) {
   EXPECT_EQ(controls(real, ControlKind::SensorsFailed).size(), 1u);
 }
 
+// ---- closed loop (--replan-every) ----------------------------------------------------------
+
+class CoordinatorClosedLoop : public CoordinatorCoreTest {
+ protected:
+  CoordinatorClosedLoop() { config_.replan_every_s = 1.0; }  // T = 3: instants 1 s and 2 s
+
+  static std::vector<PublishVersion> versions(const CoordinatorActions& actions) {
+    return only<PublishVersion>(actions);
+  }
+};
+
+TEST_F(CoordinatorClosedLoop, EachInstantReplansTheTailAndTheOpenLoopPlanComesBackNextEpisode) {
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  const RateSchedule open_loop = freshJournal().versions.front().schedule;
+  const EmulatedPlant plant(run_.scenario, run_.seed);
+  const double tick = plant.timeOf(1) - plant.timeOf(0);
+
+  now_ = first[0].start_wall_ns + 500 * kMs;
+  fused(0, 0.45);
+  EXPECT_TRUE(versions(tickAt(now_)).empty()) << "before the first instant";
+
+  now_ = first[0].start_wall_ns + kSecond + 5 * kMs;
+  fused(0, 0.98);
+  const CoordinatorActions at_one = tickAt(now_);
+  const std::vector<PublishVersion> v = versions(at_one);
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_EQ(v[0].version.version, 2u);
+  EXPECT_EQ(v[0].version.effective_episode, 0u);
+  EXPECT_NEAR(v[0].version.effective_time_s, 1.005 + config_.switch_margin_s, tick);
+  EXPECT_EQ(v[0].version.surrogate, "info");
+  EXPECT_EQ(v[1].version.version, 3u);
+  EXPECT_EQ(v[1].version.effective_episode, 1u);
+  EXPECT_EQ(v[1].version.effective_time_s, 0.0);
+  EXPECT_EQ(v[1].version.schedule.rates(), open_loop.rates()) << "the open-loop plan, bit for bit";
+  // The journal records the versions before they go out.
+  const auto journal_at = std::find_if(at_one.begin(), at_one.end(), [](const auto& a) {
+    return std::holds_alternative<WriteJournal>(a);
+  });
+  const auto first_version = std::find_if(at_one.begin(), at_one.end(), [](const auto& a) {
+    return std::holds_alternative<PublishVersion>(a);
+  });
+  EXPECT_LT(journal_at - at_one.begin(), first_version - at_one.begin());
+
+  now_ += 20 * kMs;
+  EXPECT_TRUE(versions(tickAt(now_)).empty()) << "the instant is served once";
+
+  now_ = first[0].start_wall_ns + 2 * kSecond + 5 * kMs;  // the same fused covariance still
+  const std::vector<PublishVersion> w = versions(tickAt(now_));
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_EQ(w[0].version.version, 4u);
+  EXPECT_NEAR(w[0].version.effective_time_s, 2.005 + config_.switch_margin_s, tick);
+  EXPECT_EQ(w[1].version.schedule.rates(), open_loop.rates())
+      << "from the next episode the open-loop plan, not the last tail";
+}
+
+TEST_F(CoordinatorClosedLoop, WithoutAFusedCovarianceOfTheEpisodeItWaitsAndServesTheInstantLate) {
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  now_ = first[0].start_wall_ns + kSecond + 5 * kMs;
+  const CoordinatorActions waiting = tickAt(now_);
+  EXPECT_TRUE(versions(waiting).empty());
+  EXPECT_FALSE(only<LogLine>(waiting).empty()) << "it says why";
+  now_ += 300 * kMs;
+  EXPECT_TRUE(only<LogLine>(tickAt(now_)).empty()) << "said once";
+  fused(0, 1.2);
+  now_ += 10 * kMs;
+  const CoordinatorActions served = tickAt(now_);
+  const std::vector<PublishVersion> v = versions(served);
+  std::string said;
+  for (const LogLine& line : only<LogLine>(served)) said += line.text + "\n";
+  ASSERT_EQ(v.size(), 2u) << said;
+  EXPECT_NEAR(v[0].version.effective_time_s, 1.315 + config_.switch_margin_s, 1e-3);
+}
+
+TEST_F(CoordinatorClosedLoop, NoInstantWhoseSwitchWouldFallPastTheHorizonPublishes) {
+  config_.replan_every_s = 2.8;  // T = 3, margin 0.3: 2.8 + 0.3 > T
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  now_ = first[0].start_wall_ns + 2800 * kMs + 5 * kMs;
+  fused(0, 2.7);
+  EXPECT_TRUE(versions(tickAt(now_)).empty());
+}
+
+TEST_F(CoordinatorClosedLoop, OpenLoopPublishesNothingOnItsOwn) {
+  config_.replan_every_s.reset();
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  for (int i = 1; i <= 28; ++i) {
+    now_ = first[0].start_wall_ns + i * 100 * kMs;
+    fused(0, 0.1 * i - 0.05);
+    EXPECT_TRUE(versions(tickAt(now_)).empty()) << "at " << 0.1 * i << " s";
+  }
+}
+
 }  // namespace
 }  // namespace sensornet::emulator
