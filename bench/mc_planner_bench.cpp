@@ -10,6 +10,11 @@
 //   mc_planner_bench [--sweep sensors|states|both] [--instances 10] [--eval-runs 4000]
 //                    [--max-seconds 8] [--n N] [--m M] [--gradient-episodes G]
 //                    [--screening-episodes S] [--gradient-sensors K] [--verbose] [--markdown]
+//                    [--planner-seeds K] [--max-iterations I]
+// --planner-seeds K plans each instance K times (planner seeds spec.seed + 0..K-1) and counts
+// the accepted refinements ("improved") that the independent evaluation finds worse than the
+// best of the other three (point estimate, and significantly at 95%). With --max-seconds 1e6
+// and --max-iterations I the sample sizes do not depend on measured time, so runs repeat.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -38,6 +43,8 @@ struct Options {
   int only_m = 0;
   bool verbose = false;
   bool markdown = false;
+  int planner_seeds = 1;
+  int max_iterations = sensornet::PlanRequest{}.max_iterations;
   sensornet::RealizedCostOptions realized;
 };
 
@@ -91,6 +98,8 @@ std::vector<double> ratiosOf(const std::vector<Paired>& instances) {
 struct Point {
   int n = 0, m = 0;
   int improved = 0;
+  int improved_but_worse = 0;              // by the independent evaluation's point estimate
+  int improved_but_significantly_worse = 0;  // its 95% interval entirely above 0
   std::vector<double> mc_seconds, episodes, info, cov, uniform, mc;
   std::vector<Paired> paired;
 };
@@ -110,7 +119,7 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-void runInstance(Point& point, int i, const Options& options) {
+void runInstance(Point& point, int i, int planner_seed, const Options& options) {
   sensornet::RandomPlantSpec spec;
   spec.state_dim = point.n;
   spec.sensor_count = point.m;
@@ -129,8 +138,9 @@ void runInstance(Point& point, int i, const Options& options) {
   sensornet::PlanRequest request;
   request.surrogate = PlanSurrogate::MonteCarlo;
   request.max_seconds = options.max_seconds;
+  request.max_iterations = options.max_iterations;
   request.realized = options.realized;
-  request.realized.seed = spec.seed;
+  request.realized.seed = spec.seed + static_cast<std::uint64_t>(planner_seed);
   const auto start = std::chrono::steady_clock::now();
   const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
   point.mc_seconds.push_back(secondsSince(start));
@@ -157,15 +167,19 @@ void runInstance(Point& point, int i, const Options& options) {
   const Paired paired{md, std::sqrt(sq / (runs - 1.0) / runs), runs - 1.0, means[3] / means[best]};
   point.paired.push_back(paired);
   const int v = verdict(paired, 0.05);
+  if (plan.status == "improved") {
+    point.improved_but_worse += md > 0.0 ? 1 : 0;
+    point.improved_but_significantly_worse += v > 0 ? 1 : 0;
+  }
   point.info.push_back(means[0]);
   point.cov.push_back(means[1]);
   point.uniform.push_back(means[2]);
   point.mc.push_back(means[3]);
   if (options.verbose) {
     std::printf(
-        "  n=%d M=%d #%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
+        "  n=%d M=%d #%d/%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
         "%lld episodes, %.1f s) mc-best %+.5f +- %.5f %s\n",
-        point.n, point.m, i, means[0], means[1], means[2], means[3], plan.objective / normalizer,
+        point.n, point.m, i, planner_seed, means[0], means[1], means[2], means[3], plan.objective / normalizer,
         plan.objective_half_width / normalizer, plan.status.c_str(), plan.episodes,
         point.mc_seconds.back(), md, halfWidth(paired, 0.05),
         v > 0 ? "WORSE" : (v < 0 ? "better" : "n.s."));
@@ -228,7 +242,15 @@ Point runPoint(int n, int m, const Options& options) {
   Point point;
   point.n = n;
   point.m = m;
-  for (int i = 0; i < options.instances; ++i) runInstance(point, i, options);
+  for (int i = 0; i < options.instances; ++i) {
+    for (int r = 0; r < options.planner_seeds; ++r) runInstance(point, i, r, options);
+  }
+  if (point.improved > 0) {
+    std::printf("  n=%d M=%d: %d of %zu plans improved; of those, %d worse than the best of the "
+                "others by the independent evaluation, %d significantly (95%%)\n",
+                n, m, point.improved, point.paired.size(), point.improved_but_worse,
+                point.improved_but_significantly_worse);
+  }
   return point;
 }
 
@@ -263,6 +285,10 @@ int main(int argc, char** argv) {
       options.realized.screening_episodes = std::atoi(value().c_str());
     } else if (arg == "--gradient-sensors") {
       options.realized.gradient_sensors = std::atoi(value().c_str());
+    } else if (arg == "--planner-seeds") {
+      options.planner_seeds = std::max(1, std::atoi(value().c_str()));
+    } else if (arg == "--max-iterations") {
+      options.max_iterations = std::max(0, std::atoi(value().c_str()));
     } else if (arg == "--verbose") {
       options.verbose = true;
     } else if (arg == "--markdown") {
@@ -272,7 +298,8 @@ int main(int argc, char** argv) {
                    "usage: mc_planner_bench [--sweep sensors|states|both] [--instances K] "
                    "[--eval-runs R] [--max-seconds S] [--n N] [--m M] [--gradient-episodes G] "
                    "[--screening-episodes S] "
-                   "[--gradient-sensors K] [--verbose] [--markdown]\n");
+                   "[--gradient-sensors K] [--verbose] [--markdown] [--planner-seeds K] "
+                   "[--max-iterations I]\n");
       return arg == "--help" ? 0 : 2;
     }
   }

@@ -30,6 +30,7 @@ constexpr std::uint64_t kProbeStream = 0x6d632d70726f6265ULL;      // "mc-probe"
 constexpr std::uint64_t kScreeningStage = 1;
 constexpr std::uint64_t kAcceptanceStage = 2;
 constexpr std::uint64_t kReportStage = 3;
+constexpr std::uint64_t kConfirmationStage = 4;
 constexpr std::uint64_t kGradientStage = 100;
 constexpr int kMaxRaceFactor = 8;      // the race among the starts grows to 8x its first sample
 constexpr double kRaceTolerance = 0.005;  // starts within 0.5% of each other count as equal
@@ -359,7 +360,8 @@ void checkOptions(const RealizedCostOptions& o) {
   atLeast("gradient_sensors", o.gradient_sensors, 0);
   atLeast("acceptance_episodes", o.acceptance_episodes, 2);
   atLeast("report_episodes", o.report_episodes, 2);
-  const long long fixed = 10LL * o.screening_episodes + 5LL * o.acceptance_episodes +
+  // The race of up to four starts, the refined schedule, and the confirmation's two schedules.
+  const long long fixed = 10LL * o.screening_episodes + 7LL * o.acceptance_episodes +
                           static_cast<long long>(o.report_episodes);
   atLeast("max_episodes", o.max_episodes, fixed);
 }
@@ -533,6 +535,15 @@ std::vector<Eigen::MatrixXd> surrogateStarts(const Scenario& scenario, const Pla
   return starts;
 }
 
+// A paired one-sided t-test at level 5% on the same episodes: E[candidate - reference] < 0.
+bool significantlyBetter(const std::vector<double>& candidate,
+                         const std::vector<double>& reference) {
+  std::vector<double> d(candidate.size());
+  for (std::size_t e = 0; e < d.size(); ++e) d[e] = candidate[e] - reference[e];
+  const double n = static_cast<double>(d.size());
+  return meanOf(d) + studentTQuantile(0.95, n - 1.0) * stdDevOf(d) / std::sqrt(n) < 0.0;
+}
+
 // One start in the race: its rates and its costs on the race's episodes so far.
 struct RaceEntry {
   Eigen::MatrixXd rates;
@@ -619,7 +630,9 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
   }
 
   PlanResult result;
-  const int final_schedules = static_cast<int>(starts.size()) + 1;
+  // Scored at the end on samples of the acceptance size: the starts (race), the refined
+  // schedule, and the refined schedule and the reference again (confirmation).
+  const int final_schedules = static_cast<int>(starts.size()) + 3;
   if (search.problem().variables() > 0) {
     (void)search.refine(best.rates, best.value, final_schedules);
   }
@@ -639,13 +652,24 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
   }
   Eigen::MatrixXd chosen = reference.rates;
   result.status = "kept_start";
-  if (best.rates != reference.rates) {
-    const std::vector<double> a = search.sample(best.rates, seed, static_cast<int>(r.size()));
-    std::vector<double> d(a.size());
-    for (std::size_t e = 0; e < a.size(); ++e) d[e] = a[e] - r[e];
-    const double n = static_cast<double>(d.size());
-    const double upper = meanOf(d) + studentTQuantile(0.95, n - 1.0) * stdDevOf(d) / std::sqrt(n);
-    if (upper < 0.0) {
+  std::vector<double> a;
+  if (best.rates != reference.rates) a = search.sample(best.rates, seed, static_cast<int>(r.size()));
+  if (!a.empty() && significantlyBetter(a, r)) {
+    // Confirmed with as many fresh episodes again, the test repeated on both samples together:
+    // J(P) is heavy-tailed where a mode is unstable and rarely observed, and a sample that
+    // misses the refined schedule's rare disasters passes it however large it is (n = 4 of the
+    // paper's family: accepted on 10000 episodes, then 0.0810 +- 0.0940 on the report sample
+    // against the reference's 0.0315 +- 0.024). The disasters now have to be missing from twice
+    // the episodes, and a truly better schedule loses little: the test on the doubled sample
+    // has more power than the first. Costs two samples of the acceptance size.
+    const std::uint64_t confirmation = stageSeed(o.seed, kConfirmationStage);
+    const int size = static_cast<int>(r.size());
+    const std::vector<double> more_a = search.sample(best.rates, confirmation, size);
+    const std::vector<double> more_r = search.sample(reference.rates, confirmation, size);
+    a.insert(a.end(), more_a.begin(), more_a.end());
+    std::vector<double> both_r = r;
+    both_r.insert(both_r.end(), more_r.begin(), more_r.end());
+    if (significantlyBetter(a, both_r)) {
       chosen = best.rates;
       result.status = "improved";
     }

@@ -30,12 +30,15 @@
 //    and raced: a start leaves when a paired test says it is worse than the leader (one-sided
 //    2.5%) or equal within 0.5%; while two remain the sample doubles (up to 8x, as time allows).
 //    The winner becomes the reference; the refined schedule replaces it only if a paired
-//    one-sided t-test on the same episodes says it is better at level 5%. The returned
+//    one-sided t-test on the same episodes says it is better at level 5%, and the same test
+//    says so again on those episodes and as many fresh ones together (the confirmation: J(P)
+//    is heavy-tailed where a mode is unstable, and one sample can miss the refined schedule's
+//    rare disasters; bench/CONVERGENCE.md). The returned
 //    schedule is then scored on yet another fresh sample (report_episodes): mean and 95%
 //    half-width t_{0.975, E-1} s / √E.
 //  - Time: the screening sample shrinks (to >= 200 episodes, measured on a pilot) so that it
-//    takes <= 30% of max_seconds, the acceptance and report samples (to >= 1000) so that they
-//    take <= 25%, and refinement stops in time for them.
+//    takes <= 30% of max_seconds, the acceptance, confirmation and report samples (to >= 1000)
+//    so that they take <= 25%, and refinement stops in time for them.
 // Deterministic for a fixed seed and any thread count (per-episode results reduced in order)
 // when the time budget does not bind (the sample sizes above depend on measured time).
 

@@ -89,7 +89,7 @@ struct RealizedCostOptions {
   int screening_episodes = 2000;     // the common-random-number sample that compares candidates
   int gradient_episodes = 64;        // episodes per gradient estimate
   int gradient_sensors = 8;          // sensors sampled per interval and episode (0 = all)
-  int acceptance_episodes = 10000;   // fresh paired test: refined schedule vs its warm start
+  int acceptance_episodes = 10000;   // fresh paired tests: refined schedule vs its warm start
   int report_episodes = 10000;       // fresh episodes that score the returned schedule
   long long max_episodes = 2000000;  // all stages together
 };
@@ -147,8 +147,9 @@ struct PlanResult {
   // "stalled" (no step decreases the cost any more),
   // "stopped" (progress returned false), "not_optimized" (Uniform, or nothing to plan), or
   // "failed: <IPOPT status>" (the best point found is still returned, projected and scored).
-  // MonteCarlo: "improved" (the refined schedule passed the paired test against its warm start)
-  // or "kept_start" (it did not, or no refinement was found: the warm start is returned).
+  // MonteCarlo: "improved" (the refined schedule passed the paired test against its warm start,
+  // and again on fresh episodes) or "kept_start" (it did not, or no refinement was found: the
+  // warm start is returned).
   std::string status;
   // First-order optimality at the returned point, scale-free: with rates measured in units of
   // the largest λ̄_j and the cost in units of the cost itself, the largest change of a planned
