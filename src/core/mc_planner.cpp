@@ -24,7 +24,6 @@ namespace sensornet {
 namespace {
 
 constexpr const char* kSource = "mc planner";
-constexpr std::uint64_t kUnitPointStream = 0x6d632d756e697470ULL;  // "mc-unitp"
 constexpr std::uint64_t kProbeStream = 0x6d632d70726f6265ULL;      // "mc-probe"
 // Seeds of the planner's stages, mixed with the request's seed.
 constexpr std::uint64_t kScreeningStage = 1;
@@ -110,7 +109,7 @@ class EpisodeWorker {
   void drawArrivals(const Eigen::MatrixXd& delivered, std::uint64_t seed, long long episode) {
     arrivals_.clear();
     for (int j = 0; j < static_cast<int>(delivered.cols()); ++j) {
-      Rng rng = Rng::keyed(seed, kUnitPointStream, static_cast<std::uint64_t>(episode),
+      Rng rng = Rng::keyed(seed, kTimeChangeStream, static_cast<std::uint64_t>(episode),
                            static_cast<std::uint64_t>(j));
       double point = rng.exponential(1.0);
       double integrated = 0.0;  // Λ_j at the start of the segment

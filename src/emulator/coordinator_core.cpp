@@ -11,7 +11,6 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/network.hpp"
-#include "sensornet/io/command_line.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 
 namespace sensornet::emulator {
@@ -537,31 +536,28 @@ void CoordinatorCore::replanOnCadence(std::int64_t now_ns) {
   if (reached < cadence_->next || reached * every >= run_.scenario.horizon_s) return;
   if (!(fused_ && fused_->episode == running->episode)) {
     if (!cadence_->waiting_logged) {
-      log(info, fmt::format("closed loop: no fused covariance of episode {} yet at {} s; "
+      log(info, fmt::format("closed loop: no fused covariance of episode {} yet at {:.3f} s; "
                             "re-planning as soon as one comes",
-                            running->episode, formatNumber(t)));
+                            running->episode, t));
       cadence_->waiting_logged = true;
     }
     return;
   }
   cadence_->next = reached + 1;
+  const std::string at = fmt::format("closed loop at {:.3f} s of episode {}", t, running->episode);
   try {
     const Replan r = replanner_.replanTail(book_, moment(now_ns), 0);
     if (r.versions.empty()) {
-      log(info, "closed loop at " + formatNumber(t) + " s of episode " +
-                    std::to_string(running->episode) + ": no tail, " + r.summary);
+      log(info, at + ": no tail, " + r.summary);
       return;
     }
     for (const ScheduleVersion& v : r.versions) book_.add(v);
     saveState();
     for (const ScheduleVersion& v : r.versions) act(PublishVersion{v});
-    log(info, "closed loop at " + formatNumber(t) + " s of episode " +
-                  std::to_string(running->episode) + ": " + r.summary);
+    log(info, at + ": " + r.summary);
     if (!r.caveat.empty()) log(warn, "closed loop: " + r.caveat);
   } catch (const InputError& error) {
-    log(warn, fmt::format("closed loop at {} s of episode {}: no tail published ({}); the "
-                          "schedule in force stays",
-                          formatNumber(t), running->episode, error.what()));
+    log(warn, at + ": no tail published (" + error.what() + "); the schedule in force stays");
   }
 }
 

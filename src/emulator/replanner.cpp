@@ -230,7 +230,12 @@ Replan Replanner::replanTail(const ScheduleBook& book, const RunMoment& now,
   // the run's open-loop plan (or an operator's change of it), which every episode starts with.
   const RateSchedule open_loop = book.latest().schedule;
   Replan r = plan(settings_, book, now, command_id, &open_loop);
-  if (r.versions.size() < 2) r.versions.clear();  // no tail: nothing changes
+  if (r.versions.size() < 2) {  // no tail: nothing changes, and the summary says why
+    r.versions.clear();
+    r.summary = now.running ? r.summary.substr(0, r.summary.find("; "))
+                            : "the episode ends within the switch margin (the next one keeps "
+                              "the version it was announced with)";
+  }
   return r;
 }
 
