@@ -17,7 +17,7 @@ constexpr const char* kSource = "plan request";
 
 // How closely the planner's RK4 transcription must reproduce the accurate rollout's cost
 // (relative), at the start point and at the solution, and the most RK4 steps per interval it
-// takes to get there. 1e-2 by measurement (bench/CONVERGENCE.md): where the transcription is
+// takes to get there. 1e-2 by measurement (bench/README.md): where the transcription is
 // stable its error falls 10-20x per doubling, so 1e-2 costs at most one doubling more than a
 // looser bound would, while its plans' accurate costs then agree with those planned at 64 steps
 // to about 1e-4; a 2-state cov plan at 400 Hz has an infinite cost at 2 steps and 8e-4 at 4, the

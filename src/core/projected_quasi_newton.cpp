@@ -125,7 +125,7 @@ class BindingFace {
   // slack while the residual's projected-gradient step does, so the residual stayed at the
   // largest such slack over rateUnit, and ε with it. The default scenario's cov plan without
   // sensor 1, warm-started from the plan with it, stopped there after 500 iterations (residual
-  // 1.3e-3: slacks up to 1.5e-2 held as binding under ε = 1.2e-2; bench/CONVERGENCE.md).
+  // 1.3e-3: slacks up to 1.5e-2 held as binding under ε = 1.2e-2; bench/README.md).
   void moveOntoBindingRows(const MatrixXd& x, MatrixXd& direction) const {
     const MatrixXd& C = problem_.C();
     for (const Interval& interval : intervals_) {

@@ -7,6 +7,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/emulated_plant.hpp"
@@ -201,8 +202,11 @@ ClosedLoopResult simulateClosedLoop(const Scenario& scenario, const RateSchedule
 std::vector<double> openLoopCosts(const Scenario& scenario, const RateSchedule& schedule,
                                   int runs, std::uint64_t seed, int threads) {
   checkFits(scenario, schedule);
-  ScheduleBook book;
-  book.add(openLoopVersion(scenario, schedule, PlanSurrogate::Information));
+  ScheduleBook book;  // one version; its bracket is never read here
+  ScheduleVersion only;
+  only.version = 1;
+  only.schedule = schedule;
+  book.add(std::move(only));
   std::vector<double> costs(static_cast<std::size_t>(std::max(0, runs)), 0.0);
   forEachEpisode(
       runs, threads, {}, [&] { return EpisodeRunner(scenario); },

@@ -33,7 +33,7 @@
 //    one-sided t-test on the same episodes says it is better at level 5%, and the same test
 //    says so again on those episodes and as many fresh ones together (the confirmation: J(P)
 //    is heavy-tailed where a mode is unstable, and one sample can miss the refined schedule's
-//    rare disasters; bench/CONVERGENCE.md). The returned
+//    rare disasters; bench/README.md). The returned
 //    schedule is then scored on yet another fresh sample (report_episodes): mean and 95%
 //    half-width t_{0.975, E-1} s / √E.
 //  - Time: the screening sample shrinks (to >= 200 episodes, measured on a pilot) so that it

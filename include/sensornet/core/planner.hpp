@@ -114,7 +114,7 @@ struct PlanRequest {
   double max_seconds = 120.0;  // wall time of the solve (mc: of the whole plan)
   // RK4 steps per interval of the transcription to start from (2 suffice on the paper's
   // family); the planner doubles them until its cost agrees with the accurate rollout's within
-  // 1e-2 relative at the start point and at the solution, up to 256 (bench/CONVERGENCE.md).
+  // 1e-2 relative at the start point and at the solution, up to 256 (bench/README.md).
   int substeps = 2;
   PlanMethod method = PlanMethod::ProjectedGradient;
   // Optional; called after every solver iteration from the calling thread. Returning false

@@ -386,7 +386,7 @@ TEST(Planner, DoublesTheRk4StepsUntilTheTranscriptionAgreesWithTheAccurateRollou
 // that the default start reaches. With the direction tangent to the binding face, rows with a
 // slack inside the active width ε stayed slack; the residual's unit step would fill them, so
 // the residual stayed at the largest slack and ε with it: 500 iterations, residual 1.3e-3, for
-// the cov plan warm-started from the cov plan (bench/CONVERGENCE.md).
+// the cov plan warm-started from the cov plan (bench/README.md).
 TEST(Planner, ConvergesFromTheScheduleInForceWhenASensorIsTakenOut) {
   const Scenario s = planarTargetScenario();
   for (const auto surrogate : {PlanSurrogate::Covariance, PlanSurrogate::Information}) {
