@@ -27,8 +27,7 @@ ScheduleSeen scheduleOf(const sensornet_Schedule& s) {
 SensorStatusSeen statusOf(const sensornet_SensorStatus& s, bool alive) {
   SensorStatusSeen out;
   out.sensor_id = s.sensor_id;
-  out.state = lookUpWord<emulator::SensorState>(emulator::sensorStateName(s.state))
-                  .value_or(emulator::SensorState::Starting);
+  out.state = emulator::sensorStateOf(s.state).value_or(emulator::SensorState::Starting);
   out.episode = s.episode;
   out.schedule_version = s.schedule_version;
   out.rate_hz = s.current_rate_hz;

@@ -40,8 +40,8 @@ std::string digestOf(std::string_view text) {
   return hex;
 }
 
-dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
-                                 const std::string& run_id, const RunScenario& scenario) {
+void withScenarioSample(const std::string& run_id, const RunScenario& scenario,
+                        const std::function<void(const sensornet_Scenario&)>& use) {
   sensornet_Scenario sample{};
   sample.run_id = borrowString(run_id);
   sample.digest = borrowString(scenario.digest);
@@ -53,7 +53,14 @@ dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
   sample.seed = scenario.seed;
   const std::string arrivals(arrivalModeName(scenario.scenario.arrivals));
   sample.arrivals = borrowString(arrivals);
-  return writer.write(sample);
+  use(sample);
+}
+
+dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
+                                 const std::string& run_id, const RunScenario& scenario) {
+  dds::WriteResult result = dds::WriteResult::TimedOut;
+  withScenarioSample(run_id, scenario, [&](const sensornet_Scenario& s) { result = writer.write(s); });
+  return result;
 }
 
 RunScenario scenarioFromWire(const sensornet_Scenario& sample) {
@@ -82,9 +89,9 @@ RunScenario scenarioFromWire(const sensornet_Scenario& sample) {
   return result;
 }
 
-dds::WriteResult publishSchedule(dds::Writer<sensornet_Schedule>& writer,
-                                 const std::string& run_id, const std::string& scenario_digest,
-                                 const ScheduleVersion& version) {
+void withScheduleSample(const std::string& run_id, const std::string& scenario_digest,
+                        const ScheduleVersion& version,
+                        const std::function<void(const sensornet_Schedule&)>& use) {
   const RateSchedule& schedule = version.schedule;
   // Row-major N x M.
   std::vector<double> rates(static_cast<std::size_t>(schedule.intervals() * schedule.sensorCount()));
@@ -108,7 +115,16 @@ dds::WriteResult publishSchedule(dds::Writer<sensornet_Schedule>& writer,
   sample.bracket_upper = version.bracket.cov;
   sample.command_id = version.command_id;
   sample.issued_wall_time_ns = wallNowNs();
-  return writer.write(sample);
+  use(sample);
+}
+
+dds::WriteResult publishSchedule(dds::Writer<sensornet_Schedule>& writer,
+                                 const std::string& run_id, const std::string& scenario_digest,
+                                 const ScheduleVersion& version) {
+  dds::WriteResult result = dds::WriteResult::TimedOut;
+  withScheduleSample(run_id, scenario_digest, version,
+                     [&](const sensornet_Schedule& s) { result = writer.write(s); });
+  return result;
 }
 
 ScheduleVersion scheduleFromWire(const sensornet_Schedule& sample, const Scenario& scenario,
@@ -156,22 +172,30 @@ ScheduleVersion scheduleFromWire(const sensornet_Schedule& sample, const Scenari
   return version;
 }
 
-std::string sensorStateName(sensornet_SensorState state) {
+std::optional<SensorState> sensorStateOf(sensornet_SensorState state) {
+  using S = SensorState;
   switch (state) {
-    case sensornet_SENSOR_STARTING:
-      return "starting";
-    case sensornet_SENSOR_READY:
-      return "ready";
-    case sensornet_SENSOR_RUNNING:
-      return "running";
-    case sensornet_SENSOR_EXCLUDED:
-      return "excluded";
-    case sensornet_SENSOR_STOPPED:
-      return "stopped";
-    case sensornet_SENSOR_FAILED:
-      return "failed";
+    case sensornet_SENSOR_STARTING: return S::Starting;
+    case sensornet_SENSOR_READY: return S::Ready;
+    case sensornet_SENSOR_RUNNING: return S::Running;
+    case sensornet_SENSOR_EXCLUDED: return S::Excluded;
+    case sensornet_SENSOR_STOPPED: return S::Stopped;
+    case sensornet_SENSOR_FAILED: return S::Failed;
   }
-  return "unknown";
+  return std::nullopt;
+}
+
+sensornet_SensorState wireSensorState(SensorState state) {
+  using S = SensorState;
+  switch (state) {
+    case S::Starting: return sensornet_SENSOR_STARTING;
+    case S::Ready: return sensornet_SENSOR_READY;
+    case S::Running: return sensornet_SENSOR_RUNNING;
+    case S::Excluded: return sensornet_SENSOR_EXCLUDED;
+    case S::Stopped: return sensornet_SENSOR_STOPPED;
+    case S::Failed: return sensornet_SENSOR_FAILED;
+  }
+  return sensornet_SENSOR_FAILED;
 }
 
 sensornet_Report reportSample(const std::string& run_id, const EpisodeResult& e,

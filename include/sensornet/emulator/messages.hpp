@@ -8,6 +8,8 @@
 //   ScheduleVersion v = scheduleFromWire(sample, scenario, digest);  // everyone else
 
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
@@ -18,6 +20,7 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::emulator {
 
@@ -27,8 +30,10 @@ namespace sensornet::emulator {
 // A 16-hex-digit digest of a text (FNV-1a 64), to check that processes agree on the scenario.
 [[nodiscard]] std::string digestOf(std::string_view text);
 
-// "starting", "ready", "running", "excluded", "stopped", "failed" (what status and watch show).
-[[nodiscard]] std::string sensorStateName(sensornet_SensorState state);
+// A SensorStatus's state in the vocabulary (vocabulary.hpp), and back; nullopt for a value the
+// IDL does not define (a malformed sample).
+[[nodiscard]] std::optional<SensorState> sensorStateOf(sensornet_SensorState state);
+[[nodiscard]] sensornet_SensorState wireSensorState(SensorState state);
 
 // What a process learns from the Scenario topic.
 struct RunScenario {
@@ -38,6 +43,10 @@ struct RunScenario {
   std::uint64_t seed = 0;
 };
 
+// The sample publishScenario writes, handed to `use` instead (it borrows from the arguments):
+// for a core fed in-process, or a test.
+void withScenarioSample(const std::string& run_id, const RunScenario& scenario,
+                        const std::function<void(const sensornet_Scenario&)>& use);
 [[nodiscard]] dds::WriteResult publishScenario(dds::Writer<sensornet_Scenario>& writer,
                                                const std::string& run_id,
                                                const RunScenario& scenario);
@@ -46,6 +55,10 @@ struct RunScenario {
 // empty (a writer that does not set it) means Poisson.
 [[nodiscard]] RunScenario scenarioFromWire(const sensornet_Scenario& sample);
 
+// The sample publishSchedule writes, handed to `use` instead (it borrows from the arguments).
+void withScheduleSample(const std::string& run_id, const std::string& scenario_digest,
+                        const ScheduleVersion& version,
+                        const std::function<void(const sensornet_Schedule&)>& use);
 [[nodiscard]] dds::WriteResult publishSchedule(dds::Writer<sensornet_Schedule>& writer,
                                                const std::string& run_id,
                                                const std::string& scenario_digest,
