@@ -17,6 +17,9 @@
 #include <string>
 
 #include "run_follower.hpp"
+#include <algorithm>
+#include <cstdint>
+
 #include "sensornet/dds/domain.hpp"
 #include "sensornet/launcher/fault.hpp"  // RunPosition
 #include "sensornet/launcher/run_view.hpp"
@@ -44,6 +47,15 @@ class ProgressWatcher {
   [[nodiscard]] bool gone(int sensor) const { return view_.gone(static_cast<std::uint32_t>(sensor)); }
   [[nodiscard]] RunPosition positionAt(std::int64_t wall_ns) const {
     return view_.positionAt(wall_ns);
+  }
+  // The wall time of the latest SensorStatus the process `pid` wrote (0: none came): it was alive
+  // then.
+  [[nodiscard]] std::int64_t lastStatusWallNs(std::int32_t pid) const {
+    std::int64_t latest = 0;
+    for (const auto& [sensor, view] : view_.sensors()) {
+      if (view.process_id == pid) latest = std::max(latest, view.status_wall_ns);
+    }
+    return latest;
   }
   // The external fusion center's Reports into the episode log (RunFollower::recordReportsTo).
   void recordReportsTo(const std::filesystem::path& path, int sensor_count) {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <optional>
 
 #include "interrupts.hpp"
 #include "sensornet/emulator/messages.hpp"
@@ -29,10 +30,12 @@ class Wiring {
   void step() {
     run_.progress.poll(kWatchStep);
     for (const auto& [process, reply] : run_.notices.poll()) core_.onReply(process, reply);
-    const RunPosition at = run_.progress.positionAt(emulator::wallNowNs());
+    const std::int64_t now_ns = emulator::wallNowNs();
+    const RunPosition at = run_.progress.positionAt(now_ns);
     for (const ChildExit& exit : run_.group.reap()) {
-      carryOut(core_.onChildExit(exit, at, Clock::now()), at);
+      carryOut(core_.onChildExit(exit, at, Clock::now(), lastSeenAlive(exit, now_ns)), at);
     }
+    last_look_ns_ = now_ns;
     if (const std::vector<int> gone = externalsGone(); !gone.empty()) {
       carryOut(core_.onExternalSensorsGone(gone, at), at);
     }
@@ -41,6 +44,18 @@ class Wiring {
   }
 
  private:
+  // The previous reap found the child running, and so did its latest SensorStatus: the later of
+  // the two is the last the launcher knows it alive. Far from now only when the launcher itself
+  // did not run in between (the core then dates the death by it).
+  [[nodiscard]] std::optional<LastSeenAlive> lastSeenAlive(const ChildExit& exit,
+                                                           std::int64_t now_ns) const {
+    if (last_look_ns_ == 0) return std::nullopt;
+    const std::int64_t seen_ns = std::clamp(run_.progress.lastStatusWallNs(exit.pid),
+                                            last_look_ns_, now_ns);
+    return LastSeenAlive{run_.progress.positionAt(seen_ns),
+                         1e-9 * static_cast<double>(now_ns - seen_ns)};
+  }
+
   // The external sensors gone for kExternalGoneLimit without a break: their participant left
   // (a pause shorter than that, of the process or of its link, is a stall, as for our agents).
   std::vector<int> externalsGone() {
@@ -111,6 +126,7 @@ class Wiring {
   Supervisor& core_;
   RunHandles run_;
   std::map<int, Clock::time_point> gone_since_;
+  std::int64_t last_look_ns_ = 0;  // wall time of the previous reap
 };
 
 }  // namespace

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
+#include <optional>
 
 namespace sensornet::launcher {
 namespace {
@@ -33,6 +35,31 @@ std::string seconds(std::chrono::milliseconds limit) {
   return ms % 1000 == 0 ? std::to_string(ms / 1000) : std::to_string(static_cast<double>(ms) / 1e3);
 }
 
+std::string seconds3(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", s);
+  return text;
+}
+
+// "episode 0 at t = 0.66 s", "before the first episode".
+std::string positionText(const RunPosition& at) {
+  if (!at.episode) return "before the first episode";
+  std::string text = "episode " + std::to_string(*at.episode);
+  if (at.emulated_time_s) text += " at t = " + seconds3(*at.emulated_time_s) + " s";
+  return text;
+}
+
+// A death the launcher found only after it had not looked for a while (it was stalled itself)
+// happened at some moment since the child was last seen alive, not when it was found: the fault
+// is dated by that last sight, and says so (issue 31, finding 4).
+std::optional<std::string> lateNotice(const RunPosition& found,
+                                      const std::optional<LastSeenAlive>& seen) {
+  if (!seen || !(seen->unseen_s > kLateDeathNoticeS)) return std::nullopt;
+  return "; died after " + positionText(seen->at) + " (last seen alive then), found dead " +
+         seconds3(seen->unseen_s) + " s later, " + positionText(found) +
+         " (the launcher was not running in between)";
+}
+
 }  // namespace
 
 std::string ChildExit::describe() const {
@@ -47,19 +74,26 @@ Supervisor::Supervisor(SupervisorConfig config, SteadyTime started) : config_(st
 }
 
 std::vector<Action> Supervisor::onChildExit(const ChildExit& exit, const RunPosition& at,
-                                            SteadyTime now) {
+                                            SteadyTime now, std::optional<LastSeenAlive> seen) {
   if (phase_ == Phase::Done) return {};
+  if (phase_ == Phase::Stopping || exit.succeeded()) return onChildEnded(exit, now);
+  const std::optional<std::string> late = lateNotice(at, seen);
+  late_note_ = late.value_or("");
+  std::vector<Action> actions = onBadExit(exit, late ? seen->at : at, now);
+  late_note_.clear();
+  return actions;
+}
+
+// A child that ended without a fault of its own: stopped by the launcher, or done.
+std::vector<Action> Supervisor::onChildEnded(const ChildExit& exit, SteadyTime now) {
   if (phase_ == Phase::Stopping) {
     // The launcher's own stop ended it: a consequence of the cause already recorded.
     ended_.insert(exit.name);
     stopped_.push_back(exit.name);
     return {};
   }
-  if (exit.succeeded()) {
-    ended(exit.name, now);
-    return {};
-  }
-  return onBadExit(exit, at, now);
+  ended(exit.name, now);
+  return {};
 }
 
 std::vector<Action> Supervisor::onBadExit(const ChildExit& exit, const RunPosition& at,
@@ -94,7 +128,7 @@ std::vector<Action> Supervisor::onSensorAgentDeath(const ChildExit& exit, const 
                 exitFault(exit, at));
   }
   ended_.insert(exit.name);
-  return onSensorsDead(exit.name, *sensors, exitFault(exit, at), exit.describe());
+  return onSensorsDead(exit.name, *sensors, exitFault(exit, at), exit.describe() + late_note_);
 }
 
 std::vector<Action> Supervisor::onExternalSensorsGone(const std::vector<int>& sensors,
@@ -253,7 +287,8 @@ void Supervisor::ended(const std::string& name, SteadyTime now) {
 Fault Supervisor::exitFault(const ChildExit& exit, const RunPosition& at) const {
   const std::vector<int>* sensors = sensorsOf(exit.name);
   Fault fault{exit.signal != 0 ? FaultKind::ProcessKilled : FaultKind::ProcessFailed, exit.name,
-              sensors != nullptr ? *sensors : std::vector<int>{}, at, exit.describe()};
+              sensors != nullptr ? *sensors : std::vector<int>{}, at,
+              exit.describe() + late_note_};
   if (scripted(exit)) {
     fault.kind = FaultKind::Crash;
     fault.detail = "scripted crash (the scenario's faults:), " + fault.detail;

@@ -51,6 +51,19 @@ struct ChildExit {
   [[nodiscard]] std::string describe() const;
 };
 
+// The launcher's last look that found a child alive, before the look that found it dead: where
+// the run was then (the later of that look and the child's last SensorStatus) and how many wall
+// seconds passed until the child was found dead. Normally one watch step (50 ms); much more when
+// the launcher itself was not running (SIGSTOP, starved of CPU) while the child died.
+struct LastSeenAlive {
+  RunPosition at;
+  double unseen_s = 0.0;
+};
+
+// Longer than this unseen, a death is dated by the last sight of the child alive, not by the
+// moment the launcher noticed it (StallWatch's slack: a loop that looks every 50 ms was stalled).
+inline constexpr double kLateDeathNoticeS = 0.5;
+
 // The one reason a run ended as failed or interrupted (for the lines on standard error).
 enum class RunFailureKind { ChildFailed, Interrupted, TimedOut };
 struct RunFailure {
@@ -111,8 +124,10 @@ class Supervisor {
  public:
   Supervisor(SupervisorConfig config, SteadyTime started);
 
+  // `at`: where the run is now; `seen`: the last look that found the child alive, if known.
   [[nodiscard]] std::vector<Action> onChildExit(const ChildExit& exit, const RunPosition& at,
-                                                SteadyTime now);
+                                                SteadyTime now,
+                                                std::optional<LastSeenAlive> seen = std::nullopt);
   // External sensors (--external-sensors) whose participant left the run mid-run: its
   // SensorStatus writer has been gone past the launcher's limit. A death like a sensor agent's,
   // which the failure policy answers; before the first episode or after the run ended, nothing.
@@ -151,6 +166,7 @@ class Supervisor {
     bool awaiting_restart = false;  // a restart was asked for it
   };
 
+  [[nodiscard]] std::vector<Action> onChildEnded(const ChildExit& exit, SteadyTime now);
   [[nodiscard]] std::vector<Action> onBadExit(const ChildExit& exit, const RunPosition& at,
                                               SteadyTime now);
   [[nodiscard]] std::vector<Action> onSensorAgentDeath(const ChildExit& exit,
@@ -176,6 +192,9 @@ class Supervisor {
   std::vector<Entry> entries_;
   std::optional<RunFailure> failure_;
   std::optional<std::size_t> stop_policy_cause_;  // the death the coordinator ends the run for
+  // While onChildExit runs: when the death was noticed late, what the launcher knows of its
+  // moment ("; found dead 1.0 s after it was last seen alive ..."), else "".
+  std::string late_note_;
   int restarts_coordinator_ = 0;
   int restarts_fusion_center_ = 0;
 };

@@ -110,6 +110,39 @@ TEST(Supervisor, FusionCenterKilledTwiceRecordsBothRestarts) {
   EXPECT_EQ(exitCodeOf(v.status), 3);
 }
 
+// Issue 31, finding 4: the launcher was stopped (SIGSTOP) from 0.33 s into episode 0 while a
+// sensor agent died, and found it dead only when it ran again, in episode 1 at 0.95 s. The death
+// is dated by the last sight of the agent alive (episode 0 at 0.33 s), not by the moment the
+// launcher found it, and the fault and the failure notice say when it was found.
+TEST(Supervisor, ADeathFoundLateIsDatedByTheLastSightOfTheChildAlive) {
+  Supervisor s(twoAgents(), kStart);
+  const LastSeenAlive seen{episode(0, 0.33), 2.1};
+  const auto actions = s.onChildExit(killed("sensor_agent-0-2"), episode(1, 0.95), kStart, seen);
+  ASSERT_EQ(count<NotifySensorsFailed>(actions), 1);
+  ASSERT_EQ(s.faults().size(), 1u);
+  const Fault& f = s.faults()[0];
+  EXPECT_EQ(f.at.episode, 0u) << "it died in episode 0, before episode 1 began";
+  ASSERT_TRUE(f.at.emulated_time_s.has_value());
+  EXPECT_DOUBLE_EQ(*f.at.emulated_time_s, 0.33);
+  EXPECT_NE(f.detail.find("died after episode 0 at t = 0.33 s (last seen alive then), found dead "
+                          "2.1 s later, episode 1 at t = 0.95 s"),
+            std::string::npos)
+      << f.detail;
+  EXPECT_NE(first<NotifySensorsFailed>(actions)->detail.find("died after episode 0"),
+            std::string::npos);
+}
+
+// Seen alive one watch step before it was found dead: dated where it was found, as always.
+TEST(Supervisor, ADeathFoundAtOnceIsDatedWhereItWasFound) {
+  Supervisor s(twoAgents(), kStart);
+  const LastSeenAlive seen{episode(1, 0.90), 0.05};
+  (void)s.onChildExit(killed("sensor_agent-0-2"), episode(1, 0.95), kStart, seen);
+  ASSERT_EQ(s.faults().size(), 1u);
+  EXPECT_EQ(s.faults()[0].at.episode, 1u);
+  EXPECT_DOUBLE_EQ(s.faults()[0].at.emulated_time_s.value_or(0.0), 0.95);
+  EXPECT_EQ(s.faults()[0].detail.find("died after"), std::string::npos) << s.faults()[0].detail;
+}
+
 TEST(Supervisor, FusionCenterKilledOnceTooOftenFailsTheRun) {
   Supervisor s(twoAgents(), kStart);
   for (int k = 1; k <= 3; ++k) {
