@@ -151,10 +151,9 @@ std::vector<std::string> withFlags(std::vector<std::string> argv,
   return argv;
 }
 
+// The report, or null when the run wrote none (or not a whole one).
 nlohmann::json readReport(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) return {};
-  return nlohmann::json::parse(in);
+  return sensornet::emulator::readReport(path).report;
 }
 
 // Sets an environment variable for the processes started while it lives.

@@ -25,23 +25,23 @@ using nlohmann::json;
 // ...", completing "fusion_center ..."). With an episode log (`logged`) the report is read
 // without its per_episode entries, which a rewrite streams back in from the log: a report of
 // millions of episodes is never held.
-std::optional<json> readReport(const fs::path& path, const std::string& run_id, bool logged,
-                               std::string& problem) {
-  std::ifstream in(path);
-  if (!in) {
+std::optional<json> readRunReport(const fs::path& path, const std::string& run_id, bool logged,
+                                  std::string& problem) {
+  emulator::ReportFile file = emulator::readReport(
+      path, logged ? emulator::EpisodeEntries::Skipped : emulator::EpisodeEntries::Read);
+  if (file.problem == emulator::ReportFile::Problem::Unreadable) {
     problem = "wrote no report at " + path.string();
     return std::nullopt;
   }
-  json report = logged ? emulator::parseReportWithoutEpisodes(in) : json::parse(in, nullptr, false);
-  if (!report.is_object() || !report.contains("summary") || !report["summary"].is_object()) {
+  if (!file.ok()) {
     problem = "wrote " + path.string() + ", which is not a sensornet report";
     return std::nullopt;
   }
-  if (report.value("run_id", std::string()) != run_id) {
+  if (file.report["run_id"].get<std::string>() != run_id) {
     problem = "wrote a report of another run in " + path.string();
     return std::nullopt;
   }
-  return report;
+  return std::move(file.report);
 }
 
 // The report rebuilt from the episode log beside `report_path` (no log: no episode); with a log,
@@ -329,7 +329,7 @@ RunOutcome settleRun(const RunEnd& end) {
     seen.readable = true;
     outcome.amended = true;
   } else {
-    report = readReport(end.report_path, end.run_id, logged, seen.problem);
+    report = readRunReport(end.report_path, end.run_id, logged, seen.problem);
     seen.readable = report.has_value();
     if (!report) {
       report = rebuildReport(end, logged);

@@ -156,13 +156,18 @@ RunEntry examine(const fs::path& folder) {
     e.episodes = linesIn(emulator::episodeLogPath(e.report));
     return e;
   }
-  if (const std::optional<json> report = readObject(e.report)) {
-    const std::string status = stringIn(*report, "status");
+  // Its per_episode entries are not needed here (a report of millions of episodes is never held).
+  const emulator::ReportFile file =
+      emulator::readReport(e.report, emulator::EpisodeEntries::Skipped);
+  if (file.ok()) {
+    const std::string status = stringIn(file.report, "status");
     if (lookUpWord<emulator::RunStatus>(status)) {
       e.state = RunState::Finished;
       e.status = status;
-      e.episodes = countIn(*report, "episodes");
-      if (const auto planned = countIn(*report, "episodes_planned")) e.episodes_planned = planned;
+      e.episodes = countIn(file.report, "episodes");
+      if (const auto planned = countIn(file.report, "episodes_planned")) {
+        e.episodes_planned = planned;
+      }
       return e;
     }
   }

@@ -1,5 +1,7 @@
 #include "sensornet/emulator/report_page.hpp"
 
+#include "sensornet/emulator/run_report.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -13,6 +15,7 @@
 #include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/emulator/run_report.hpp"
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/emulator/svg_plot.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -868,12 +871,18 @@ void checkReport(const json& report, const std::string& source) {
 }
 
 json readReportFile(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string(), "", "a readable run report (cannot open it)");
-  const json report = json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (report.is_discarded()) throw InputError(path.string(), "", "JSON (a run report)");
-  checkReport(report, path.string());
-  return report;
+  ReportFile file = readReport(path);
+  switch (file.problem) {
+    case ReportFile::Problem::None: break;
+    case ReportFile::Problem::Unreadable:
+      throw InputError(path.string(), "", "a readable run report (cannot open it)");
+    case ReportFile::Problem::NotJson:
+      throw InputError(path.string(), "", "JSON (a run report)");
+    case ReportFile::Problem::NotAReport:
+      throw InputError(path.string(), file.field, file.expected);
+  }
+  checkReport(file.report, path.string());
+  return std::move(file.report);
 }
 
 std::string reportPage(const json& report, const std::string& source) {

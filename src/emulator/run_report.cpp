@@ -584,6 +584,41 @@ json parseReportWithoutEpisodes(std::istream& in, std::size_t* listed) {
   return report;
 }
 
+ReportFile readReport(const std::filesystem::path& path, EpisodeEntries entries) {
+  ReportFile file;
+  std::ifstream in(path);
+  if (!in) {
+    file.problem = ReportFile::Problem::Unreadable;
+    return file;
+  }
+  file.report = entries == EpisodeEntries::Skipped ? parseReportWithoutEpisodes(in)
+                                                   : json::parse(in, nullptr, false);
+  if (file.report.is_discarded()) {
+    file.problem = ReportFile::Problem::NotJson;
+    return file;
+  }
+  const auto lacks = [&](const char* key, json::value_t type, const char* what) {
+    const auto it = file.report.find(key);
+    if (it != file.report.end() && it->type() == type) return false;
+    file.problem = ReportFile::Problem::NotAReport;
+    file.field = key;
+    file.expected = what;
+    return true;
+  };
+  if (!file.report.is_object()) {
+    file.problem = ReportFile::Problem::NotAReport;
+    file.expected = "a JSON object (a run report)";
+    return file;
+  }
+  if (lacks("run_id", json::value_t::string, "a string (the run id)") ||
+      lacks("summary", json::value_t::object, "an object (the run's summary)") ||
+      (entries == EpisodeEntries::Read &&
+       lacks(kPerEpisode, json::value_t::array, "an array of episode entries"))) {
+    file.report = json();
+  }
+  return file;
+}
+
 json faultEntry(FaultKind kind, const std::string& process, std::optional<int> sensor,
                 std::optional<std::uint32_t> episode, std::optional<double> emulated_time_s,
                 const std::string& detail) {

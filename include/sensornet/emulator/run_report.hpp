@@ -262,6 +262,26 @@ void writeReportWithLog(std::ostream& out, const nlohmann::json& doc,
 [[nodiscard]] nlohmann::json parseReportWithoutEpisodes(std::istream& in,
                                                         std::size_t* listed = nullptr);
 
+// A report file as every reader takes it (the launcher's outcome, `sensornet report` and `runs`,
+// the testing fixture, the benchmarks): the document, or the one reason it is not a report.
+// A report is a JSON object with a string run_id, an object summary and (unless skipped) an
+// array per_episode; what each reader needs beyond that it checks itself (the page:
+// checkReport).
+struct ReportFile {
+  enum class Problem { None, Unreadable, NotJson, NotAReport };
+  nlohmann::json report;  // the document when problem is None
+  Problem problem = Problem::None;
+  std::string field;     // NotAReport: the key that is missing or of the wrong type
+  std::string expected;  // NotAReport: what it should be
+  [[nodiscard]] bool ok() const { return problem == Problem::None; }
+};
+enum class EpisodeEntries {
+  Read,
+  Skipped,  // per_episode is dropped while parsed (a report with an episode log beside it)
+};
+[[nodiscard]] ReportFile readReport(const std::filesystem::path& path,
+                                    EpisodeEntries entries = EpisodeEntries::Read);
+
 // What a restarted fusion center (`serve --resume`) makes of the episodes it hears of. Those in
 // its episode log are done: their entries start the report, and their late measurements and
 // tallies are ignored. An episode that started before this process joined and is not in the log

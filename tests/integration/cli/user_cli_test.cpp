@@ -218,7 +218,8 @@ class Runs : public UserCli {
           record("run-done", "/s/lossy.yaml", 5, "2026-12-01T10:00:00Z").dump());
     write(scratch_ / "run-done" / "launch.lock", "123\n");
     write(scratch_ / "run-done" / "report.json",
-          R"({"run_id": "run-done", "status": "degraded", "episodes": 4, "episodes_planned": 5})");
+          R"({"run_id": "run-done", "status": "degraded", "episodes": 4, "episodes_planned": 5,)"
+          R"( "summary": {}, "per_episode": []})");
     write(scratch_ / "run-live" / "run.json",
           record("run-live", "/s/default.yaml", 20, "2026-12-01T11:00:00Z").dump());
     write(scratch_ / "run-live" / "report.jsonl", "{\"episode\": 0}\n{\"episode\": 1}\n");

@@ -197,6 +197,53 @@ TEST(RunReport, WritesPerEpisodeFromItsLogAsTheWholeDocumentWouldRead) {
   std::filesystem::remove_all(dir);
 }
 
+// The one reader of report files: a written report reads back whole, or without its
+// per_episode (then nothing there is even looked at); anything else is one named problem.
+TEST(ReportFile, ReadsAWrittenReportAndNamesWhatIsWrongWithAnythingElse) {
+  const std::filesystem::path dir = scratchDir();
+  ASSERT_FALSE(dir.empty());
+  std::mt19937_64 rng(5);
+  RunReport report("r", "d", 3, 4);
+  for (std::uint32_t i = 0; i < 6; ++i) report.add(episodeEntry(randomEpisode(i, rng)));
+  const json doc = report.toJson("completed", json::array(), json::array());
+  std::ofstream(dir / "report.json") << doc.dump(2);
+  const ReportFile whole = readReport(dir / "report.json");
+  ASSERT_TRUE(whole.ok());
+  EXPECT_EQ(whole.report, doc);
+  const ReportFile head = readReport(dir / "report.json", EpisodeEntries::Skipped);
+  ASSERT_TRUE(head.ok());
+  EXPECT_FALSE(head.report.contains("per_episode"));
+  json expected = doc;
+  expected.erase("per_episode");
+  EXPECT_EQ(head.report, expected);
+
+  EXPECT_EQ(readReport(dir / "absent.json").problem, ReportFile::Problem::Unreadable);
+  std::ofstream(dir / "torn.json") << doc.dump().substr(0, 40);
+  EXPECT_EQ(readReport(dir / "torn.json").problem, ReportFile::Problem::NotJson);
+  const auto lacking = [&](const char* key) {
+    json other = doc;
+    other.erase(key);
+    std::ofstream(dir / "other.json", std::ios::trunc) << other.dump();
+    return readReport(dir / "other.json");
+  };
+  for (const char* key : {"run_id", "summary", "per_episode"}) {
+    const ReportFile r = lacking(key);
+    EXPECT_EQ(r.problem, ReportFile::Problem::NotAReport) << key;
+    EXPECT_EQ(r.field, key);
+    EXPECT_FALSE(r.expected.empty());
+    EXPECT_TRUE(r.report.is_null()) << "no half-checked document is handed out";
+  }
+  std::ofstream(dir / "list.json") << "[1, 2]";
+  EXPECT_EQ(readReport(dir / "list.json").problem, ReportFile::Problem::NotAReport);
+  // Skipped, a per_episode of the wrong type is not looked at.
+  json odd = doc;
+  odd["per_episode"] = 3;
+  std::ofstream(dir / "odd.json") << odd.dump();
+  EXPECT_TRUE(readReport(dir / "odd.json", EpisodeEntries::Skipped).ok());
+  EXPECT_EQ(readReport(dir / "odd.json").field, "per_episode");
+  std::filesystem::remove_all(dir);
+}
+
 // Random inserts (mostly in order, with gaps and repeats) against std::set.
 TEST(EpisodeSet, AgreesWithAStdSetAndKeepsRangesDisjoint) {
   std::mt19937_64 rng(11);
