@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "support/sanitizer.hpp"
+
 extern char** environ;
 
 namespace sensornet::testing {
@@ -53,7 +55,7 @@ BackgroundProcess::~BackgroundProcess() {
 
 std::optional<int> BackgroundProcess::waitForExit(std::chrono::milliseconds timeout) {
   if (status_ || pid_ <= 0) return status_;
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const auto deadline = std::chrono::steady_clock::now() + scaledLimit(timeout);
   for (;;) {
     int status = 0;
     const pid_t done = ::waitpid(pid_, &status, WNOHANG);

@@ -10,6 +10,8 @@
 #include <array>
 #include <stdexcept>
 
+#include "support/sanitizer.hpp"
+
 extern char** environ;
 
 namespace sensornet::testing {
@@ -58,7 +60,7 @@ ProcessResult runProcess(const std::vector<std::string>& argv, std::chrono::mill
   err.closeWrite();
 
   ProcessResult result;
-  const auto deadline = std::chrono::steady_clock::now() + limit;
+  const auto deadline = std::chrono::steady_clock::now() + scaledLimit(limit);
   std::array<pollfd, 2> fds{pollfd{out.read_end, POLLIN, 0}, pollfd{err.read_end, POLLIN, 0}};
   std::array<std::string*, 2> sinks{&result.out, &result.err};
   int open_streams = 2;

@@ -6,6 +6,7 @@
 //    the sanitizer, not the program.
 //
 //   if (sensornet::testing::kAddressSanitizer) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
+//   runProcess(argv, 60s);   // waits up to 60 s, or 240 s in the sanitizer build
 
 namespace sensornet::testing {
 
@@ -14,6 +15,17 @@ inline constexpr bool kAddressSanitizer = true;
 #else
 inline constexpr bool kAddressSanitizer = false;
 #endif
+
+// The one factor every time limit of a test's processes is scaled by (runProcess,
+// RunningProgram, BackgroundProcess::waitForExit): the sanitizer build runs programs several
+// times slower, and a whole run that needs 20 s there is not a hung one. A limit is scaled, a
+// test is never skipped for being slow.
+inline constexpr int kTimeFactor = kAddressSanitizer ? 4 : 1;
+
+template <class Duration>
+[[nodiscard]] constexpr Duration scaledLimit(Duration limit) {
+  return limit * kTimeFactor;
+}
 
 inline constexpr const char* kNoGlibcHeap =
     "AddressSanitizer replaces malloc: glibc's heap statistics (mallinfo2) see none of it";
