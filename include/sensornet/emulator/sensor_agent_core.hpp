@@ -1,6 +1,6 @@
 #pragma once
-// What a sensor agent decides, without DDS or a clock of its own (docs/ARCHITECTURE.md, "Sensor
-// agent"): which of its sensors are alive, when each episode starts for it, which measurement
+// What a sensor agent decides, without DDS or a clock of its own (docs/ARCHITECTURE.md,
+// "Cores"): which of its sensors are alive, when each episode starts for it, which measurement
 // falls due when and what the emulated network does to it, when a scripted crash comes, what
 // each tally and status says, how far it fell behind the emulated clock (its own stalls and a
 // start the network delivered late left out) and when it leaves the run. Events go in (what
