@@ -56,19 +56,6 @@ struct ServeOptions {
 
 // ---- codecs: wire samples to the core's events, its controls to wire samples ---------------
 
-std::optional<emulator::SensorState> stateOf(sensornet_SensorState state) {
-  using S = emulator::SensorState;
-  switch (state) {
-    case sensornet_SENSOR_STARTING: return S::Starting;
-    case sensornet_SENSOR_READY: return S::Ready;
-    case sensornet_SENSOR_RUNNING: return S::Running;
-    case sensornet_SENSOR_EXCLUDED: return S::Excluded;
-    case sensornet_SENSOR_STOPPED: return S::Stopped;
-    case sensornet_SENSOR_FAILED: return S::Failed;
-  }
-  return std::nullopt;
-}
-
 emulator::CommandKind kindOf(sensornet_CommandKind kind) {
   using K = emulator::CommandKind;
   switch (kind) {
@@ -190,7 +177,7 @@ class CoordinatorNode {
   void readSamples() {
     for (auto& received : status_reader_.take(64).samples) {
       const sensornet_SensorStatus& s = *received.sample;
-      if (const auto state = stateOf(s.state)) {
+      if (const auto state = emulator::sensorStateOf(s.state)) {
         const int sensor = static_cast<int>(s.sensor_id);
         carryOut(core_.onSensorStatus(
             {sensor, *state, s.schedule_version, std::string(dds::viewString(s.detail)),

@@ -34,6 +34,9 @@ const std::string kYaml =
     "  - H: [[1, 1]]\n    R: [[0.2]]\n"
     "constraints:\n  C: [[1, 1, 1]]\n  b: [200]\n";
 
+// Every measurement held back 0.3 s by the emulated network.
+const std::string kDelayedYaml = kYaml + "network:\n  default: {delay: {fixed: 0.3}}\n";
+
 template <class A>
 std::vector<A> only(const SensorAgentActions& actions) {
   std::vector<A> out;
@@ -132,19 +135,24 @@ class SensorAgentCoreTest : public ::testing::Test {
     return all;
   }
 
-  // The usual start: scenario, version 1 (sensor 0 at 30 Hz then 10 Hz, sensor 2 at 20 Hz),
-  // everything matched, episode 0 starting 0.1 s from now.
-  std::int64_t startEpisodeZero() {
-    announceScenario();
-    Eigen::MatrixXd rates(2, 3);
-    rates << 30, 0, 20,  //
-        10, 0, 20;
+  // Scenario `yaml`, version 1 with `rates`, everything matched, episode 0 (without the
+  // `failed` sensors) starting 0.1 s from now; returns its start.
+  std::int64_t startEpisodeZero(const std::string& yaml, const Eigen::MatrixXd& rates,
+                                std::vector<std::uint32_t> failed = {}) {
+    announceScenario(yaml);
     announceVersion(1, 0, 0.0, rates);
     discover();
     const std::int64_t start = now_ + kSecond / 10;
-    control(sensornet_EPISODE_START, 0, start);
+    control(sensornet_EPISODE_START, 0, start, 1, std::move(failed));
     (void)feed();
     return start;
+  }
+  // The usual start: sensor 0 at 30 Hz then 10 Hz, sensor 2 at 20 Hz.
+  std::int64_t startEpisodeZero() {
+    Eigen::MatrixXd rates(2, 3);
+    rates << 30, 0, 20,  //
+        10, 0, 20;
+    return startEpisodeZero(kYaml, rates);
   }
 
   std::int64_t now_ = 1'000 * kSecond;
@@ -154,7 +162,7 @@ class SensorAgentCoreTest : public ::testing::Test {
   SensorAgentCore core_{{{0, 2}, 1.0}, inputs_};
 };
 
-TEST_F(SensorAgentCoreTest, EachMeasurementGoesOutAtTheFirstTickAtOrAfterItsInstantAndTheTallyCountsThem) {
+TEST_F(SensorAgentCoreTest, EachMeasurementGoesOutAtTheFirstTickAtOrAfterItsInstant) {
   const std::int64_t start = startEpisodeZero();
   const std::int64_t step = kSecond / 1000;  // a 1 ms tick
   std::vector<Sent> sent;
@@ -351,12 +359,7 @@ TEST_F(SensorAgentCoreTest, AStartTheNetworkDeliveredLateIsNotLag) {
 }
 
 TEST_F(SensorAgentCoreTest, ADelayedMeasurementGoesOutAtItsDelayAndTheTallyWaitsForIt) {
-  announceScenario(kYaml + "network:\n  default: {delay: {fixed: 0.3}}\n");
-  announceVersion(1, 0, 0.0, Eigen::MatrixXd::Constant(2, 3, 20.0));
-  discover();
-  const std::int64_t start = now_ + kSecond / 10;
-  control(sensornet_EPISODE_START, 0, start);
-  (void)feed();
+  const std::int64_t start = startEpisodeZero(kDelayedYaml, Eigen::MatrixXd::Constant(2, 3, 20.0));
   std::vector<Sent> sent;
   const SensorAgentActions actions = runUntil(start + 3 * kSecond, kSecond / 1000, &sent);
   ASSERT_FALSE(sent.empty());
@@ -376,12 +379,7 @@ TEST_F(SensorAgentCoreTest, ADelayedMeasurementGoesOutAtItsDelayAndTheTallyWaits
 }
 
 TEST_F(SensorAgentCoreTest, AStoppedEpisodeFlushesWhatTheNetworkHeldAndTalliesUnfinished) {
-  announceScenario(kYaml + "network:\n  default: {delay: {fixed: 0.3}}\n");
-  announceVersion(1, 0, 0.0, Eigen::MatrixXd::Constant(2, 3, 20.0));
-  discover();
-  const std::int64_t start = now_ + kSecond / 10;
-  control(sensornet_EPISODE_START, 0, start);
-  (void)feed();
+  const std::int64_t start = startEpisodeZero(kDelayedYaml, Eigen::MatrixXd::Constant(2, 3, 20.0));
   std::vector<Sent> sent;
   (void)runUntil(start + kSecond / 2, kSecond / 1000, &sent);
   control(sensornet_EPISODE_STOP, 0, 0);
@@ -401,12 +399,7 @@ TEST_F(SensorAgentCoreTest, AStoppedEpisodeFlushesWhatTheNetworkHeldAndTalliesUn
 }
 
 TEST_F(SensorAgentCoreTest, AFailedSensorPublishesNothingAndHasNoTally) {
-  announceScenario();
-  announceVersion(1, 0, 0.0, Eigen::MatrixXd::Constant(2, 3, 20.0));
-  discover();
-  const std::int64_t start = now_ + kSecond / 10;
-  control(sensornet_EPISODE_START, 0, start, 1, {2});
-  (void)feed();
+  const std::int64_t start = startEpisodeZero(kYaml, Eigen::MatrixXd::Constant(2, 3, 20.0), {2});
   std::vector<Sent> sent;
   const SensorAgentActions actions = runUntil(start + 2 * kSecond, kSecond / 1000, &sent);
   EXPECT_TRUE(logs(actions, "sensor 2 was declared failed"));
@@ -419,12 +412,9 @@ TEST_F(SensorAgentCoreTest, AFailedSensorPublishesNothingAndHasNoTally) {
 }
 
 TEST_F(SensorAgentCoreTest, AScriptedCrashComesAtItsInstantAfterWhatWasDueAndNothingFollows) {
-  announceScenario(kYaml + "faults:\n  - {kind: crash, sensor: 2, episode: 0, at: 0.5}\n");
-  announceVersion(1, 0, 0.0, Eigen::MatrixXd::Constant(2, 3, 20.0));
-  discover();
-  const std::int64_t start = now_ + kSecond / 10;
-  control(sensornet_EPISODE_START, 0, start);
-  (void)feed();
+  const std::string crashing =
+      kYaml + "faults:\n  - {kind: crash, sensor: 2, episode: 0, at: 0.5}\n";
+  const std::int64_t start = startEpisodeZero(crashing, Eigen::MatrixXd::Constant(2, 3, 20.0));
   std::vector<Sent> sent;
   const SensorAgentActions actions = runUntil(start + 2 * kSecond, kSecond / 1000, &sent);
   ASSERT_TRUE(contains<CrashProcess>(actions));
