@@ -43,6 +43,7 @@
 #include "sensornet/emulator/coordinator_journal.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/episode_controls.hpp"
+#include "sensornet/emulator/log_line.hpp"
 #include "sensornet/emulator/replanner.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
@@ -166,10 +167,6 @@ struct WriteJournal {
 // RUN_SHUTDOWN, then wait (a few seconds at most) until the others have it.
 struct ShutDownRun {
   EpisodeControl control;
-};
-struct LogLine {
-  spdlog::level::level_enum level = spdlog::level::info;
-  std::string text;
 };
 // The program ends with this code; `summary` when the run ran to its end (for --json).
 struct CoordinatorSummary {
