@@ -1,10 +1,13 @@
 #include "serve_command.hpp"
 
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <ctime>
 #include <deque>
+#include <fstream>
 #include <iostream>
 #include <iterator>
 #include <map>
@@ -207,6 +210,27 @@ emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
   return config;
 }
 
+// The launcher's pid when `sensornet launch` started this process, else 0. The launcher arms the
+// parent-death signal SIGTERM in it, so a SIGTERM that comes with this parent gone is the
+// launcher's death (kill -9), and this process is the last one of the run to say so.
+pid_t launcherParent() {
+  const pid_t parent = ::getppid();
+  std::ifstream comm("/proc/" + std::to_string(parent) + "/comm");
+  std::string name;
+  std::getline(comm, name);
+  return name == "sensornet" ? parent : 0;
+}
+
+// The report and the episode log are written and closed (each entry in one write(2)): what is
+// left is deleting the DDS entities, and Cyclone lets a reliable writer linger for the readers'
+// acknowledgements, which readers killed with the launcher never send. Nothing of this process
+// is owed to anyone any more.
+[[noreturn]] void leaveNow(int code) {
+  spdlog::shutdown();
+  std::fflush(nullptr);
+  ::_exit(code);
+}
+
 class FusionCenter {
  public:
   explicit FusionCenter(const ServeOptions& options)
@@ -279,15 +303,26 @@ class FusionCenter {
       core_.tick(now);
       carryOut();
     }
+    const bool launcher_gone = !end && launcher_ != 0 && ::getppid() != launcher_;
+    if (launcher_gone) {
+      core_.onLauncherGone("the launcher (sensornet launch, pid " + std::to_string(launcher_) +
+                               ") died while the run went on (its children got the "
+                               "parent-death signal); the run ends here",
+                           wallNowNs());
+    }
     const emulator::RunStatus status =
         core_.finish(end, inputs_.rejected(), utcNow(), wallNowNs());
     carryOut();
-    if (metrics_) {
+    // With the launcher dead, the other processes of the run were killed with it: no reader is
+    // left to take the last Report or a scrape, and waiting for them would only keep this
+    // process alive after its launcher.
+    if (metrics_ && !launcher_gone) {
       metrics_->publish(emulator::fusionCenterMetrics(core_, inputs_.book()));
       std::this_thread::sleep_for(kMetricsLinger);
     }
-    (void)report_writer_.waitForAcks(2s);
+    if (!launcher_gone) (void)report_writer_.waitForAcks(2s);
     spdlog::info("run {}: {}", options_.run.run_id, wordOf(status));
+    if (launcher_gone) leaveNow(kExitFailure);
     // The report carries the run's status; the exit code says whether this process did its job
     // (followed the run to its end and wrote the report).
     return end && core_.hasReport() ? kExitOk : kExitFailure;
@@ -416,6 +451,7 @@ class FusionCenter {
   }
 
   ServeOptions options_;
+  const pid_t launcher_ = launcherParent();  // read at start, while the parent lives
   std::unique_ptr<MetricsServer> metrics_;  // --metrics; made first: a bad address is bad input
   dds::Domain domain_;
   dds::Participant participant_;

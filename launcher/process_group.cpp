@@ -44,8 +44,8 @@ void signalChild(pid_t pid, int signal) {
 
 // Runs in the forked child, where only async-signal-safe calls are allowed: everything it needs
 // was prepared by the parent.
-[[noreturn]] void becomeChild(pid_t parent, int log_fd, int null_fd, int max_fd, char* const* argv,
-                              const std::string& exec_failure) {
+[[noreturn]] void becomeChild(pid_t parent, int death_signal, int log_fd, int null_fd, int max_fd,
+                              char* const* argv, const std::string& exec_failure) {
   ::setpgid(0, 0);
   // Default dispositions first: the launcher's handlers would swallow the death signal.
   struct sigaction default_action {};
@@ -59,7 +59,7 @@ void signalChild(pid_t pid, int signal) {
   ::sigprocmask(SIG_SETMASK, &none, nullptr);
   // Dies with the launcher. If the launcher died before this line, the signal was never
   // armed: leave now instead of running orphaned.
-  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+  ::prctl(PR_SET_PDEATHSIG, death_signal);
   if (::getppid() != parent) ::_exit(127);
   ::dup2(null_fd, STDIN_FILENO);
   ::dup2(log_fd, STDOUT_FILENO);
@@ -95,7 +95,10 @@ pid_t ProcessGroup::start(const ChildSpec& spec) {
   const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw std::runtime_error("cannot start " + spec.name + ": fork failed");
-  if (pid == 0) becomeChild(parent, log.get(), null_input.get(), max_fd, argv.data(), exec_failure);
+  if (pid == 0) {
+    becomeChild(parent, spec.parent_death_signal, log.get(), null_input.get(), max_fd, argv.data(),
+                exec_failure);
+  }
   ::setpgid(pid, pid);  // also in the parent, so that a signal sent right now reaches the group
   children_.push_back({spec, pid, true});
   return pid;

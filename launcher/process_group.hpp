@@ -1,15 +1,14 @@
 #pragma once
 // The child processes of one launched emulation: started with their output in a log file each,
-// tied to the launcher's life (PR_SET_PDEATHSIG: a launcher that dies, even by SIGKILL, takes
-// them with it), watched without blocking, and stopped together (SIGTERM, then SIGKILL after a
-// grace period). The destructor stops whatever is still running, so no path leaves a process
-// behind.
+// tied to the launcher's life (PR_SET_PDEATHSIG, ChildSpec::parent_death_signal: a launcher that
+// dies, even by SIGKILL, takes them with it), watched without blocking, and stopped together
+// (SIGTERM, then SIGKILL after a grace period). The destructor stops whatever is still running,
+// so no path leaves a process behind.
 //
 //   ProcessGroup group;
-//   group.start({"coordinator", {"/usr/bin/coordinator", "serve", ...},
-//   "/tmp/run/coordinator.log"}); for (const ChildExit& e : group.reap()) ...;    // children that
-//   ended since the last call group.stopAll(std::chrono::seconds(3));          // SIGTERM, wait,
-//   SIGKILL
+//   group.start({"coordinator", {"/usr/bin/coordinator", "serve", ...}, "run/coordinator.log"});
+//   for (const ChildExit& e : group.reap()) ...;  // children that ended since the last call
+//   group.stopAll(std::chrono::seconds(3));       // SIGTERM, wait, SIGKILL
 //
 // Children run in their own process group, so a Ctrl-C at the terminal reaches only the
 // launcher, which then stops them in order. Start children from the thread that lives as long
@@ -18,6 +17,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -31,6 +31,10 @@ struct ChildSpec {
   std::string name;                // e.g. "coordinator", "sensor_agent-0-2"
   std::vector<std::string> argv;   // argv[0] is the program's path
   std::filesystem::path log_path;  // standard output and error, truncated at start
+  // What the child gets when the launcher dies (PR_SET_PDEATHSIG): SIGKILL, so that nothing of
+  // the run outlives the launcher; the fusion center gets SIGTERM, on which it writes the report
+  // with the launcher's death as its cause.
+  int parent_death_signal = SIGKILL;
 };
 
 class ProcessGroup {

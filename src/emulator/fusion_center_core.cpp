@@ -7,6 +7,7 @@
 
 #include "sensornet/core/network.hpp"
 #include "sensornet/emulator/covariance_trace.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 
 namespace sensornet::emulator {
@@ -757,6 +758,20 @@ void FusionCenterCore::publishReport(const EpisodeResult& e, std::vector<int> la
   emit<PublishReport>(e, report_->summary(), std::move(lacking_writers));
 }
 
+// The launcher's death as a cause: {kind, process} as the launcher names its own faults.
+static json launcherDeath() {
+  return {{"kind", std::string(wordOf(FaultKind::Interrupted))}, {"process", "sensornet"}};
+}
+
+void FusionCenterCore::onLauncherGone(const std::string& detail, std::int64_t /*now*/) {
+  if (launcher_gone_) return;
+  launcher_gone_ = true;
+  log(spdlog::level::warn, detail);
+  const json cause = launcherDeath();
+  recordFault(faultEntry(FaultKind::Interrupted, cause.at("process").get<std::string>(),
+                         std::nullopt, std::nullopt, std::nullopt, detail));
+}
+
 RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
                                    const std::map<std::string, std::uint64_t>& rejected_by_inputs,
                                    const std::string& written_at, std::int64_t now) {
@@ -769,7 +784,8 @@ RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
   // named once (cutShort), not as a fault of every sensor it waited for.
   if (!open_.empty()) {
     if (!end) {
-      cutShort("the run was stopped by a signal", FaultKind::Interrupted);
+      cutShort(launcher_gone_ ? "the launcher died" : "the run was stopped by a signal",
+               FaultKind::Interrupted);
     } else if (end->aborted) {
       cutShort("the coordinator ended the run: " + end->detail, FaultKind::RunAborted);
     } else {
@@ -820,6 +836,7 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
   // What ended the run as the fusion center saw it; the launcher, which knows the run's one cause,
   // marks this entry as that cause's consequence (caused_by, fault_causes.hpp).
   if (cause) fault["ended_by"] = std::string(wordOf(*cause));
+  if (launcher_gone_) fault[kCausedByField] = launcherDeath();
   log(spdlog::level::warn, fault.at("detail").get<std::string>());
   recordFault(std::move(fault));
   for (auto& [number, open] : open_) finishEpisode(number, *open, &why);

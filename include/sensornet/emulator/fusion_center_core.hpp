@@ -178,6 +178,10 @@ class FusionCenterCore {
   // The coordinator refused command `command_id` because its sender had no right to send it
   // (a CommandReply whose reason begins with kNotPermitted): a fault, once per command.
   void onCommandRefused(std::uint64_t command_id, const std::string& reason, std::int64_t now);
+  // The launcher that started this process died (kill -9), and its parent-death signal is what
+  // stops this one: the run ends interrupted with that death as its cause, recorded here since
+  // no launcher is left to add it to the report (issue 31).
+  void onLauncherGone(const std::string& detail, std::int64_t now);
   // The main loop's turn: its own stalls, fusion up to the watermark, episodes closed or timed out.
   void tick(std::int64_t now);
   // The run ended (`end`) or was stopped by a signal (nullopt): what is open is closed, the
@@ -274,6 +278,7 @@ class FusionCenterCore {
   // stalled): long after they fell silent, or after the end of an episode whose count they
   // still owed. When they were last heard dates the death better than the notice.
   std::map<int, std::int64_t> silent_from_ns_;
+  bool launcher_gone_ = false;           // onLauncherGone: the run's cause is the launcher's death
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
   std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "sensornet/dds/domain.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "support/background_process.hpp"
 #include "support/occurrences.hpp"
 #include "support/process.hpp"
@@ -404,19 +405,31 @@ TEST_F(Launcher, SigtermMidRunStopsEveryChild) {
 TEST_F(Launcher, KilledLauncherTakesItsChildrenAlong) {
   const LeftoverGuard guard(run_id_);
   RunningProgram launcher(launchArgs(100, 1), 60s);
-  // Wait until all 8 children are up (each carries the run id), then kill the launcher hard.
-  const auto deadline = std::chrono::steady_clock::now() + 15s;
-  while (processesMentioning(run_id_).size() < 1u + 2u + kDefaultSensors &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(50ms);
-  }
+  // Mid-run (every sensor running, all 8 children up, each carrying the run id), then kill the
+  // launcher hard: the children have their DDS readers and writers then, and something to say.
+  ASSERT_TRUE(waitUntilRunning(25s).has_value()) << "the run never got going";
   const std::optional<pid_t> launcher_pid = launcherOf(run_id_);
   ASSERT_TRUE(launcher_pid.has_value());
   ASSERT_EQ(processesMentioning(run_id_).size(), 1u + 2u + kDefaultSensors);
   ASSERT_EQ(::kill(*launcher_pid, SIGKILL), 0);
   EXPECT_EQ(launcher.result().exit_code, 128 + SIGKILL);
-  // PR_SET_PDEATHSIG: every child gets SIGTERM when the launcher dies, and leaves.
-  EXPECT_EQ(leftoversAfter(run_id_, 5s), std::vector<pid_t>{});
+  const auto killed = std::chrono::steady_clock::now();
+  // PR_SET_PDEATHSIG: every child dies with the launcher (SIGKILL), the fusion center after
+  // writing the report (SIGTERM), without waiting for readers that died with the launcher.
+  EXPECT_EQ(leftoversAfter(run_id_, 1s), std::vector<pid_t>{});
+  const double gone_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count();
+  std::printf("children gone %.0f ms after the launcher's kill -9\n", 1e3 * gone_s);
+  // The report names the launcher's death as the one cause of the interrupted run.
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object()) << "no report at " << dir_ / "report.json";
+  EXPECT_EQ(report["status"], "interrupted");
+  ASSERT_FALSE(report["faults"].empty());
+  EXPECT_EQ(report["faults"][0]["kind"], "interrupted");
+  EXPECT_EQ(report["faults"][0]["process"], "sensornet");
+  EXPECT_NE(report["faults"][0]["detail"].get<std::string>().find("the launcher"),
+            std::string::npos)
+      << report["faults"].dump();
+  EXPECT_EQ(sensornet::emulator::causeCount(report["faults"]), 1u) << report["faults"].dump();
   // The killed launcher could not forget its current-run record; `status` sees it is stale.
   const ProcessResult status = runProcess({kLauncher, "status"}, 10s);
   EXPECT_EQ(status.exit_code, 2);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sensornet/core/rate_schedule.hpp"
+#include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "emulator_test_support.hpp"
@@ -623,6 +624,29 @@ TEST_F(FusionCenterCoreTest, ARunStoppedWithEpisodesOpenNamesItsCauseOnce) {
   EXPECT_NE(cut.at("detail").get<std::string>().find("episode 0: sensors 1, 2"), std::string::npos)
       << cut.at("detail");
   EXPECT_EQ(core_->faults()[0].at("sensor"), 3);
+}
+
+// Issue 31: the launcher killed with -9 mid-episode; its parent-death signal stops the fusion
+// center, which writes the report alone: interrupted, and the launcher's death is its one cause
+// (the open episode's cut_short is marked as its consequence), not "stopped by a signal".
+TEST_F(FusionCenterCoreTest, ALauncherThatDiedIsTheCauseOfTheInterruptedRun) {
+  begin(0);
+  auto all = measurements(0);
+  std::erase_if(all, [](const auto& m) { return m.measurement.time_s > 1.0; });
+  deliver(all);
+  core_->onLauncherGone("the launcher (pid 42) that started this fusion center died", now_);
+  EXPECT_EQ(finish(std::nullopt), RunStatus::Interrupted);
+  const json& faults = core_->faults();
+  ASSERT_EQ(faults.size(), 2u) << faults.dump();
+  EXPECT_EQ(faults[0].at("kind"), "interrupted");
+  EXPECT_EQ(faults[0].at("process"), "sensornet");
+  EXPECT_EQ(faults[0].at("detail"), "the launcher (pid 42) that started this fusion center died");
+  EXPECT_EQ(faults[1].at("kind"), "cut_short");
+  EXPECT_NE(faults[1].at("detail").get<std::string>().find("open when the launcher died"),
+            std::string::npos)
+      << faults[1].dump();
+  EXPECT_EQ(faults[1].at(kCausedByField), (json{{"kind", "interrupted"}, {"process", "sensornet"}}));
+  EXPECT_EQ(causeCount(final_.at("faults")), 1u);
 }
 
 // The coordinator's --on-sensor-failure stop: the run is aborted with an episode open.
