@@ -576,6 +576,24 @@ int runLaunch(LaunchOptions options) {
   }
   std::vector<Fault> faults = core.faults();
   nameSilentExternals(external, options.external_fusion_center, progress, faults);
+  // Every process has left: what the recorder still holds goes in now, so that a recording
+  // that fell short (a full disk) is one of the run's faults. It is closed once the outcome is
+  // known (its run-end metadata).
+  bool recording_fell_short = false;
+  if (recorder) {
+    if (const emulator::RecordingSummary& drained = recorder->drain(); !drained.error.empty()) {
+      recording_fell_short = true;
+      std::error_code unknown;
+      const std::uintmax_t kept = fs::file_size(drained.path, unknown);
+      Fault short_recording{
+          emulator::FaultKind::RecordingIncomplete, kLauncherProcess, {}, {},
+          "--record: the recording fell short: " + drained.error + "; " +
+              drained.path.string() + " ends after the last whole record written" +
+              (unknown ? std::string() : " (" + std::to_string(kept) + " bytes)")};
+      short_recording.survived = true;  // the run went on; its costs are unchanged
+      faults.push_back(std::move(short_recording));
+    }
+  }
   const RunEnd end{
       plan.run_id,
       plan.report_path,
@@ -593,18 +611,20 @@ int runLaunch(LaunchOptions options) {
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
   }
-  if (recorder) {  // like the page: a recording that failed is a warning, never an exit code
+  if (recorder) {  // a recording that fell short is a fault (above); one that cannot close, a warning
     const emulator::RecordingSummary recorded =
         recorder->stop({{"status", std::string(wordOf(outcome.status))},
                         {"exit_code", std::to_string(outcome.exit_code)},
                         {"ended_at", utcNow()}});
-    if (!recorded.error.empty()) {
-      std::fprintf(stderr, "sensornet: warning: --record: recording stopped early: %s\n",
+    if (!recorded.error.empty() && !recording_fell_short) {  // else the fault said it
+      std::fprintf(stderr, "sensornet: warning: --record: the recording could not be closed: %s\n",
                    recorded.error.c_str());
     }
-    std::fprintf(stderr, "sensornet: recorded %llu samples (%llu bytes) in %s\n",
-                 static_cast<unsigned long long>(recorded.messages),
-                 static_cast<unsigned long long>(recorded.bytes), recorded.path.c_str());
+    if (recorded.error.empty()) {
+      std::fprintf(stderr, "sensornet: recorded %llu samples (%llu bytes) in %s\n",
+                   static_cast<unsigned long long>(recorded.messages),
+                   static_cast<unsigned long long>(recorded.bytes), recorded.path.c_str());
+    }
   }
   if (!options.junit_path.empty()) {  // like the page: a warning, never an exit code
     const emulator::JunitRun junit{

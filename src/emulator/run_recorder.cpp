@@ -93,7 +93,7 @@ const std::string& RunRecorder::idlText() {
 
 RunRecorder::RunRecorder(const dds::Participant& participant, const std::string& run_id,
                          const std::filesystem::path& path, const McapMap& run_metadata)
-    : writer_(std::make_unique<McapWriter>(path, "sensornet")) {
+    : writer_(std::make_unique<McapWriter>(path, "sensornet", kChunkBytes)) {
   summary_.path = path;
   const std::string run = "sensornet/" + run_id;
   const std::string sensors = sensorPartitionPattern(run);
@@ -157,8 +157,6 @@ void RunRecorder::loop() {
 }
 
 // Takes every sample each reader holds into the file; after a write error, only takes (the
-// samples must not pile up in the readers) and keeps the error for the summary.
-// Takes every sample each reader holds into the file; after a write error, only takes (the
 // samples must not pile up in the readers) and keeps the error for the summary. What one pass
 // took from all readers is written in the order of the writers' source timestamps (one host's
 // clock), not reader by reader: so a sensor's last tally goes before the coordinator's
@@ -215,18 +213,35 @@ void RunRecorder::takeAll() {
   }
 }
 
-RecordingSummary RunRecorder::stop(const McapMap& final_metadata) {
-  if (stopped_) return summary_;
+const RecordingSummary& RunRecorder::drain() {
+  if (drained_) return summary_;
   stopping_ = true;
   if (thread_.joinable()) thread_.join();
   const std::lock_guard lock(mutex_);
-  stopped_ = true;
+  drained_ = true;
   takeAll();
   for (const auto& c : channels_) {
     summary_.per_topic[c->topic] += c->messages;
     summary_.messages += c->messages;
     (void)dds_delete(c->reader);
   }
+  // What the run sent is on disk now, with room for the file's end: a disk too full for either
+  // is known while the launcher can still count it a fault.
+  if (writer_ && summary_.error.empty()) {
+    try {
+      writer_->reserveEnd(kRunEndBytes);
+    } catch (const std::exception& e) {
+      summary_.error = e.what();  // the launcher's fault says it
+    }
+  }
+  return summary_;
+}
+
+RecordingSummary RunRecorder::stop(const McapMap& final_metadata) {
+  if (stopped_) return summary_;
+  (void)drain();
+  const std::lock_guard lock(mutex_);
+  stopped_ = true;
   if (summary_.error.empty()) {
     try {
       if (!final_metadata.empty()) writer_->addMetadata("run-end", final_metadata);

@@ -1,5 +1,7 @@
 #include "sensornet/io/mcap.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -162,6 +164,9 @@ McapWriter::McapWriter(const std::filesystem::path& path, const std::string& pro
   if (file_ == nullptr) {
     throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(errno));
   }
+  // Unbuffered: every record goes out whole in one call (messages wait in the chunk), so that
+  // offset_ is what the file holds and a write that fails is known at once.
+  std::setvbuf(file_, nullptr, _IONBF, 0);
   Out magic;
   magic.raw(kMagic.data(), kMagic.size());
   append(magic.data());
@@ -179,7 +184,11 @@ McapWriter::~McapWriter() {
 }
 
 void McapWriter::append(const std::vector<std::byte>& bytes) {
+  if (failed_) throw std::runtime_error("cannot write " + path_.string() + " after a failed write");
   if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
+    const int error = errno;
+    fail();
+    errno = error;
     throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
   }
   offset_ += bytes.size();
@@ -264,8 +273,63 @@ void McapWriter::addMetadata(const std::string& name, const McapMap& metadata) {
   ++metadata_count_;
 }
 
+// Each record is an opcode and a u64 length before its content (kRecordHead); the sizes below
+// follow close()'s records field by field.
+std::uint64_t McapWriter::endBytes() const {
+  constexpr std::uint64_t kRecordHead = 1 + 8;
+  constexpr std::uint64_t kGroups = 6;  // schemas, channels, statistics, chunk and metadata indexes
+  std::uint64_t bytes = kRecordHead + 4;  // Data End
+  for (const auto& r : schemas_) bytes += r.size();
+  for (const auto& r : channels_) bytes += r.size();
+  bytes += kRecordHead + 8 + 2 + 4 + 4 + 4 + 4 + 8 + 8 + 4 + 10 * channel_counts_.size();
+  for (const ChunkIndex& i : chunk_indexes_) {
+    bytes += kRecordHead + 4 * 8 + 4 + 10 * i.message_index_offsets.size() + 8 + 4 + 8 + 8;
+  }
+  for (const auto& r : metadata_indexes_) bytes += r.size();
+  bytes += kGroups * (kRecordHead + 1 + 8 + 8);  // summary offsets
+  bytes += kRecordHead + 8 + 8 + 4 + kMagic.size();  // footer and the closing magic
+  return bytes;
+}
+
+// A write failed: the file is cut back to its last whole record, and nothing more goes in.
+void McapWriter::fail() {
+  failed_ = true;
+  (void)::ftruncate(::fileno(file_), static_cast<off_t>(offset_));
+}
+
+void McapWriter::reserveEnd(std::size_t metadata_bytes) {
+  if (file_ == nullptr) throw std::runtime_error("write to closed " + path_.string());
+  flushChunk();
+  if (std::fflush(file_) != 0) {
+    const std::string why = std::strerror(errno);
+    fail();
+    throw std::runtime_error("cannot write " + path_.string() + ": " + why);
+  }
+  // Past the buffered stream: its position stays at offset_, where close() goes on.
+  const int fd = ::fileno(file_);
+  const std::vector<std::byte> zeros(endBytes() + metadata_bytes);
+  std::size_t done = 0;
+  while (done < zeros.size()) {
+    const ssize_t n = ::pwrite(fd, zeros.data() + done, zeros.size() - done,
+                               static_cast<off_t>(offset_ + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = n < 0 ? std::strerror(errno) : "no room";
+      fail();
+      throw std::runtime_error("cannot write " + path_.string() + ": " + why);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  reserved_to_ = offset_ + zeros.size();
+}
+
 void McapWriter::close() {
   if (file_ == nullptr) return;
+  if (failed_) {  // fail() cut the file back to its last whole record: nothing more goes in
+    (void)std::fclose(file_);
+    file_ = nullptr;
+    return;
+  }
   flushChunk();
   Out end;
   end.u32(data_crc_);
@@ -322,7 +386,10 @@ void McapWriter::close() {
   append(footer.data());
   std::FILE* file = file_;
   file_ = nullptr;
-  if (std::fclose(file) != 0) {
+  // What reserveEnd made room for and close() did not need goes.
+  const bool cut = reserved_to_ <= offset_ ||
+                   (std::fflush(file) == 0 && ::ftruncate(::fileno(file), static_cast<off_t>(offset_)) == 0);
+  if (std::fclose(file) != 0 || !cut) {
     throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
   }
 }

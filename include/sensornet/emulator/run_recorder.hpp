@@ -19,7 +19,7 @@
 // stop() (or the destructor: an interrupted launch) takes what is left, adds the metadata and
 // closes the file with its summary, so the file is valid however the run ended. A recorder that
 // cannot write (a full disk) stops recording and says so in the summary's `error`; the run goes
-// on.
+// on, and `sensornet launch` lists it as a `recording_incomplete` fault.
 
 #include <atomic>
 #include <cstdint>
@@ -51,10 +51,21 @@ class RunRecorder {
   RunRecorder(const RunRecorder&) = delete;
   RunRecorder& operator=(const RunRecorder&) = delete;
 
-  // Stops, takes what is left, writes `final_metadata` (a "run-end" metadata record) and closes
-  // the file. Idempotent: a second call returns the same summary.
+  // Stops taking: the thread ends, what is left in the readers goes into the file, the readers
+  // are deleted, and the disk holds every sample taken and room for the file's end (the
+  // summary, and run-end metadata of up to kRunEndBytes: McapWriter::reserveEnd). The summary
+  // says whether all of it went in (`error` empty): the launcher drains before it settles the
+  // run, so that a recording that fell short is one of the run's faults, and stop() cannot
+  // fail for want of space after it. Idempotent.
+  const RecordingSummary& drain();
+  // Drains, writes `final_metadata` (a "run-end" metadata record) and closes the file with its
+  // summary section. Idempotent: a second call returns the same summary.
   RecordingSummary stop(const McapMap& final_metadata = {});
 
+  static constexpr std::size_t kRunEndBytes = 4096;  // stop()'s metadata, reserved by drain()
+  // What is recorded reaches the disk a chunk at a time: a disk that fills shows during the run,
+  // and a launcher that dies loses at most one chunk.
+  static constexpr std::size_t kChunkBytes = 64 * 1024;
   // The IDL the schemas carry (idl/sensornet.idl, compiled in).
   [[nodiscard]] static const std::string& idlText();
 
@@ -67,6 +78,7 @@ class RunRecorder {
   std::vector<std::unique_ptr<Channel>> channels_;
   std::mutex mutex_;  // the writer and the channels, between the thread and stop()
   std::atomic<bool> stopping_{false};
+  bool drained_ = false;
   bool stopped_ = false;
   RecordingSummary summary_;
   std::thread thread_;

@@ -50,6 +50,7 @@ enum class FaultKind {
   ReportMissing,      // no readable report: it was rebuilt from the episode log
   ReportInvalid,      // the report says something the launcher cannot believe
   SensorDied,         // a sensor's process died (the failure policy then acts)
+  RecordingIncomplete,  // --record could not write everything (a full disk): the file is short
 };
 
 // Why a sample on the wire was refused: counted by reason in the report's `rejected`, never
@@ -106,7 +107,7 @@ struct Words<emulator::RunStatus> {
 template <>
 struct Words<emulator::FaultKind> {
   using F = emulator::FaultKind;
-  static constexpr std::array<WordOf<F>, 22> kTable{{{F::Stall, "stall"},
+  static constexpr std::array<WordOf<F>, 23> kTable{{{F::Stall, "stall"},
                                                      {F::Lost, "lost"},
                                                      {F::Overload, "overload"},
                                                      {F::SensorLag, "sensor_lag"},
@@ -127,7 +128,9 @@ struct Words<emulator::FaultKind> {
                                                      {F::Timeout, "timeout"},
                                                      {F::ReportMissing, "report_missing"},
                                                      {F::ReportInvalid, "report_invalid"},
-                                                     {F::SensorDied, "sensor_died"}}};
+                                                     {F::SensorDied, "sensor_died"},
+                                                     {F::RecordingIncomplete,
+                                                      "recording_incomplete"}}};
 };
 
 template <>

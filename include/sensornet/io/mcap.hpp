@@ -50,7 +50,15 @@ class McapWriter {
   void write(std::uint16_t channel_id, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
              std::span<const std::byte> data);
   void addMetadata(const std::string& name, const McapMap& metadata);
+  // Writes the open chunk and makes room on disk for everything close() will write: the
+  // summary, the footer, and `metadata_bytes` of metadata records (with their index entries)
+  // added before it. After it, close() needs no new space, so a disk that is full shows here,
+  // while the caller can still count it, and not in a file that never gets its end. The room is
+  // zeros past the data that close() overwrites and cuts off after the footer. Throws what
+  // cannot be written; the file then ends after its last whole record.
+  void reserveEnd(std::size_t metadata_bytes);
   // Writes the last chunk, the summary and the footer; the file is complete after it. Idempotent.
+  // After a failed write it only closes the file, which then ends after its last whole record.
   void close();
 
   [[nodiscard]] std::uint64_t messageCount() const { return message_count_; }
@@ -60,6 +68,8 @@ class McapWriter {
   struct ChunkIndex;
   void flushChunk();
   void append(const std::vector<std::byte>& bytes);
+  void fail();
+  [[nodiscard]] std::uint64_t endBytes() const;  // what close() writes past the open chunk, at most
 
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
@@ -76,6 +86,8 @@ class McapWriter {
   std::map<std::uint16_t, std::uint32_t> sequences_;
   std::uint64_t message_count_ = 0, first_ns_ = 0, last_ns_ = 0;
   std::uint32_t metadata_count_ = 0;
+  std::uint64_t reserved_to_ = 0;  // reserveEnd: the file's size with the room made
+  bool failed_ = false;            // a write failed: close() adds nothing
 };
 
 struct McapSchema {

@@ -171,6 +171,57 @@ TEST_F(Recording, ARunInterruptedWithCtrlCLeavesACompleteFile) {
   EXPECT_EQ(read.at("metadata").at("run-end").at("status"), "interrupted");
 }
 
+// A recording that cannot be written whole (the disk fills: here a file-size limit of 160 KB on
+// the launcher and its children, which the 75 KB report fits and a 3-episode recording of about
+// 350 KB does not) is one `recording_incomplete` fault: the run is degraded (exit 3, the
+// outcome table), every episode still complete with the costs of the same seed's run without
+// --record, recomputed from both reports.
+TEST_F(Recording, ARecordingThatCannotBeWrittenWholeIsOneFaultAndChangesNoCost) {
+  const LeftoverGuard guard(run_id_);
+  const fs::path file = dir_ / "short.mcap";
+  std::vector<std::string> argv = launchArgs(3, "4");
+  argv.insert(argv.end(), {"--no-html", "--record", file.string()});
+  // SIGXFSZ ignored (inherited through exec): a write past the limit fails with EFBIG, as a
+  // full disk fails with ENOSPC. sh's ulimit -f counts 512-byte blocks (POSIX).
+  std::vector<std::string> limited = {"/bin/sh", "-c", "trap '' XFSZ; ulimit -f 320; exec \"$@\"",
+                                      "sh"};
+  limited.insert(limited.end(), argv.begin(), argv.end());
+  const testing::ProcessResult r = runProcess(limited, 120s);
+  EXPECT_EQ(r.exit_code, 3) << r.err;  // degraded (README, "Exit status")
+  EXPECT_NE(r.out.find("the recording fell short"), std::string::npos) << r.out;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report.at("status"), "degraded");
+  ASSERT_EQ(report.at("faults").size(), 1u) << report.at("faults").dump(2);
+  const json& fault = report.at("faults")[0];
+  EXPECT_EQ(fault.at("kind"), "recording_incomplete");
+  EXPECT_NE(fault.at("detail").get<std::string>().find(file.string()), std::string::npos)
+      << fault.dump();
+  // The file ends after its last whole record, whose end the fault gives.
+  const std::uintmax_t kept = fs::file_size(file);
+  EXPECT_LT(kept, 160u * 1024u + 1u);
+  EXPECT_NE(fault.at("detail").get<std::string>().find("(" + std::to_string(kept) + " bytes)"),
+            std::string::npos)
+      << fault.dump() << " vs " << kept;
+
+  fs::rename(dir_ / "report.json", dir_ / "recorded.json");
+  fs::remove(dir_ / "report.jsonl");
+  fs::remove_all(dir_ / "logs");
+  const testing::ProcessResult clean = runProcess(launchArgs(3, "4"), 120s);
+  ASSERT_EQ(clean.exit_code, 0) << clean.err;
+  const json reference = readJson(dir_ / "report.json");
+  const json recorded_report = readJson(dir_ / "recorded.json");
+  const json& recorded = recorded_report.at("per_episode");
+  ASSERT_EQ(recorded.size(), 3u);
+  ASSERT_EQ(reference.at("per_episode").size(), 3u);
+  for (std::size_t e = 0; e < 3; ++e) {
+    EXPECT_TRUE(recorded[e].at("complete").get<bool>()) << e;
+    EXPECT_EQ(recorded[e].at("realized_cost").get<double>(),
+              reference.at("per_episode")[e].at("realized_cost").get<double>())
+        << "episode " << e;
+  }
+}
+
 // Offline replay (`sensornet replay RUN.mcap`): the recorded samples through the fusion center's
 // own decisions give every episode's realized cost equal to the bit to the run's own report,
 // recomputed here from both report files: with a live re-plan in the middle of the run (a

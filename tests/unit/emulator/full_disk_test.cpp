@@ -5,8 +5,6 @@
 // EFBIG) stands in for the full disk, as a full tmpfs takes what fits and then says ENOSPC.
 
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -18,6 +16,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "support/file_size_limit.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -25,27 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// While it lives, no file this process writes grows past `bytes`.
-class FileSizeLimit {
- public:
-  explicit FileSizeLimit(rlim_t bytes) {
-    ::getrlimit(RLIMIT_FSIZE, &saved_);
-    previous_ = ::signal(SIGXFSZ, SIG_IGN);
-    rlimit limited = saved_;
-    limited.rlim_cur = bytes;
-    ::setrlimit(RLIMIT_FSIZE, &limited);
-  }
-  ~FileSizeLimit() {
-    ::setrlimit(RLIMIT_FSIZE, &saved_);
-    ::signal(SIGXFSZ, previous_);
-  }
-  FileSizeLimit(const FileSizeLimit&) = delete;
-  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
-
- private:
-  rlimit saved_{};
-  sighandler_t previous_ = SIG_DFL;
-};
+using sensornet::testing::FileSizeLimit;
 
 class FullDisk : public ::testing::Test {
  protected:

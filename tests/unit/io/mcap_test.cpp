@@ -2,9 +2,13 @@
 // order, across many chunks; the summary's statistics count what was written; a byte flipped in
 // a chunk or the data section is a CRC error naming the field; the layout's fixed points (magic
 // at both ends, the footer's offsets) are checked on the raw bytes. The official reader
-// (@mcap/core) reads a recorded run in the integration test Recording.*.
+// (@mcap/core) reads a recorded run in the integration test Recording.*. reserveEnd is tried on
+// a file that cannot grow past a size limit (RLIMIT_FSIZE with SIGXFSZ ignored), as a full disk.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -16,6 +20,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/io/mcap.hpp"
+#include "support/file_size_limit.hpp"
 
 namespace sensornet {
 namespace {
@@ -159,6 +164,72 @@ TEST(Mcap, ADamagedFileIsRefusedNamingWhatIsWrong) {
   auto not_mcap = bytes;
   not_mcap[1] = 'X';
   expectRefused(not_mcap, "magic");
+}
+
+using sensornet::testing::FileSizeLimit;
+
+// The same content every time: a schema, two channels, 300 messages over many chunks.
+void writeSome(McapWriter& out) {
+  const auto idl = out.addSchema("sensornet::Measurement", "omgidl", std::string(900, 'i'));
+  const auto a = out.addChannel(idl, "sensornet/Measurement", "cdr", {{"partition", "p/1"}});
+  const auto b = out.addChannel(idl, "sensornet/Report", "cdr");
+  for (int i = 0; i < 300; ++i) {
+    const std::vector<std::byte> data(static_cast<std::size_t>(i % 37), std::byte{0x5a});
+    out.write(i % 4 == 0 ? b : a, 1000U + static_cast<std::uint64_t>(i), 7, data);
+  }
+}
+
+// After reserveEnd, close() writes into room already on disk: with the file unable to grow by a
+// byte, the metadata, summary and footer still go in, the file reads back whole, and the room
+// left over (less than the metadata allowance) is cut off.
+TEST(Mcap, AfterReserveEndTheFileClosesWithoutGrowing) {
+  const fs::path path = scratch("reserved.mcap");
+  constexpr std::size_t kMetadataRoom = 512;
+  std::uintmax_t reserved = 0;
+  {
+    McapWriter out(path, "sensornet", 1024);
+    writeSome(out);
+    out.reserveEnd(kMetadataRoom);
+    reserved = fs::file_size(path);
+    const FileSizeLimit limit(reserved);
+    out.addMetadata("run-end", {{"status", "completed"}, {"exit_code", "0"}});
+    EXPECT_NO_THROW(out.close());
+  }
+  const std::uintmax_t closed = fs::file_size(path);
+  EXPECT_LT(closed, reserved);
+  EXPECT_LE(reserved - closed, kMetadataRoom) << "reserveEnd made room for more than close() needs";
+  const McapReader in(path);
+  EXPECT_EQ(in.messages().size(), 300u);
+  ASSERT_EQ(in.metadata().size(), 1u);
+  EXPECT_EQ(in.metadata()[0].second.at("status"), "completed");
+}
+
+// A disk too full for the file's end: reserveEnd says so, naming the file and why, and the file
+// ends where its data ends (a prefix of the same content closed without a limit), not in zeros.
+TEST(Mcap, ReserveEndOnAFullDiskNamesTheFileAndLeavesTheDataAsWritten) {
+  const fs::path whole = scratch("whole.mcap");
+  {
+    McapWriter out(whole, "sensornet", 1024);
+    writeSome(out);
+  }
+  const auto complete = bytesOf(whole);
+  const fs::path path = scratch("full.mcap");
+  {
+    McapWriter out(path, "sensornet", 1024);
+    const FileSizeLimit limit(complete.size() - 1);  // the data fits, its end does not
+    writeSome(out);
+    try {
+      out.reserveEnd(0);
+      ADD_FAILURE() << "reserveEnd succeeded with no room for the file's end";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(std::strerror(EFBIG)), std::string::npos) << e.what();
+    }
+  }  // the destructor's close() fails quietly past the limit
+  const auto left = bytesOf(path);
+  ASSERT_LT(left.size(), complete.size());
+  EXPECT_GT(left.size(), 1000u) << "the chunks written before are kept";
+  EXPECT_TRUE(std::equal(left.begin(), left.end(), complete.begin()));
 }
 
 }  // namespace
