@@ -112,6 +112,7 @@ sensornet_EpisodeCommand commandOf(emulator::ControlKind kind) {
 
 class CoordinatorNode {
  public:
+  void journalFailed(const std::string& why) { core_.onJournalFailed(why); }
   CoordinatorNode(const ServeOptions& options, emulator::RunScenario run,
                   const emulator::CoordinatorJournal& journal)
       : options_(options),
@@ -205,22 +206,27 @@ class CoordinatorNode {
     }
   }
 
-  // The fusion center counts as present once one participant matched all three: a reader of
-  // this EpisodeControl writer, and writers of the Report and FusionState readers. Discovery
+  // The fusion center counts as present once one participant matched all five: readers of
+  // the Scenario, Schedule and EpisodeControl writers, and writers of the Report and
+  // FusionState readers (a run that ends at once, aborted, must still reach the fusion center's
+  // Scenario reader, or no report says why: chaos of a full log folder). Discovery
   // announces endpoints one by one (on a lossy link seconds apart), and a control reader that
   // matches after the first two episodes were announced gets only the latest of them. The
   // participants are looked up again when a match count changes, and twice a second in case
   // one endpoint left and another came between two looks.
   bool fusionCenterPresent() {
-    const std::array<std::uint32_t, 3> counts{control_writer_.matchedReaders(),
-                                              report_reader_.matchedWriters(),
-                                              state_reader_.matchedWriters()};
+    const std::array<std::uint32_t, 5> counts{
+        scenario_writer_.matchedReaders(), schedule_writer_.matchedReaders(),
+        control_writer_.matchedReaders(), report_reader_.matchedWriters(),
+        state_reader_.matchedWriters()};
     const std::int64_t now = wallNowNs();
     if (counts != presence_counts_ || now >= presence_recheck_ns_) {
       presence_counts_ = counts;
       presence_recheck_ns_ = now + 500'000'000;
-      fusion_present_ = counts[1] > 0 && counts[2] > 0 &&
-                        dds::sharesParticipant({dds::participantsOfMatchedReaders(control_writer_),
+      fusion_present_ = counts[3] > 0 && counts[4] > 0 &&
+                        dds::sharesParticipant({dds::participantsOfMatchedReaders(scenario_writer_),
+                                                dds::participantsOfMatchedReaders(schedule_writer_),
+                                                dds::participantsOfMatchedReaders(control_writer_),
                                                 dds::participantsOfMatchedWriters(report_reader_),
                                                 dds::participantsOfMatchedWriters(state_reader_)});
     }
@@ -254,13 +260,22 @@ class CoordinatorNode {
       spdlog::warn("the reply to command {} timed out", a.command_id);
     }
   }
-  void operator()(const emulator::WriteJournal& a) const {
-    if (!options_.state_path.empty()) emulator::saveJournal(options_.state_path, a.journal);
+  void operator()(const emulator::WriteJournal& a) {
+    if (options_.state_path.empty()) return;
+    try {
+      emulator::saveJournal(options_.state_path, a.journal);
+    } catch (const std::exception& e) {  // a full disk: the run ends with the reason
+      core_.onJournalFailed(e.what());
+    }
   }
   void operator()(const emulator::ShutDownRun& a) {
     if (control_writer_.write(wireControl(a.control)) == dds::WriteResult::TimedOut) {
       spdlog::warn("the shutdown announcement timed out");
     }
+    // The scenario and schedules too: a run that ends early (an abort before its first
+    // episode) still leaves the fusion center what it needs to write the report.
+    (void)scenario_writer_.waitForAcks(3s);
+    (void)schedule_writer_.waitForAcks(3s);
     (void)control_writer_.waitForAcks(3s);
     (void)reply_writer_.waitForAcks(1s);
   }
@@ -322,7 +337,7 @@ class CoordinatorNode {
   dds::ReadCondition operator_command_ready_;
   dds::ReadCondition status_ready_;
   dds::ReadCondition report_ready_;
-  std::array<std::uint32_t, 3> presence_counts_{};
+  std::array<std::uint32_t, 5> presence_counts_{};
   std::int64_t presence_recheck_ns_ = 0;
   bool fusion_present_ = false;
 };
@@ -422,11 +437,21 @@ int runServe(ServeOptions options) {
   }
   const emulator::CoordinatorJournal journal =
       options.resume && journaled ? resumedJournal(options, run) : freshJournal(options, run);
+  // A path where no file can be made is bad input (exit 2); a disk that refuses the bytes ends
+  // the run, which the others can only hear of once the node is up.
+  std::optional<std::string> journal_failure;
   if (!options.state_path.empty() && !(options.resume && journaled)) {
-    emulator::saveJournal(options.state_path, journal);
+    try {
+      emulator::saveJournal(options.state_path, journal);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      journal_failure = e.what();
+    }
   }
   emulator::installStopSignals();
   CoordinatorNode node(options, std::move(run), journal);
+  if (journal_failure) node.journalFailed(*journal_failure);
   return node.run();
 }
 

@@ -570,9 +570,16 @@ int runLaunch(LaunchOptions options) {
   if (const auto& failure = core.failure()) {
     explainFailure(*failure, plan, group, core.stoppedChildren());
   }
-  for (const ChildExit& lingering : group.stopAll(kStopGrace)) {
-    spdlog::warn("{} had not left after the run ended; stopped it ({})", lingering.name,
-                 lingering.describe());
+  // One line per way they ended: six sensor agents that never heard of the end are one fact.
+  std::map<std::string, std::vector<std::string>> lingering;  // how it ended -> who
+  for (const ChildExit& left : group.stopAll(kStopGrace)) {
+    lingering[left.describe()].push_back(left.name);
+  }
+  for (const auto& [how, names] : lingering) {
+    std::string who;
+    for (const std::string& name : names) who += (who.empty() ? "" : ", ") + name;
+    spdlog::warn("{} had not left after the run ended; stopped {} ({})", who,
+                 names.size() == 1 ? "it" : "them", how);
   }
   std::vector<Fault> faults = core.faults();
   nameSilentExternals(external, options.external_fusion_center, progress, faults);

@@ -89,6 +89,7 @@ void CoordinatorCore::log(spdlog::level::level_enum level, std::string text) {
 
 // The journal as the run stands now; it goes out before the DDS write it records.
 void CoordinatorCore::saveState() {
+  if (journal_failed_) return;
   CoordinatorJournal journal = journalHeader(config_, run_.digest, run_.seed);
   journal.settings = replanner_.settings();
   journal.versions = book_.versions();
@@ -100,6 +101,15 @@ void CoordinatorCore::saveState() {
   act(WriteJournal{std::move(journal)});
 }
 
+void CoordinatorCore::onJournalFailed(const std::string& why) {
+  if (journal_failed_) return;
+  journal_failed_ = true;
+  const std::string detail = "the coordinator cannot write its journal (" + why +
+                             "), without which a restart could not resume the run";
+  log(err, detail);
+  if (abort_detail_.empty()) abort_detail_ = detail;
+}
+
 CoordinatorActions CoordinatorCore::start(std::int64_t now_ns) {
   saveState();
   act(PublishScenario{});
@@ -109,8 +119,7 @@ CoordinatorActions CoordinatorCore::start(std::int64_t now_ns) {
                         config_.run_id, run_.digest, book_.latest().version, sensorsInService()));
   phase_ = Phase::AwaitingPeers;
   ready_deadline_ns_ = now_ns + toNs(config_.ready_timeout_s);
-  if (!abort_detail_.empty()) endRun(abort_detail_, kCoordinatorExitDone, now_ns);
-  return take();
+  return take();  // an abort already decided (the journal) ends the run at the first tick
 }
 
 std::chrono::nanoseconds CoordinatorCore::waitHint() const {
@@ -207,7 +216,10 @@ CoordinatorActions CoordinatorCore::tick(std::int64_t now_ns) {
   if (stop_signal_) {
     endRun("the coordinator was stopped by a signal", kCoordinatorExitDone, now_ns);
   } else if (!abort_detail_.empty()) {
-    endRun(abort_detail_, kCoordinatorExitDone, now_ns);
+    // The fusion center writes the report: a run that ends before it joined waits for it (up to
+    // the readiness deadline), so that the report gets the reason.
+    const bool heard = fusion_matched_ || phase_ != Phase::AwaitingPeers;
+    if (heard || now_ns > ready_deadline_ns_) endRun(abort_detail_, kCoordinatorExitDone, now_ns);
   } else if (phase_ == Phase::AwaitingPeers) {
     tickAwaitingPeers(now_ns);
   } else if (phase_ == Phase::Settling && now_ns >= settled_ns_) {

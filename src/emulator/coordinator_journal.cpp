@@ -315,19 +315,9 @@ CoordinatorJournal journalFromJson(const std::string& text, const std::string& s
 }
 
 void saveJournal(const std::string& path, const CoordinatorJournal& journal) {
-  const std::string temporary = path + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << journalToJson(journal);
-    out.close();
-    if (!out) throw std::runtime_error("cannot write the coordinator state " + temporary);
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    throw std::runtime_error("cannot replace the coordinator state " + path + ": " +
-                             error.message());
-  }
+  // Atomic, and on a full disk the system's reason with no temporary left behind.
+  writeJsonFile(path, "coordinator journal",
+                [&journal](std::ostream& out) { out << journalToJson(journal); });
 }
 
 CoordinatorJournal loadJournal(const std::string& path, const Scenario& scenario) {

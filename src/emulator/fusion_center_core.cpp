@@ -830,13 +830,22 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
   }
   json fault = faultEntry(FaultKind::CutShort, kProcess, std::nullopt, episodes.front(),
                           std::nullopt,
-                          "episodes " + listed(episodes) + " were open when " + why +
+                          (episodes.size() == 1 ? "episode " + listed(episodes) + " was"
+                                                : "episodes " + listed(episodes) + " were") +
+                              " open when " + why +
                               (awaited.empty() ? "" : " (their counts not in: " + awaited + ")"));
   fault["episodes"] = episodes;
   // What ended the run as the fusion center saw it; the launcher, which knows the run's one cause,
   // marks this entry as that cause's consequence (caused_by, fault_causes.hpp).
   if (cause) fault["ended_by"] = std::string(wordOf(*cause));
-  if (launcher_gone_) fault[kCausedByField] = launcherDeath();
+  // A cause the fusion center records itself is named here: the launcher's death, or the
+  // coordinator's abort (decideStatus's run_aborted entry).
+  if (launcher_gone_) {
+    fault[kCausedByField] = launcherDeath();
+  } else if (cause == FaultKind::RunAborted) {
+    fault[kCausedByField] = {{"kind", std::string(wordOf(FaultKind::RunAborted))},
+                             {"process", "coordinator"}};
+  }
   log(spdlog::level::warn, fault.at("detail").get<std::string>());
   recordFault(std::move(fault));
   for (auto& [number, open] : open_) finishEpisode(number, *open, &why);

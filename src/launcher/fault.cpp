@@ -1,6 +1,7 @@
 #include "sensornet/launcher/fault.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace sensornet::launcher {
 namespace {
@@ -17,11 +18,21 @@ bool atOrAfter(const json& entry, const RunPosition& cause) {
   return episode.get<std::int64_t>() + 1 >= static_cast<std::int64_t>(*cause.episode);
 }
 
+// A kind word of a reported entry, if it is one.
+std::optional<FaultKind> kindOf(const json& entry) {
+  const json kind = entry.is_object() ? entry.value("kind", json()) : json();
+  return kind.is_string() ? lookUpWord<FaultKind>(kind.get<std::string>()) : std::nullopt;
+}
+
 bool isConsequenceOf(const json& entry, const Fault& cause) {
-  if (!entry.is_object() || entry.contains(emulator::kCausedByField)) return false;
-  const json kind = entry.value("kind", json());
-  if (!kind.is_string()) return false;
-  const std::optional<FaultKind> known = lookUpWord<FaultKind>(kind.get<std::string>());
+  if (!entry.is_object()) return false;
+  // The fusion center marks what it saw as the cause (the coordinator's abort); when that
+  // followed from the launcher's cause, the launcher names the root instead.
+  if (entry.contains(emulator::kCausedByField)) {
+    const std::optional<FaultKind> marked = kindOf(entry[emulator::kCausedByField]);
+    if (!marked || !followsFromStop(*marked)) return false;
+  }
+  const std::optional<FaultKind> known = kindOf(entry);
   return known && followsFromStop(*known) && atOrAfter(entry, cause.at);
 }
 

@@ -211,6 +211,10 @@ class CoordinatorCore {
   [[nodiscard]] CoordinatorActions onCommand(const CommandEvent& command, std::int64_t now_ns);
   // SIGINT or SIGTERM: the run ends at the next tick, as one the coordinator was told to end.
   void onStopSignal() { stop_signal_ = true; }
+  // A WriteJournal could not be carried out (`why`: a full disk). Without its journal a restart
+  // could not resume the run, so the run ends at the next tick as failed, the reason in the
+  // RUN_SHUTDOWN that every process and the report get; no journal is written any more.
+  void onJournalFailed(const std::string& why);
   // Readiness, the next announcements, deadlines, the end of the run.
   [[nodiscard]] CoordinatorActions tick(std::int64_t now_ns);
 
@@ -307,6 +311,7 @@ class CoordinatorCore {
   std::int64_t last_end_ns_ = 0;         // wall time of the end of the episode announced last
   bool stopping_ = false;                // COMMAND_SHUTDOWN: no more announcements
   std::string abort_detail_;             // the run ends as failed (--on-sensor-failure stop)
+  bool journal_failed_ = false;          // onJournalFailed: saveState writes nothing
   std::uint64_t rejected_ = 0;
   std::set<int> impostors_;  // sensors a foreign identity's status spoke for (logged once)
   std::optional<int> exit_code_;

@@ -68,8 +68,8 @@ struct CoordinatorJournal {
 [[nodiscard]] CoordinatorJournal journalFromJson(const std::string& text, const std::string& source,
                                                  const Scenario& scenario);
 
-// Writes `path` atomically (path + ".tmp", then rename); throws std::runtime_error naming the
-// file when it cannot.
+// Writes `path` atomically (writeJsonFile: a temporary beside it, then rename); throws naming
+// the file and, when the disk refuses the bytes, the system's reason.
 void saveJournal(const std::string& path, const CoordinatorJournal& journal);
 // Reads and checks `path` (InputError when missing or malformed).
 [[nodiscard]] CoordinatorJournal loadJournal(const std::string& path, const Scenario& scenario);

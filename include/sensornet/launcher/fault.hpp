@@ -64,8 +64,10 @@ struct Fault {
 // The launcher's faults, then the reported ones; a reported entry of a kind that follows from a
 // stop, of an episode still open when the cause struck (the cause's, or the one before it,
 // which may still have been owed counts) or later, or of no episode, gets caused_by {kind,
-// process} of the run-ending cause. The other processes record their entries without wall
-// time, so "after the cause" is judged by episode.
+// process} of the run-ending cause, also one the fusion center marked with a cause that itself
+// follows from a stop (its run_aborted: the coordinator's abort came from the launcher's cause).
+// The other processes record their entries without wall time, so "after the cause" is judged by
+// episode.
 [[nodiscard]] nlohmann::json faultList(const std::vector<Fault>& launcher_faults,
                                        const nlohmann::json& reported);
 

@@ -402,6 +402,37 @@ TEST_F(Launcher, SigtermMidRunStopsEveryChild) {
   EXPECT_TRUE(processesMentioning(run_id_).empty());
 }
 
+// Issue 31: the coordinator's journal cannot be written mid-run (here its folder is replaced by
+// a file, as a full disk refuses it; the open logs stay). The coordinator ends the run, and the
+// report names the journal as the run's one cause, instead of "coordinator exited with status 1"
+// over an empty log: failed, exit 1 (the outcome table).
+TEST_F(Launcher, AJournalThatCannotBeWrittenEndsTheRunNamingIt) {
+  const LeftoverGuard guard(run_id_);
+  RunningProgram launcher(launchArgs(100, 2), 90s);
+  ASSERT_TRUE(waitUntilRunning(25s).has_value()) << "the run never got going";
+  const fs::path logs = dir_ / "logs";
+  fs::rename(logs, dir_ / "logs.gone");
+  std::ofstream(logs) << "not a folder\n";
+  const ProcessResult& r = launcher.result();
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object()) << r.err;
+  EXPECT_EQ(report["status"], "failed");
+  const json& faults = report["faults"];
+  EXPECT_EQ(sensornet::emulator::causeCount(faults), 1u) << faults.dump(2);
+  const auto aborted = std::find_if(faults.begin(), faults.end(), [](const json& f) {
+    return f.value("kind", "") == "run_aborted";
+  });
+  ASSERT_NE(aborted, faults.end()) << faults.dump(2);
+  const std::string detail = (*aborted)["detail"].get<std::string>();
+  EXPECT_NE(detail.find("cannot write its journal"), std::string::npos) << detail;
+  EXPECT_NE(detail.find((logs / "coordinator-state.json").string()), std::string::npos) << detail;
+  for (const json& f : faults) {
+    EXPECT_NE(f.value("kind", ""), "process_failed") << "the coordinator did its job: " << f.dump();
+  }
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+}
+
 TEST_F(Launcher, KilledLauncherTakesItsChildrenAlong) {
   const LeftoverGuard guard(run_id_);
   RunningProgram launcher(launchArgs(100, 1), 60s);

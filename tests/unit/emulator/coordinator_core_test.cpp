@@ -340,6 +340,45 @@ TEST_F(CoordinatorPolicy, StopEndsTheRunAsFailedAndTheCoordinatorExitsZero) {
   EXPECT_FALSE(exit[0].summary);
 }
 
+// Issue 31: the journal cannot be written (the log folder's disk is full) in the middle of the
+// run. The run ends at the next tick, aborted with the reason, which every process and so the
+// report get in the RUN_SHUTDOWN; nothing more is written to the journal.
+TEST_F(CoordinatorCoreTest, AJournalThatCannotBeWrittenEndsTheRunWithTheReason) {
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  ASSERT_FALSE(first.empty());  // two outstanding: episodes 0 and 1
+  now_ = first[0].start_wall_ns + kSecond;
+  core_->onJournalFailed("cannot write the coordinator journal logs/state.json: No space left on device");
+  const CoordinatorActions end = tickAt(now_ + kMs);
+  const std::vector<ShutDownRun> shutdown = only<ShutDownRun>(end);
+  ASSERT_EQ(shutdown.size(), 1u);
+  EXPECT_TRUE(shutdown[0].control.aborted);
+  EXPECT_NE(shutdown[0].control.detail.find("logs/state.json: No space left on device"),
+            std::string::npos)
+      << shutdown[0].control.detail;
+  EXPECT_NE(shutdown[0].control.detail.find("journal"), std::string::npos);
+  EXPECT_TRUE(only<WriteJournal>(end).empty()) << "a journal that failed is not tried again";
+  EXPECT_TRUE(starts(end).empty());
+  ASSERT_EQ(only<ExitProgram>(end).size(), 1u);
+  EXPECT_EQ(only<ExitProgram>(end)[0].exit_code, 0) << "it ended the run and said why";
+  EXPECT_EQ(core_->exitCode(), 0);
+}
+
+// The first journal cannot be written (the log folder full from the start): the run ends once
+// the fusion center, which writes the report, has joined, not before, so that it hears why.
+TEST_F(CoordinatorCoreTest, AJournalFailedAtTheStartEndsTheRunOnceTheFusionCenterJoined) {
+  (void)make();
+  core_->onJournalFailed("cannot write the coordinator journal logs/state.json: No space left on device");
+  EXPECT_TRUE(only<ShutDownRun>(tickAt(now_ + kMs)).empty()) << "nobody would hear of it";
+  core_->onFusionCenterMatched(true);
+  const CoordinatorActions end = tickAt(now_ + kMs);
+  const std::vector<ShutDownRun> shutdown = only<ShutDownRun>(end);
+  ASSERT_EQ(shutdown.size(), 1u);
+  EXPECT_TRUE(shutdown[0].control.aborted);
+  EXPECT_NE(shutdown[0].control.detail.find("No space left on device"), std::string::npos);
+  EXPECT_EQ(shutdown[0].control.episodes_planned, 0u) << "no episode ran";
+  EXPECT_EQ(core_->exitCode(), 0);
+}
+
 TEST_F(CoordinatorPolicy, ReplanGivesTheDeadRateZeroFromASwitchInTheRunningEpisode) {
   const std::vector<EpisodeControl> first = starts(startRunning());
   now_ = first[0].start_wall_ns + kSecond;
@@ -624,10 +663,14 @@ TEST_F(CoordinatorResume, KilledBetweenTheJournalWriteAndTheAnnouncementItAnnoun
   EXPECT_EQ(next[0].episode, 3u);
 }
 
-TEST_F(CoordinatorResume, AJournalThatSaysTheRunWasAbortedEndsItAtOnce) {
+// ... at its first tick with the fusion center there (which writes the report), not before.
+TEST_F(CoordinatorResume, AJournalThatSaysTheRunWasAbortedEndsItOnceTheFusionCenterHearsIt) {
   CoordinatorJournal journal = freshJournal();
   journal.abort_detail = "sensor(s) 1 failed; --on-sensor-failure stop";
-  const CoordinatorActions a = make(journal);
+  EXPECT_TRUE(only<ShutDownRun>(make(journal)).empty());
+  EXPECT_TRUE(only<ShutDownRun>(tickAt(now_ + kMs)).empty());
+  core_->onFusionCenterMatched(true);
+  const CoordinatorActions a = tickAt(now_ + kMs);
   const std::vector<ShutDownRun> shutdown = only<ShutDownRun>(a);
   ASSERT_EQ(shutdown.size(), 1u);
   EXPECT_EQ(shutdown[0].control.detail, journal.abort_detail);

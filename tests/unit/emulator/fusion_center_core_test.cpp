@@ -660,6 +660,12 @@ TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
             RunStatus::Failed);
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"cut_short", "run_aborted"}));
   EXPECT_EQ(core_->faults()[0].at("ended_by"), "run_aborted");
+  // The abort, recorded here too, is the one cause; the cut is its consequence.
+  EXPECT_EQ(core_->faults()[0].at(kCausedByField),
+            (json{{"kind", "run_aborted"}, {"process", "coordinator"}}));
+  EXPECT_EQ(causeCount(core_->faults()), 1u) << core_->faults().dump();
+  EXPECT_EQ(core_->faults()[0].at("detail").get<std::string>().rfind("episode 0 was open when", 0), 0u)
+      << core_->faults()[0].dump();
 }
 
 // Entries of a log a killed fusion center left: episodes 0 .. n-1.

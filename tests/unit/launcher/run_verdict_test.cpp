@@ -150,6 +150,23 @@ TEST(FaultList, InterruptBeforeTheFirstEpisodeOwnsEveryStopEntry) {
   EXPECT_EQ(emulator::causeCount(faults), 1u);
 }
 
+// The fusion center marks its cut as caused by the coordinator's abort; the abort came from the
+// launcher's cause (a Ctrl-C), which both are then counted with. A mark the fusion center made
+// for a cause of its own kind (a death it recorded) is left as it is.
+TEST(FaultList, TheLauncherNamesTheRootOfACauseTheFusionCenterMarked) {
+  const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {2, 0.5}, "interrupted by SIGINT"};
+  json cut = entry("cut_short", 2);
+  cut["caused_by"] = {{"kind", "run_aborted"}, {"process", "coordinator"}};
+  json lost = entry("lost", 3, 1);  // of a kind that follows from a stop, marked otherwise
+  lost["caused_by"] = {{"kind", "process_killed"}, {"process", "sensor_agent-1"}};
+  const json faults = faultList({signal}, json::array({entry("run_aborted", nullptr), cut, lost}));
+  ASSERT_EQ(faults.size(), 4u);
+  const json root = {{"kind", "interrupted"}, {"process", "sensornet"}};
+  EXPECT_EQ(faults[1]["caused_by"], root);
+  EXPECT_EQ(faults[2]["caused_by"], root) << "re-pointed to the root cause";
+  EXPECT_EQ(faults[3]["caused_by"], lost["caused_by"]);
+}
+
 TEST(FaultList, SurvivedFaultsLeaveTheOthersCausesOfTheirOwn) {
   const json faults = faultList({survivedDeath()}, json::array({entry("lost", 3, 4)}));
   EXPECT_FALSE(faults[1].contains("caused_by"));
