@@ -2,10 +2,13 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <variant>
 
 #include "sensornet/core/input_error.hpp"
@@ -190,6 +193,7 @@ class CoordinatorNode {
       }
     }
     for (auto& received : report_reader_.take(16).samples) {
+      heard_report_ = true;
       carryOut(core_.onReport(reportOf(*received.sample), wallNowNs()));
     }
     for (auto& received : state_reader_.take(8).samples) {
@@ -206,31 +210,41 @@ class CoordinatorNode {
     }
   }
 
-  // The fusion center counts as present once one participant matched all five: readers of
-  // the Scenario, Schedule and EpisodeControl writers, and writers of the Report and
-  // FusionState readers (a run that ends at once, aborted, must still reach the fusion center's
-  // Scenario reader, or no report says why: chaos of a full log folder). Discovery
+  // The fusion center counts as present once one participant matched all three: a reader of
+  // this EpisodeControl writer, and writers of the Report and FusionState readers. Discovery
   // announces endpoints one by one (on a lossy link seconds apart), and a control reader that
   // matches after the first two episodes were announced gets only the latest of them. The
   // participants are looked up again when a match count changes, and twice a second in case
   // one endpoint left and another came between two looks.
   bool fusionCenterPresent() {
-    const std::array<std::uint32_t, 5> counts{
-        scenario_writer_.matchedReaders(), schedule_writer_.matchedReaders(),
-        control_writer_.matchedReaders(), report_reader_.matchedWriters(),
-        state_reader_.matchedWriters()};
+    const std::array<std::uint32_t, 3> counts{control_writer_.matchedReaders(),
+                                              report_reader_.matchedWriters(),
+                                              state_reader_.matchedWriters()};
     const std::int64_t now = wallNowNs();
     if (counts != presence_counts_ || now >= presence_recheck_ns_) {
       presence_counts_ = counts;
       presence_recheck_ns_ = now + 500'000'000;
-      fusion_present_ = counts[3] > 0 && counts[4] > 0 &&
-                        dds::sharesParticipant({dds::participantsOfMatchedReaders(scenario_writer_),
-                                                dds::participantsOfMatchedReaders(schedule_writer_),
-                                                dds::participantsOfMatchedReaders(control_writer_),
+      fusion_present_ = counts[1] > 0 && counts[2] > 0 &&
+                        dds::sharesParticipant({dds::participantsOfMatchedReaders(control_writer_),
                                                 dds::participantsOfMatchedWriters(report_reader_),
                                                 dds::participantsOfMatchedWriters(state_reader_)});
     }
     return fusion_present_;
+  }
+
+  // Until every participant that reads EpisodeControl reads the Scenario too, or `limit`.
+  void awaitScenarioReaders(std::chrono::milliseconds limit) const {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    const auto missing = [this] {
+      const auto scenario = dds::participantsOfMatchedReaders(scenario_writer_);
+      for (const dds::ParticipantKey& p : dds::participantsOfMatchedReaders(control_writer_)) {
+        if (std::find(scenario.begin(), scenario.end(), p) == scenario.end()) return true;
+      }
+      return false;
+    };
+    while (missing() && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(20ms);
+    }
   }
 
   void carryOut(const emulator::CoordinatorActions& actions) {
@@ -272,8 +286,12 @@ class CoordinatorNode {
     if (control_writer_.write(wireControl(a.control)) == dds::WriteResult::TimedOut) {
       spdlog::warn("the shutdown announcement timed out");
     }
-    // The scenario and schedules too: a run that ends early (an abort before its first
-    // episode) still leaves the fusion center what it needs to write the report.
+    // A run aborted before any Report came (a journal that failed at once): the readers of the
+    // shutdown may not have matched the Scenario writer yet (discovery announces endpoints one
+    // by one), and without the scenario the fusion center writes no report that says why. So
+    // wait (2 s at most: an external fusion center need not read the scenario) until they
+    // have, and for their acknowledgements.
+    if (a.control.aborted && !heard_report_) awaitScenarioReaders(2s);
     (void)scenario_writer_.waitForAcks(3s);
     (void)schedule_writer_.waitForAcks(3s);
     (void)control_writer_.waitForAcks(3s);
@@ -337,7 +355,8 @@ class CoordinatorNode {
   dds::ReadCondition operator_command_ready_;
   dds::ReadCondition status_ready_;
   dds::ReadCondition report_ready_;
-  std::array<std::uint32_t, 5> presence_counts_{};
+  std::array<std::uint32_t, 3> presence_counts_{};
+  bool heard_report_ = false;  // a Report came: the fusion center had the scenario
   std::int64_t presence_recheck_ns_ = 0;
   bool fusion_present_ = false;
 };

@@ -204,6 +204,7 @@ emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
       config.resumed_log = emulator::readEpisodeLog(log_path);
       spdlog::info("resuming from {} episodes in the episode log {}", config.resumed_log->size(),
                    log_path.string());
+      config.resumed_faults = emulator::readFaultLog(emulator::faultLogPath(options.report_path));
     }
   }
   if (options.resume && !config.resumed_log) config.resumed_log.emplace();
@@ -270,9 +271,11 @@ class FusionCenter {
     waitset_.attach(status_ready_, 2);
     if (!options_.report_path.empty()) {
       const auto log_path = emulator::episodeLogPath(options_.report_path);
-      episode_log_.emplace(log_path, options_.resume ? emulator::EpisodeLog::Mode::Append
-                                                     : emulator::EpisodeLog::Mode::Truncate);
+      const auto mode =
+          options_.resume ? emulator::EpisodeLog::Mode::Append : emulator::EpisodeLog::Mode::Truncate;
+      episode_log_.emplace(log_path, mode);
       spdlog::info("episode log: {}", log_path.string());
+      fault_log_.emplace(emulator::faultLogPath(options_.report_path), mode);
     }
   }
 
@@ -419,7 +422,16 @@ class FusionCenter {
   void carryOut(const emulator::AppendEpisodeLog& a) {
     if (episode_log_) episode_log_->append(a.entry);
   }
-  static void carryOut(const emulator::RecordFault& /*kept by the core for the report*/) {}
+  // Kept by the core for the report, and in the fault log for a restarted fusion center. A
+  // fault log that cannot take it costs only what a restart would have carried over: a warning.
+  void carryOut(const emulator::RecordFault& a) {
+    if (!fault_log_) return;
+    try {
+      fault_log_->append(a.fault);
+    } catch (const std::exception& e) {
+      spdlog::warn("{}; a restarted fusion center would not know of this fault", e.what());
+    }
+  }
   static void carryOut(const emulator::LogLine& a) { spdlog::log(a.level, "{}", a.text); }
   void carryOut(const emulator::WriteFinalReport& a) {
     if (!options_.report_path.empty()) {
@@ -476,6 +488,7 @@ class FusionCenter {
   ReaderFacts facts_;
   emulator::FusionCenterCore core_;
   std::optional<emulator::EpisodeLog> episode_log_;
+  std::optional<emulator::EpisodeLog> fault_log_;  // faultLogPath: what a restart carries over
   Inbox inbox_;
   std::vector<Arrival> taken_;    // the listener's batch (receive thread only)
   std::vector<Arrival> drained_;  // the main loop's (main thread only)

@@ -292,6 +292,7 @@ void checkReportPaths(const LaunchPlan& plan) {
   const std::string option = plan.default_report ? "report" : "--report";
   checkOutputFile(plan.report_path, option);
   checkOutputFile(emulator::episodeLogPath(plan.report_path), option + " (its episode log)");
+  checkOutputFile(emulator::faultLogPath(plan.report_path), option + " (its fault log)");
 }
 
 // The log folder: made if missing (private when it is the default one, in the scratch folder;
@@ -325,10 +326,12 @@ std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher&
   // Results of an earlier run of this id must not pass for this run's.
   removeRegularFile(plan.report_path);
   removeRegularFile(emulator::episodeLogPath(plan.report_path));
+  removeRegularFile(emulator::faultLogPath(plan.report_path));
   removeRegularFile(plan.coordinator_state);
   if (!plan.reference_report.empty()) {
     removeRegularFile(plan.reference_report);
     removeRegularFile(emulator::episodeLogPath(plan.reference_report));
+    removeRegularFile(emulator::faultLogPath(plan.reference_report));
   }
   return lock;
 }

@@ -48,14 +48,21 @@ std::optional<json> readRunReport(const fs::path& path, const std::string& run_i
 // without per_episode (a rewrite streams it in from the log).
 json rebuildReport(const RunEnd& end, bool logged) {
   const fs::path log = emulator::episodeLogPath(end.report_path);
+  // What our fusion center recorded before it died: its fault log (the launch removed an
+  // earlier run's; an external fusion center keeps none).
+  json faults = json::array();
+  if (!end.external_fusion_center) {
+    for (json& fault : emulator::readFaultLog(emulator::faultLogPath(end.report_path))) {
+      faults.push_back(std::move(fault));
+    }
+  }
   json report;
   if (logged) {
     emulator::RunReport rebuilt(end.run_id, "", end.sensor_count, 0, log);
     emulator::forEachReportedEpisode(log, [&rebuilt](const json& entry) { rebuilt.add(entry); });
-    report = rebuilt.toJsonWithoutEpisodes("failed", json::array(), json::array());
+    report = rebuilt.toJsonWithoutEpisodes("failed", faults, json::array());
   } else {
-    report = emulator::reportFromEpisodes(end.run_id, end.sensor_count, {}, "failed",
-                                          json::array());
+    report = emulator::reportFromEpisodes(end.run_id, end.sensor_count, {}, "failed", faults);
   }
   report["rebuilt_from"] = log.string();
   if (!report.contains("episodes_planned")) report["episodes_planned"] = end.episodes_planned;

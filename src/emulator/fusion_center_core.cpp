@@ -61,7 +61,20 @@ struct FusionCenterCore::OpenEpisode {
 FusionCenterCore::FusionCenterCore(FusionCenterConfig config, const WriterFacts& writers,
                                    std::int64_t joined_ns)
     : config_(std::move(config)), writers_(writers) {
-  if (config_.resumed_log) resumed_.emplace(*config_.resumed_log, joined_ns);
+  for (json& fault : config_.resumed_faults) faults_.push_back(std::move(fault));
+  config_.resumed_faults.clear();
+  if (config_.resumed_log) {
+    resumed_.emplace(*config_.resumed_log, joined_ns);
+    // Recorded now, so that a life killed before its end still leaves its restart in the fault
+    // log, as the next life reads it; noteRestart says what it could not fuse when this one ends.
+    restart_fault_ = faults_.size();
+    recordFault(faultEntry(FaultKind::Restarted, kProcess, std::nullopt, std::nullopt,
+                           std::nullopt,
+                           "the fusion center was restarted and resumed from " +
+                               std::to_string(resumed_->entries().size()) +
+                               " logged episodes, and was stopped again before the run's end "
+                               "(what it could not fuse is incomplete in the episode log)"));
+  }
 }
 
 FusionCenterCore::~FusionCenterCore() = default;
@@ -892,10 +905,14 @@ RunStatus FusionCenterCore::decideStatus(
   return clean ? RunStatus::Completed : RunStatus::Degraded;
 }
 
-// The restart in the report's faults: the process, the episodes it could not fuse.
-void FusionCenterCore::noteRestart() {
+// The restart in the report's faults: the process, the episodes it could not fuse. Replaces
+// the entry the constructor recorded (in the report; the fault log keeps the first version, read
+// only by a later life, which a life that ends has none of).
+void FusionCenterCore::noteRestart() { faults_[restart_fault_] = restartFault(); }
+
+json FusionCenterCore::restartFault() const {
   const std::set<std::uint32_t>& lost = resumed_->restarted();
-  json fault = faultEntry(
+  return faultEntry(
       FaultKind::Restarted, kProcess, std::nullopt,
       lost.empty() ? std::nullopt : std::optional<std::uint32_t>(*lost.rbegin()), std::nullopt,
       "the fusion center was restarted and resumed from " +
@@ -911,8 +928,6 @@ void FusionCenterCore::noteRestart() {
                ? std::string()
                : "; answered without the measurement writers of sensors " +
                      listed(answered_without_) + " (their next measurements could be lost)"));
-  faults_.insert(faults_.begin(), fault);
-  emit<RecordFault>(std::move(fault));
 }
 
 // The arrival mode of the run, and what the bracket [info, cov] says under it.

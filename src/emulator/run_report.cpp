@@ -636,6 +636,12 @@ std::filesystem::path episodeLogPath(const std::filesystem::path& report_path) {
   return log += ".jsonl";
 }
 
+std::filesystem::path faultLogPath(const std::filesystem::path& report_path) {
+  std::filesystem::path log = report_path;
+  if (log.extension() == ".json") log.replace_extension();
+  return log += ".faults.jsonl";
+}
+
 namespace {
 
 // The file is not empty and its last byte is not a newline: a line torn by a crash.
@@ -705,6 +711,19 @@ std::vector<json> readEpisodeLog(const std::filesystem::path& path) {
   std::vector<json> entries;
   (void)forEachLoggedEpisode(path, [&entries](json entry) { entries.push_back(std::move(entry)); });
   return entries;
+}
+
+std::vector<json> readFaultLog(const std::filesystem::path& path) {
+  std::vector<json> faults;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {  // a torn last line is no object, and skipped
+    json fault = json::parse(line, nullptr, false);
+    if (fault.is_object() && fault.contains("kind") && fault["kind"].is_string()) {
+      faults.push_back(std::move(fault));
+    }
+  }
+  return faults;
 }
 
 ResumedRun::ResumedRun(std::vector<json> log_entries, std::int64_t joined_wall_ns)

@@ -53,6 +53,8 @@ struct FusionCenterConfig {
   double state_period_s = 0.05;  // FusionState publication period (wall seconds)
   // Restarted (--resume): the entries of the episode log it goes on from (empty: none yet).
   std::optional<std::vector<nlohmann::json>> resumed_log;
+  // ... and the faults its earlier lives recorded (faultLogPath), which the report keeps.
+  std::vector<nlohmann::json> resumed_faults;
   bool episode_log = false;      // the report's entries are read back from an episode log
   std::string episode_log_path;  // ... this one
 };
@@ -254,6 +256,7 @@ class FusionCenterCore {
   RunStatus decideStatus(const std::optional<RunEnd>& end,
                          const std::map<std::string, std::uint64_t>& rejected_by_inputs);
   void noteRestart();
+  [[nodiscard]] nlohmann::json restartFault() const;
   [[nodiscard]] nlohmann::json finalReport(RunStatus status, const std::string& written_at);
 
   FusionCenterConfig config_;
@@ -279,6 +282,7 @@ class FusionCenterCore {
   // still owed. When they were last heard dates the death better than the notice.
   std::map<int, std::int64_t> silent_from_ns_;
   bool launcher_gone_ = false;           // onLauncherGone: the run's cause is the launcher's death
+  std::size_t restart_fault_ = 0;        // resumed: where this life's restart fault is in faults_
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
   std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses

@@ -218,6 +218,10 @@ inline constexpr double kLatencyQuantileRelativeError = 5.76e-4;  // 10^(1/4000)
 // The episode log beside a report: report.json -> report.jsonl (any other name gets ".jsonl"
 // appended).
 [[nodiscard]] std::filesystem::path episodeLogPath(const std::filesystem::path& report_path);
+// Beside it, the faults the fusion center recorded, one JSON line each as they happen
+// ("report.json" -> "report.faults.jsonl"): a restarted fusion center starts from them, so that
+// what an earlier life of it saw stays in the report.
+[[nodiscard]] std::filesystem::path faultLogPath(const std::filesystem::path& report_path);
 
 // Appends one JSON document per line, each line in one write(2) to the file itself, so that a
 // crash of the process loses no line it appended and tears none. A line the file cannot take
@@ -245,6 +249,8 @@ class EpisodeLog {
 
 // The entries of an episode log, in order; a torn last line (a crash mid-write) is skipped.
 [[nodiscard]] std::vector<nlohmann::json> readEpisodeLog(const std::filesystem::path& path);
+// The faults of a fault log (faultLogPath), in order; none when there is no such file.
+[[nodiscard]] std::vector<nlohmann::json> readFaultLog(const std::filesystem::path& path);
 // The same, one at a time, without holding them; returns how many there were.
 std::size_t forEachLoggedEpisode(const std::filesystem::path& path,
                                  const std::function<void(nlohmann::json)>& each);

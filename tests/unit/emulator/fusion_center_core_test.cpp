@@ -61,10 +61,12 @@ class FusionCenterCoreTest : public ::testing::Test {
   FusionCenterCoreTest()
       : scenario_(smallScenario()), version_(versionOf(1, uniformSchedule(scenario_))) {}
 
-  void make(std::optional<std::vector<json>> resumed = std::nullopt, std::int64_t joined = 0) {
+  void make(std::optional<std::vector<json>> resumed = std::nullopt, std::int64_t joined = 0,
+            std::vector<json> resumed_faults = {}) {
     FusionCenterConfig config;
     config.run_id = kRun;
     config.resumed_log = std::move(resumed);
+    config.resumed_faults = std::move(resumed_faults);
     core_ = std::make_unique<FusionCenterCore>(config, writers_, joined);
     now_ = joined;
   }
@@ -159,6 +161,7 @@ class FusionCenterCoreTest : public ::testing::Test {
       if (auto* r = std::get_if<PublishReport>(&a)) reports_.push_back(*r);
       if (auto* f = std::get_if<WriteFinalReport>(&a)) final_ = f->doc;
       if (std::holds_alternative<AppendEpisodeLog>(a)) ++logged_;
+      if (auto* f = std::get_if<RecordFault>(&a)) fault_log_.push_back(f->fault);
     }
   }
   RunStatus finish(std::optional<RunEnd> end) {
@@ -190,6 +193,7 @@ class FusionCenterCoreTest : public ::testing::Test {
   std::vector<PublishReport> reports_;
   json final_;
   int logged_ = 0;
+  std::vector<json> fault_log_;  // what RecordFault gave the fault log, in order
 };
 
 TEST_F(FusionCenterCoreTest, ClosesAnEpisodeOnlyWhenEveryCountIsIn) {
@@ -719,6 +723,34 @@ TEST_F(FusionCenterCoreTest, AResumedCenterAnswersOnlyWhenItHoldsEverySensorProc
   EXPECT_EQ(finish(RunEnd{6, false, ""}), RunStatus::Degraded);
   EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"});
   EXPECT_EQ(final_.at("summary").at("episodes"), 6);
+}
+
+// Issue 31, finding 5: killed twice. The first restarted life records its restart at once (the
+// fault log), and a stall it saw; killed again, the second life starts from that log, so the
+// report keeps both restarts and the stall, the first life's entries first.
+TEST_F(FusionCenterCoreTest, AFusionCenterKilledTwiceKeepsWhatEachLifeRecorded) {
+  make(loggedEpisodes(3), startOf(3) + 1 * kS);
+  take();
+  ASSERT_EQ(fault_log_.size(), 1u) << "the restart is in the fault log from the start";
+  EXPECT_EQ(fault_log_[0].at("kind"), "restarted");
+  EXPECT_NE(fault_log_[0].at("detail").get<std::string>().find("stopped again"), std::string::npos);
+  std::vector<json> first_life = fault_log_;
+  first_life.push_back(faultEntry(FaultKind::Stall, "fusion_center", 2, 3, 1.5, "a stall"));
+  fault_log_.clear();
+  make(loggedEpisodes(4), startOf(4) + 1 * kS, first_life);  // killed, started again
+  announce();
+  start(4);
+  hearStatuses(*core_, 4, now_);
+  writers_.held = {statusWriter(0), statusWriter(2)};
+  runUntil(endOf(4) + 500 * kMs);
+  EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"restarted", "stall", "restarted"}));
+  EXPECT_EQ(core_->faults().at(0), first_life[0]);
+  const std::string second = core_->faults().at(2).at("detail");
+  EXPECT_NE(second.find("resumed from 4 logged episodes"), std::string::npos) << second;
+  EXPECT_NE(second.find("episode 4"), std::string::npos) << "what it could not fuse: " << second;
+  EXPECT_EQ(final_.at("faults").size(), 3u);
+  ASSERT_EQ(fault_log_.size(), 1u) << "only what this life recorded goes to the log again";
 }
 
 // Two sensor processes stopped at the moment of the kill: their statuses never come. The
