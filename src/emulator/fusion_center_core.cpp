@@ -568,8 +568,8 @@ std::vector<int> FusionCenterCore::sensorsLackingWriters() const {
       lacking.push_back(j);
       continue;
     }
-    const SensorProcessState state = process->second.state;
-    if (state == SensorProcessState::Failed || state == SensorProcessState::Stopped) continue;
+    const SensorState state = process->second.state;
+    if (state == SensorState::Failed || state == SensorState::Stopped) continue;
     if (!writers_.measurementWriterMatchedWith(process->second.status_writer)) lacking.push_back(j);
   }
   return lacking;

@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "sensornet/dds/wire.hpp"
+#include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet::emulator {
@@ -42,19 +43,13 @@ EpisodeTally tallyOfSample(const sensornet_EpisodeTally& t, WriterId writer) {
 }
 
 SensorStatus statusOfSample(const sensornet_SensorStatus& s, WriterId writer) {
-  using State = SensorProcessState;
   SensorStatus out;
   out.sensor = s.sensor_id;
   out.run_id = std::string(dds::viewString(s.run_id));
   out.episode = s.episode;
-  switch (s.state) {
-    case sensornet_SENSOR_STARTING: out.state = State::Starting; break;
-    case sensornet_SENSOR_READY: out.state = State::Ready; break;
-    case sensornet_SENSOR_RUNNING: out.state = State::Running; break;
-    case sensornet_SENSOR_EXCLUDED: out.state = State::Excluded; break;
-    case sensornet_SENSOR_STOPPED: out.state = State::Stopped; break;
-    case sensornet_SENSOR_FAILED: out.state = State::Failed; break;
-  }
+  // A state word this build does not know (a newer peer's) reads as starting: no decision
+  // rests on it.
+  out.state = sensorStateOf(s.state).value_or(SensorState::Starting);
   out.sent_in_episode = s.sent_in_episode;
   out.process_id = s.process_id;
   out.wall_time_ns = s.wall_time_ns;

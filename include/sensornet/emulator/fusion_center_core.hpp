@@ -37,6 +37,7 @@
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/episode_controls.hpp"
+#include "sensornet/emulator/log_line.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
@@ -117,14 +118,11 @@ struct EpisodeTally {
   WriterId writer = 0;
 };
 
-// What a sensor process is doing (the SensorStatus topic).
-enum class SensorProcessState { Starting, Ready, Running, Excluded, Stopped, Failed };
-
 struct SensorStatus {
   std::uint32_t sensor = 0;
   std::string run_id;
   std::uint32_t episode = 0;
-  SensorProcessState state = SensorProcessState::Starting;
+  SensorState state = SensorState::Starting;  // vocabulary.hpp
   std::uint64_t sent_in_episode = 0;
   std::int32_t process_id = 0;
   std::int64_t wall_time_ns = 0;
@@ -150,10 +148,6 @@ struct AppendEpisodeLog {
 };
 struct RecordFault {
   nlohmann::json fault;  // faultEntry(...), also kept for the final report
-};
-struct LogLine {
-  spdlog::level::level_enum level = spdlog::level::info;
-  std::string text;
 };
 struct WriteFinalReport {
   RunStatus status = RunStatus::Completed;
@@ -206,7 +200,7 @@ class FusionCenterCore {
   struct OpenEpisode;
   struct SensorProcess {
     std::int32_t id = 0;
-    SensorProcessState state = SensorProcessState::Starting;
+    SensorState state = SensorState::Starting;  // vocabulary.hpp
     WriterId status_writer = 0;
   };
 

@@ -689,7 +689,7 @@ void hearStatuses(FusionCenterCore& core, std::uint32_t episode, std::int64_t no
     s.sensor = static_cast<std::uint32_t>(j);
     s.run_id = kRun;
     s.episode = episode;
-    s.state = SensorProcessState::Running;
+    s.state = SensorState::Running;
     s.process_id = j < 2 ? 1000 : 2000;
     s.writer = statusWriter(j < 2 ? 0 : 2);
     s.wall_time_ns = now;
