@@ -12,6 +12,7 @@
 
 #include "launch_command.hpp"
 #include "pki_command.hpp"
+#include "record_command.hpp"
 #include "replan_command.hpp"
 #include "replay_command.hpp"
 #include "report_command.hpp"
@@ -34,7 +35,8 @@ int main(int argc, char** argv) {
         sensornet::launcher::addLaunchCommand(app), sensornet::launcher::addReplanCommand(app),
         sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
         sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app),
-        sensornet::launcher::addRunsCommand(app), sensornet::launcher::addReplayCommand(app)};
+        sensornet::launcher::addRunsCommand(app), sensornet::launcher::addReplayCommand(app),
+        sensornet::launcher::addRecordCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

@@ -151,6 +151,55 @@ TEST_F(Recording, TheReferenceReaderReadsEveryTopicWithTheCountsTheReportGives) 
   EXPECT_EQ(ours_per_topic, counts);
 }
 
+// `sensornet record --run-id ID` joins a run from outside: started before the launch, it takes
+// the whole run, every count as the report gives it (recomputed here), ends by itself with the
+// run (exit 0), and its file replays to the recorded costs bit for bit.
+TEST_F(Recording, RecordJoinsARunAndTakesAllOfIt) {
+  const LeftoverGuard guard(run_id_);
+  constexpr int kEpisodes = 3;
+  const fs::path file = dir_ / "joined.mcap";
+  RunningProgram recorder({testing::kLauncher, "record", "--run-id", run_id_, file.string()}, 120s);
+  ASSERT_TRUE(testing::waitUntil([&] { return fs::exists(file); }, 20s)) << "the recorder never began";
+  std::vector<std::string> argv = launchArgs(kEpisodes, "5");
+  argv.insert(argv.end(), {"--seed", "11", "--no-html"});
+  const testing::ProcessResult run = runProcess(argv, 120s);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const testing::ProcessResult& r = recorder.result();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("of run " + run_id_ + " in " + file.string() + " (ended)"), std::string::npos)
+      << r.out;
+  const json report = readJson(dir_ / "report.json");
+  ASSERT_TRUE(report.is_object());
+  const auto counts = countsOf(readWithMcapCore(file));
+  std::uint64_t sent = 0;
+  for (const json& e : report.at("per_episode")) {
+    for (const json& n : e.at("sent")) sent += n.get<std::uint64_t>();
+  }
+  const std::uint64_t sensors = report.at("scenario").at("sensors").get<std::uint64_t>();
+  EXPECT_EQ(counts.at("sensornet/Measurement"), sent);
+  EXPECT_EQ(counts.at("sensornet/EpisodeTally"), kEpisodes * sensors);
+  EXPECT_EQ(counts.at("sensornet/Report"), static_cast<std::uint64_t>(kEpisodes));
+  EXPECT_EQ(counts.at("sensornet/Scenario"), 1u);
+  EXPECT_EQ(counts.at("sensornet/EpisodeControl"), kEpisodes + 1u);
+  const testing::ProcessResult replay = runProcess(
+      {testing::kLauncher, "replay", file.string(), "--report", (dir_ / "replay.json").string()},
+      60s);
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+}
+
+// A run id nobody answers for: one line saying so after --wait, exit 1, and still a valid file.
+TEST_F(Recording, RecordOfARunThatNeverComesSaysSoAndExitsOne) {
+  const fs::path file = dir_ / "nothing.mcap";
+  const testing::ProcessResult r = runProcess(
+      {testing::kLauncher, "record", "--run-id", run_id_, file.string(), "--wait", "1"}, 30s);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("nothing of run " + run_id_ + " answered within 1 s"), std::string::npos)
+      << r.err;
+  const json read = readWithMcapCore(file);
+  ASSERT_TRUE(read.is_object());
+  EXPECT_EQ(read.at("metadata").at("run-end").at("status"), "never answered");
+}
+
 TEST_F(Recording, ARunInterruptedWithCtrlCLeavesACompleteFile) {
   const LeftoverGuard guard(run_id_);
   const fs::path file = dir_ / "cut.mcap";
