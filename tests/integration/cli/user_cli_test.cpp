@@ -307,7 +307,8 @@ TEST_F(Runs, RmNeverRemovesALiveRunAndRefusesAnUnknownId) {
   ::close(lock_fd_);
   lock_fd_ = -1;
   const ProcessResult after = runs({"--json"});
-  for (const json& run : json::parse(after.out).at("runs")) {
+  const json listed = json::parse(after.out);  // kept: a loop over a temporary's member dangles
+  for (const json& run : listed.at("runs")) {
     if (run.at("run_id") == "run-live") {
       EXPECT_EQ(run.at("state"), "unknown");
     }

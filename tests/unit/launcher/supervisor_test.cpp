@@ -119,8 +119,9 @@ TEST(Supervisor, ADeathFoundLateIsDatedByTheLastSightOfTheChildAlive) {
   const LastSeenAlive seen{episode(0, 0.33), 2.1};
   const auto actions = s.onChildExit(killed("sensor_agent-0-2"), episode(1, 0.95), kStart, seen);
   ASSERT_EQ(count<NotifySensorsFailed>(actions), 1);
-  ASSERT_EQ(s.faults().size(), 1u);
-  const Fault& f = s.faults()[0];
+  const std::vector<Fault> faults = s.faults();  // a copy: a reference into it would dangle
+  ASSERT_EQ(faults.size(), 1u);
+  const Fault& f = faults[0];
   EXPECT_EQ(f.at.episode, 0u) << "it died in episode 0, before episode 1 began";
   ASSERT_TRUE(f.at.emulated_time_s.has_value());
   EXPECT_DOUBLE_EQ(*f.at.emulated_time_s, 0.33);
