@@ -32,6 +32,7 @@
 #include "support/background_process.hpp"
 #include "support/occurrences.hpp"
 #include "support/process.hpp"
+#include "support/sanitizer.hpp"
 
 namespace {
 
@@ -58,7 +59,7 @@ std::string readText(const fs::path& path) {
 
 // Waits until no process mentions `token`; the ones still there after `limit`.
 std::vector<pid_t> leftoversAfter(const std::string& token, std::chrono::milliseconds limit) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
+  const auto deadline = std::chrono::steady_clock::now() + sensornet::testing::scaledLimit(limit);
   std::vector<pid_t> left = processesMentioning(token);
   while (!left.empty() && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(50ms);
