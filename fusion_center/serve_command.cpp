@@ -212,8 +212,8 @@ emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
 }
 
 // The launcher's pid when `sensornet launch` started this process, else 0. The launcher arms the
-// parent-death signal SIGTERM in it, so a SIGTERM that comes with this parent gone is the
-// launcher's death (kill -9), and this process is the last one of the run to say so.
+// parent-death signal emulator::kLauncherDeathSignal in it, so that signal (or this parent gone)
+// is the launcher's death (kill -9), and this process is the last one of the run to say so.
 pid_t launcherParent() {
   const pid_t parent = ::getppid();
   std::ifstream comm("/proc/" + std::to_string(parent) + "/comm");
@@ -306,7 +306,10 @@ class FusionCenter {
       core_.tick(now);
       carryOut();
     }
-    const bool launcher_gone = !end && launcher_ != 0 && ::getppid() != launcher_;
+    // The death signal says so at once; the parent's id changes only once every thread of the
+    // dying launcher is gone.
+    const bool launcher_gone =
+        !end && launcher_ != 0 && (emulator::launcherDied() || ::getppid() != launcher_);
     if (launcher_gone) {
       core_.onLauncherGone("the launcher (sensornet launch, pid " + std::to_string(launcher_) +
                                ") died while the run went on (its children got the "

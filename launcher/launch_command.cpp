@@ -31,6 +31,7 @@
 #include "runs_command.hpp"
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/dds/security.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
@@ -202,14 +203,14 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
     plan.children.push_back(childSpec(kFusionCenter, serve,
                                       roleFlags(flags, options, dds::SecurityRole::FusionCenter),
                                       plan.log_dir));
-    plan.children.back().parent_death_signal = SIGTERM;  // it writes the report
+    plan.children.back().parent_death_signal = emulator::kLauncherDeathSignal;  // it writes the report
   } else if (options.reference_fusion) {
     plan.reference_report = plan.log_dir / "reference-report.json";
     plan.children.push_back(childSpec(
         kReferenceFusionCenter,
         {programs.fusion_center, "serve", "--reference", "--report", plan.reference_report},
         roleFlags(flags, options, dds::SecurityRole::FusionCenter), plan.log_dir));
-    plan.children.back().parent_death_signal = SIGTERM;
+    plan.children.back().parent_death_signal = emulator::kLauncherDeathSignal;
   }
   const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
   // External sensors get no agent: a participant of the user's speaks for them.

@@ -51,7 +51,7 @@ void signalChild(pid_t pid, int signal) {
   struct sigaction default_action {};
   default_action.sa_handler = SIG_DFL;
   sigemptyset(&default_action.sa_mask);
-  for (int signal : {SIGINT, SIGTERM, SIGPIPE, SIGCHLD, SIGHUP}) {
+  for (int signal : {SIGINT, SIGTERM, SIGPIPE, SIGCHLD, SIGHUP, SIGUSR1}) {
     ::sigaction(signal, &default_action, nullptr);
   }
   sigset_t none;

@@ -32,8 +32,8 @@ struct ChildSpec {
   std::vector<std::string> argv;   // argv[0] is the program's path
   std::filesystem::path log_path;  // standard output and error, truncated at start
   // What the child gets when the launcher dies (PR_SET_PDEATHSIG): SIGKILL, so that nothing of
-  // the run outlives the launcher; the fusion center gets SIGTERM, on which it writes the report
-  // with the launcher's death as its cause.
+  // the run outlives the launcher; the fusion center gets emulator::kLauncherDeathSignal, on
+  // which it writes the report with the launcher's death as its cause.
   int parent_death_signal = SIGKILL;
 };
 

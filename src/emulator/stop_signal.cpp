@@ -1,13 +1,17 @@
 #include "sensornet/emulator/stop_signal.hpp"
 
-#include <csignal>
+#include <initializer_list>
 
 namespace sensornet::emulator {
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_launcher_died = 0;
 
-extern "C" void onStopSignal(int) { g_stop = 1; }
+extern "C" void onStopSignal(int signal) {
+  if (signal == kLauncherDeathSignal) g_launcher_died = 1;
+  g_stop = 1;
+}
 
 }  // namespace
 
@@ -15,10 +19,11 @@ void installStopSignals() {
   struct sigaction action {};
   action.sa_handler = onStopSignal;
   sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  for (const int signal : {SIGINT, SIGTERM, kLauncherDeathSignal}) sigaction(signal, &action, nullptr);
 }
 
 bool stopRequested() { return g_stop != 0; }
+
+bool launcherDied() { return g_launcher_died != 0; }
 
 }  // namespace sensornet::emulator

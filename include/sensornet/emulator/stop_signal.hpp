@@ -4,10 +4,23 @@
 //
 //   installStopSignals();
 //   while (!stopRequested()) { ...; waitset.wait(20ms); }
+//   if (launcherDied()) ...  // stopped by the launcher's death, not asked by it
+
+#include <csignal>
 
 namespace sensornet::emulator {
 
+// What a child that writes something on the way out (the fusion center) gets when its launcher
+// dies (PR_SET_PDEATHSIG). The launcher never sends it otherwise, so the child can tell "my
+// launcher died" from "my launcher asks me to stop" (SIGTERM). getppid() cannot tell them
+// apart in time: the kernel first hands the children to another thread of the dying launcher,
+// whose process id is the launcher's, and sends the signal from there.
+inline constexpr int kLauncherDeathSignal = SIGUSR1;
+
+// Handles SIGINT, SIGTERM and kLauncherDeathSignal.
 void installStopSignals();
 [[nodiscard]] bool stopRequested();
+// True when the stop came from kLauncherDeathSignal.
+[[nodiscard]] bool launcherDied();
 
 }  // namespace sensornet::emulator
