@@ -85,6 +85,7 @@ struct LaunchOptions {
   bool reference_fusion = false;  // --reference-fusion: ours beside it, on the same measurements
   double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator
   double replan_every_s = 0.0;    // --replan-every, passed to the coordinator (0: open loop)
+  std::optional<double> switch_margin_s;  // --switch-margin, passed to the coordinator
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
@@ -257,6 +258,9 @@ LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
   coordinator.insert(coordinator.end(), {"--ready-timeout", formatNumber(options.ready_timeout_s)});
   if (options.replan_every_s > 0.0) {
     coordinator.insert(coordinator.end(), {"--replan-every", formatNumber(options.replan_every_s)});
+  }
+  if (options.switch_margin_s) {
+    coordinator.insert(coordinator.end(), {"--switch-margin", formatNumber(*options.switch_margin_s)});
   }
   plan.children.push_back(childSpec(kCoordinator, std::move(coordinator),
                                     roleFlags(flags, options, dds::SecurityRole::Coordinator),
@@ -754,6 +758,12 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "info or cov; taking effect a switch margin later), and every episode starts "
                   "with the open-loop plan again. Offline: fusion_center evaluate --replan-every. "
                   "Default: open loop")
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  cmd->add_option("--switch-margin", options->switch_margin_s,
+                  "wall seconds between a re-plan (--replan-every's, a failure's, `sensornet "
+                  "replan`'s) and the moment it takes effect: the time every sensor has to hear "
+                  "of it. Raise it on a slow or loaded machine, where a re-plan published late "
+                  "moves to the next episode. Default: the coordinator's, 0.3")
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "launch_fixture.hpp"
+#include "support/sanitizer.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet::testing {
@@ -52,9 +53,12 @@ constraints:
   b: [12]
 )";
 
-constexpr double kEvery = 0.4;      // emulated seconds
-constexpr double kTimeScale = 2.0;  // the switch margin of 0.3 wall s is 0.6 emulated s
-constexpr double kMargin = 0.3 * kTimeScale;
+constexpr double kEvery = 0.4;  // emulated seconds
+// Time scale 2 with the switch margin of 0.3 wall s: 0.6 emulated s. The sanitizer build runs
+// the same emulated run kTimeFactor times slower, with a margin as much longer.
+constexpr double kTimeScale = 2.0 / kTimeFactor;
+constexpr double kSwitchMargin = 0.3 * kTimeFactor;  // wall seconds
+constexpr double kMargin = kSwitchMargin * kTimeScale;
 constexpr int kEpisodes = 36;
 
 // The two-sample KS statistic sup |F_a - F_b|.
@@ -86,10 +90,12 @@ TEST_F(ClosedLoop, TheLiveRunReplansAtEveryInstantAndAgreesWithTheOfflineSimulat
       120s);
   ASSERT_EQ(planned.exit_code, 0) << planned.err;
 
-  std::vector<std::string> argv = launchArgs(kEpisodes, "2", dir_ / "report.json", dir_ / "logs",
-                                             scenario.string());
+  const std::string time_scale = std::to_string(kTimeScale);
+  const std::string margin = std::to_string(kSwitchMargin);
+  std::vector<std::string> argv = launchArgs(kEpisodes, time_scale, dir_ / "report.json",
+                                             dir_ / "logs", scenario.string());
   argv.insert(argv.end(), {"--surrogate", "info", "--schedule", plan.string(), "--replan-every",
-                           "0.4", "--seed", "5"});
+                           "0.4", "--switch-margin", margin, "--seed", "5"});
   const LeftoverGuard guard(run_id_);
   const ProcessResult live = runProcess(argv, 240s);
   ASSERT_EQ(live.exit_code, 0) << live.out << live.err;
@@ -130,8 +136,8 @@ TEST_F(ClosedLoop, TheLiveRunReplansAtEveryInstantAndAgreesWithTheOfflineSimulat
   const fs::path costs = dir_ / "offline-costs.txt";
   const ProcessResult offline = runProcess(
       {SENSORNET_FUSION_CENTER, "evaluate", "--scenario", scenario.string(), "--schedule",
-       plan.string(), "--replan-every", "0.4", "--surrogate", "info", "--time-scale", "2",
-       "--runs", "2000", "--seed", "5", "--costs", costs.string(), "--json"},
+       plan.string(), "--replan-every", "0.4", "--surrogate", "info", "--time-scale", time_scale,
+       "--switch-margin", margin, "--runs", "2000", "--seed", "5", "--costs", costs.string(), "--json"},
       300s);
   ASSERT_EQ(offline.exit_code, 0) << offline.err;
   const json summary = json::parse(offline.out);

@@ -32,6 +32,7 @@
 #include "sensornet/io/scenario_file.hpp"
 #include "emulation_fixture.hpp"
 #include "support/background_process.hpp"
+#include "support/sanitizer.hpp"
 
 namespace sensornet {
 namespace {
@@ -123,8 +124,12 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   run.startFusionCenter();
   run.startSensors("0-2");
   run.startSensors("3-5");
+  // The whole time axis stretched by the sanitizer build's factor (1 in the release build): the
+  // episodes, the margin and the waits below, so the switch lands at the same emulated moment.
+  constexpr int kSlow = sensornet::testing::kTimeFactor;
   run.startCoordinator({"--scenario", kDefaultScenario, "--surrogate", "uniform", "--episodes",
-                        std::to_string(episodes), "--time-scale", "1", "--switch-margin", "1.0"});
+                        std::to_string(episodes), "--time-scale", std::to_string(1.0 / kSlow),
+                        "--switch-margin", std::to_string(1.0 * kSlow)});
 
   emulator::RunOptions options;
   options.run_id = run.runId();
@@ -148,7 +153,7 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
           emulator::sensorPartitionPattern(participant.partition())));
 
   // Wait for episode 0's report: episode 1 is then about to start.
-  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  const auto deadline = std::chrono::steady_clock::now() + kSlow * 60s;
   bool first_report = false;
   while (!first_report && std::chrono::steady_clock::now() < deadline) {
     for (auto& r : reports.take(8).samples) first_report |= r.sample->episode == 0;
@@ -157,9 +162,8 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   ASSERT_TRUE(first_report);
   // Into episode 1 (3 s of wall time long; it starts 0.2 s after the report), so that the
   // fusion center has published a covariance of it: the switch lands about 1.8 s into it, with
-  // a second of wall time for planning and for every process to hear of it (ample even in the
-  // sanitizer build, where planning is ten times slower).
-  std::this_thread::sleep_for(1000ms);
+  // a second of wall time for planning and for every process to hear of it.
+  std::this_thread::sleep_for(kSlow * 1000ms);
 
   ASSERT_TRUE(commands.waitForReaders(1, 5s));
   const std::vector<std::uint32_t> excluded = {0};
@@ -190,7 +194,7 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
   // Once version 2 is in force (the rest of the running episode), `status` shows sensor 0 as
   // excluded, and only it.
   bool zero_excluded = false;
-  const auto status_deadline = std::chrono::steady_clock::now() + 6s;
+  const auto status_deadline = std::chrono::steady_clock::now() + kSlow * 6s;
   while (!zero_excluded && std::chrono::steady_clock::now() < status_deadline) {
     for (auto& s : statuses.take(32).samples) {
       const bool says_excluded = s.sample->state == sensornet_SENSOR_EXCLUDED;

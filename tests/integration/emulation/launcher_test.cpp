@@ -120,8 +120,10 @@ class Launcher : public ::testing::Test {
   }
 
   // Polls `sensornet status --json` until every sensor says it is running.
+  // `limit` as the release build needs it: scaled for the sanitizer build, whose coordinator
+  // plans the default scenario's schedule in about 13 s.
   std::optional<json> waitUntilRunning(std::chrono::seconds limit) {
-    const auto deadline = std::chrono::steady_clock::now() + limit;
+    const auto deadline = std::chrono::steady_clock::now() + sensornet::testing::scaledLimit(limit);
     while (std::chrono::steady_clock::now() < deadline) {
       const ProcessResult r = runProcess({kLauncher, "status", "--wait", "1", "--json"}, 10s);
       if (r.exit_code == 0) {

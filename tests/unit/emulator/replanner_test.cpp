@@ -17,6 +17,7 @@
 #include "sensornet/io/scenario_file.hpp"
 
 #include "emulator_test_support.hpp"
+#include "support/sanitizer.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -399,7 +400,9 @@ TEST(ReplanningDefaultScenario, ASensorDeathIsReplannedToACertifiedPlanWithoutIt
   const ScheduleVersion v1 = firstVersion(scenario, PlanSurrogate::Covariance);
   book.add(v1);
   ASSERT_GT(v1.schedule.rates().col(1).maxCoeff(), 0.0) << "the plan must use sensor 1";
-  Replanner r(scenario, plant, initialSettings(scenario, PlanSurrogate::Covariance), {});
+  ReplannerOptions options;  // the planner's wall-time limit, as slow as the build
+  options.max_plan_seconds = sensornet::testing::scaledLimit(options.max_plan_seconds);
+  Replanner r(scenario, plant, initialSettings(scenario, PlanSurrogate::Covariance), options);
   const std::vector<std::uint32_t> dead = {1};
   r.noteFailed(dead, 7);
   RunMoment between;  // between episodes: one full-horizon version from episode 3
