@@ -31,6 +31,7 @@
 #include "runs_command.hpp"
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/emulator/coordinator_core.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/dds/security.hpp"
@@ -763,7 +764,8 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "wall seconds between a re-plan (--replan-every's, a failure's, `sensornet "
                   "replan`'s) and the moment it takes effect: the time every sensor has to hear "
                   "of it. Raise it on a slow or loaded machine, where a re-plan published late "
-                  "moves to the next episode. Default: the coordinator's, 0.3")
+                  "moves to the next episode. Default: the coordinator's, " +
+                      formatNumber(emulator::CoordinatorConfig{}.switch_margin_s))
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "

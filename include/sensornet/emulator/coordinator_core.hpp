@@ -72,7 +72,8 @@ struct CoordinatorConfig {
   double ready_timeout_s = 30.0;
   double start_lead_s = 0.2;       // wall seconds between announcing the first episode and its start
   double episode_gap_s = 0.002;    // wall seconds between one episode's end and the next's start
-  double switch_margin_s = 0.3;    // wall seconds between a re-plan and its effective time
+  // Wall seconds between a re-plan and its effective time: the replanner's default.
+  double switch_margin_s = ReplannerOptions{}.switch_margin_s;
   double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
   FailurePolicy on_sensor_failure = FailurePolicy::Replan;
   bool network_aware = false;  // plans for the rates the scenario's network: delivers
