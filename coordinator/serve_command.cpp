@@ -179,10 +179,18 @@ class CoordinatorNode {
   }
 
   void readSamples() {
-    for (auto& received : status_reader_.take(64).samples) {
+    auto statuses = status_reader_.take(64);
+    for (const auto& change : statuses.changes) {
+      core_.onSensorLiveliness(static_cast<int>(change.key->sensor_id),
+                               change.info.instance_state == dds::InstanceState::Alive,
+                               wallNowNs());
+    }
+    for (auto& received : statuses.samples) {
       const sensornet_SensorStatus& s = *received.sample;
       if (const auto state = emulator::sensorStateOf(s.state)) {
         const int sensor = static_cast<int>(s.sensor_id);
+        core_.onSensorLiveliness(sensor, received.info.instance_state == dds::InstanceState::Alive,
+                                 wallNowNs());
         carryOut(core_.onSensorStatus(
             {sensor, *state, s.schedule_version, std::string(dds::viewString(s.detail)),
              speakers_.speaksFor(status_reader_, received.info.publication, sensor)},
@@ -532,12 +540,25 @@ Subcommand addServeCommand(CLI::App& app) {
       ->check(positiveNumber(emulator::kMaxWallSeconds));
   wordOption<emulator::FailurePolicy>(
       cmd->add_option("--on-sensor-failure", options->core.on_sensor_failure,
-                      "when the launcher reports that sensors died: replan = re-plan the rest of "
+                      "when sensors die (--sensor-deaths says who tells): replan = re-plan the rest of "
                       "the horizon among the survivors (rate zero for the dead from a switch tick "
                       "on, a full-horizon version from the next episode), continue = keep the "
                       "schedule, stop = end the run as failed (the report says so; the coordinator "
                       "itself exits 0). Either way the dead sensors are announced and nobody waits "
                       "for them"));
+  wordOption<emulator::DeathWitness>(
+      cmd->add_option("--sensor-deaths", options->core.sensor_deaths,
+                      "who tells the coordinator that sensors died: launcher = the launcher's "
+                      "failure notices (it sees its children exit; the default), liveliness = "
+                      "no launcher supervises the run (containers, a process manager of your "
+                      "own): a sensor whose SensorStatus writer loses its DDS liveliness (1 s "
+                      "lease) while episodes run and does not get it back within --death-grace "
+                      "is dead, and --on-sensor-failure answers"));
+  cmd->add_option("--death-grace", options->core.death_grace_s,
+                  "with --sensor-deaths liveliness: wall seconds a sensor may stay without "
+                  "liveliness (a stall, a cut link) before it counts as dead")
+      ->capture_default_str()
+      ->check(positiveNumber(emulator::kMaxWallSeconds));
   cmd->add_flag("--network-aware", options->core.network_aware,
                 "plan the initial schedule and every re-plan for the rates the scenario's "
                 "network: section delivers (loss thins them, outages of every episode zero "

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
@@ -38,6 +39,7 @@
 #include "sensornet/emulator/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_speakers.hpp"
+#include "sensornet/emulator/report_page.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -62,6 +64,8 @@ struct ServeOptions {
   double state_period_s = 0.05;  // FusionState publication period (wall seconds)
   bool json = false;
   bool resume = false;           // restarted by the launcher: go on from the episode log
+  bool resume_unfinished = false;  // --resume when an episode log has no final report beside it
+  bool page = false;               // --page: the report page beside the final report
   bool reference = false;        // beside an external fusion center: write in P/reference
   std::string metrics_address;   // --metrics: serve /metrics (Prometheus) here while the run lives
 };
@@ -443,6 +447,14 @@ class FusionCenter {
         out << '\n';
       });
       spdlog::info("report written to {}", options_.report_path);
+      if (options_.page) {
+        if (const auto problem = emulator::writePageBeside(options_.report_path)) {
+          spdlog::warn("{}", *problem);
+        } else {
+          spdlog::info("report page written to {}",
+                       emulator::pagePathBeside(options_.report_path).string());
+        }
+      }
     }
     if (options_.json) {
       core_.report().write(std::cout, a.doc, -1);
@@ -517,7 +529,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "--report report.json");
   emulator::addRunOptions(*cmd, options->run);
   options->run.security_identity = dds::SecurityRole::FusionCenter;
-  cmd->add_option("--report", options->report_path,
+  CLI::Option* report = cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down (missing folders are made "
                   "at start); the episode log goes beside it");
   cmd->add_option("--lag", options->lag_s,
@@ -552,7 +564,27 @@ Subcommand addServeCommand(CLI::App& app) {
                 "restarted after a death (the launcher adds it): start the report from the "
                 "episode log beside --report and append to it; an episode that began before this "
                 "process and is not in the log is recorded incomplete (fusion_center_restarted)");
+  cmd->add_flag("--page", options->page,
+                "also write the report page beside the final report (report.json -> "
+                "report.html, as `sensornet report` makes it): for runs without a launcher, "
+                "which writes it otherwise")
+      ->needs(report);
+  cmd->add_flag("--resume-unfinished", options->resume_unfinished,
+                "for a command that is the same at every start (a container's restart policy, "
+                "systemd): --resume when the episode log beside --report exists and the final "
+                "report does not (an earlier process of the run died), else start afresh")
+      ->needs(report)
+      ->excludes("--resume");
   return {cmd, [options] {
+            if (options->resume_unfinished) {
+              const std::filesystem::path log = emulator::episodeLogPath(options->report_path);
+              options->resume =
+                  std::filesystem::exists(log) && !std::filesystem::exists(options->report_path);
+              if (options->resume) {
+                spdlog::info("{} has no final report beside it: resuming (--resume-unfinished)",
+                             log.string());
+              }
+            }
             (void)options->run.domainConfig();
             // A folder the report cannot go in is bad input now, not after the run.
             if (!options->report_path.empty()) {

@@ -32,6 +32,7 @@
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/coordinator_core.hpp"
+#include "sensornet/emulator/report_page.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/dds/security.hpp"
@@ -654,7 +655,7 @@ int runLaunch(LaunchOptions options) {
     }
   }
   if (!options.no_html) {  // a page that cannot be written is a warning, never an exit code
-    if (const auto problem = writePageBeside(plan.report_path)) {
+    if (const auto problem = emulator::writePageBeside(plan.report_path)) {
       std::fprintf(stderr, "sensornet: warning: %s\n", problem->c_str());
     }
   }

@@ -64,23 +64,6 @@ int runReport(const ReportOptions& options) {
 
 }  // namespace
 
-fs::path pagePathBeside(const fs::path& report_path) {
-  fs::path page = report_path;
-  if (page.extension() == ".json") return page.replace_extension(".html");
-  return page += ".html";
-}
-
-std::optional<std::string> writePageBeside(const fs::path& report_path) {
-  const fs::path page = pagePathBeside(report_path);
-  try {
-    const nlohmann::json report = emulator::readReportFile(report_path);
-    writeOutput(page, emulator::reportPage(report, report_path.string()), "report page");
-    return std::nullopt;
-  } catch (const std::exception& e) {
-    return "no report page " + page.string() + ": " + e.what();
-  }
-}
-
 Subcommand addReportCommand(CLI::App& app) {
   auto options = std::make_shared<ReportOptions>();
   CLI::App* cmd = app.add_subcommand(

@@ -4,24 +4,12 @@
 // DIR/sensors.csv). Bad input (a missing or malformed report, an output that cannot be written)
 // is one line naming the file and the problem, exit 2.
 //
-// The launcher writes the page beside every report it settles:
-//   if (auto problem = writePageBeside(report_path)) spdlog::warn("{}", *problem);
-
-#include <filesystem>
-#include <optional>
-#include <string>
+// The launcher writes the page beside every report it settles (emulator::writePageBeside).
 
 #include "sensornet/io/command_line.hpp"
 
 namespace sensornet::launcher {
 
 Subcommand addReportCommand(CLI::App& app);
-
-// The page's path beside a report: report.json -> report.html (any other name gets ".html"
-// appended).
-[[nodiscard]] std::filesystem::path pagePathBeside(const std::filesystem::path& report_path);
-
-// Writes the page beside the report; the problem as one line when it cannot (never throws).
-[[nodiscard]] std::optional<std::string> writePageBeside(const std::filesystem::path& report_path);
 
 }  // namespace sensornet::launcher

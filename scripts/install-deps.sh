@@ -3,23 +3,46 @@
 # so it takes a second when everything is already there. Needs root (or sudo) to install.
 set -euo pipefail
 
-packages=(
+# What building the programs needs (cmake -DSENSORNET_BUILD_TESTS=OFF -DSENSORNET_BUILD_BENCH=OFF
+# -DSENSORNET_PYTHON=OFF): the build stage of docker/Dockerfile.
+build_packages=(
   cmake ninja-build g++ pkg-config
   cyclonedds-dev cyclonedds-tools
   libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   coinor-libipopt-dev liblapack-dev libblas-dev  # IPOPT's CMake link line names -llapack -lblas
+  libssl-dev  # certificates checked with libcrypto
+)
+# What the built programs load and run, and nothing else: the runtime stage of docker/Dockerfile.
+# Cyclone with its security plugins, spdlog, fmt, yaml-cpp, IPOPT (with lapack, blas, MUMPS),
+# libcrypto; openssl, which `sensornet pki init` runs; tini, a PID 1 for containers.
+runtime_packages=(
+  libddsc0debian libspdlog1.10 libfmt9 libyaml-cpp0.7 coinor-libipopt1v5 libssl3 openssl tini
+)
+# Everything else the tests and the documented features use.
+packages=(
+  "${build_packages[@]}"
   libgtest-dev libgmock-dev docker-compose
   fastddsgen libfastrtps-dev  # a second DDS vendor: the interoperability test (Fast DDS 2.9)
   chromium  # headless, for the report page's browser test
-  openssl libssl-dev  # secured runs: `sensornet pki init` runs openssl; certificates checked with libcrypto
+  openssl  # secured runs: `sensornet pki init` runs openssl
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
   python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
 )
 # --tests (scripts/test.sh): also what only the tests use. Prometheus' server scrapes a run's
 # /metrics and promtool checks the exposition; @mcap/core (npm), the reference MCAP reader, reads
 # recordings. A machine with node from elsewhere (NodeSource's nodejs bundles npm) keeps it.
+# --build: only what building the programs needs; --runtime: only what running them needs.
 for_tests=false
-if [[ "${1:-}" == "--tests" ]]; then for_tests=true; fi
+case "${1:-}" in
+  "") ;;
+  --tests) for_tests=true ;;
+  --build) packages=("${build_packages[@]}") ;;
+  --runtime) packages=("${runtime_packages[@]}") ;;
+  *)
+    echo "usage: scripts/install-deps.sh [--tests|--build|--runtime]" >&2
+    exit 2
+    ;;
+esac
 if $for_tests; then
   packages+=(prometheus)
   if ! command -v node >/dev/null; then packages+=(nodejs); fi

@@ -20,74 +20,30 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-log() { echo "test-fresh-debian: $*" >&2; }
-die() { log "$*"; exit 1; }
-
-[[ "$(id -u)" -eq 0 ]] || die "needs root (it starts dockerd and installs packages)"
-
-missing=()
-command -v dockerd >/dev/null || missing+=(docker.io)
-command -v debootstrap >/dev/null || missing+=(debootstrap)
-if ((${#missing[@]} > 0)); then
-  log "installing ${missing[*]}"
-  apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" \
-    >/dev/null
-fi
+docker_host_log_prefix=test-fresh-debian
+source scripts/docker-host.sh
+die() { docker_host_log "$*"; exit 1; }
 
 work=$(mktemp -d /tmp/sensornet-fresh.XXXXXX)
-dockerd_pid=""
-made_image=""
 container="sensornet-fresh-$$"
 cleanup() {
   local status=$?
   docker rm -f "$container" >/dev/null 2>&1 || true
-  if [[ -n "$made_image" ]]; then docker rmi -f "$made_image" >/dev/null 2>&1 || true; fi
-  if [[ -n "$dockerd_pid" ]]; then
-    kill "$dockerd_pid" 2>/dev/null || true
-    for _ in $(seq 1 100); do kill -0 "$dockerd_pid" 2>/dev/null || break; sleep 0.1; done
-  fi
+  docker_host_down
   rm -rf "$work"
   exit "$status"
 }
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
-if ! docker info >/dev/null 2>&1; then
-  log "starting dockerd (log: $work/dockerd.log)"
-  dockerd >"$work/dockerd.log" 2>&1 &
-  dockerd_pid=$!
-  for _ in $(seq 1 300); do docker info >/dev/null 2>&1 && break; sleep 0.1; done
-  docker info >/dev/null 2>&1 || { tail -n 20 "$work/dockerd.log" >&2; die "dockerd did not answer within 30 s"; }
-fi
-
-# This machine's Debian mirror: the first URI of its apt sources (deb822 or one-line form).
-mirror() {
-  local uri
-  uri=$(grep -hE '^URIs:' /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '{print $2}' \
-    | grep -v security | head -n 1 || true)
-  [[ -n "$uri" ]] || uri=$(grep -hE '^deb ' /etc/apt/sources.list 2>/dev/null | awk '{print $2}' \
-    | grep -v security | head -n 1 || true)
-  echo "${uri:-http://deb.debian.org/debian}"
-}
-
-image=debian:12
-if ! docker image inspect "$image" >/dev/null 2>&1; then
-  image="sensornet-fresh/debian:12-$$"
-  log "no local debian:12: making a bare one with debootstrap from $(mirror)"
-  started=$SECONDS
-  debootstrap --variant=minbase bookworm "$work/root" "$(mirror)" >"$work/debootstrap.log" 2>&1 \
-    || { tail -n 20 "$work/debootstrap.log" >&2; die "debootstrap failed"; }
-  tar -C "$work/root" -c . | docker import - "$image" >/dev/null
-  made_image=$image
-  rm -rf "$work/root"
-  log "base image $image made in $((SECONDS - started)) s"
-fi
+docker_host_up "$work" docker.io debootstrap || die "no Docker Engine to run the check in"
+docker_base_image "$work" || die "no Debian 12 base image"
+image=$docker_host_image
 
 # The tracked files only: what a clean clone holds (with this tree's uncommitted edits).
 git ls-files -z | tar --null -T - -cf "$work/tree.tar"
 
-log "running scripts/demo.sh in a bare Debian 12 container ($image)"
+docker_host_log "running scripts/demo.sh in a bare Debian 12 container ($image)"
 started=$SECONDS
 docker create --name "$container" --cap-add NET_ADMIN --cap-add SYS_ADMIN \
   --security-opt apparmor=unconfined "$image" \
@@ -105,5 +61,5 @@ docker create --name "$container" --cap-add NET_ADMIN --cap-add SYS_ADMIN \
 docker cp "$work/tree.tar" "$container:/tree.tar"
 status=0
 docker start -a "$container" || status=$?
-log "container finished with status $status after $((SECONDS - started)) s"
+docker_host_log "container finished with status $status after $((SECONDS - started)) s"
 exit "$status"

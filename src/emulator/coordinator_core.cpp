@@ -227,6 +227,7 @@ CoordinatorActions CoordinatorCore::tick(std::int64_t now_ns) {
     if (resumed_with_outstanding_) announceAgain(outstanding_.front(), now_ns);
     tickRunning(now_ns);
   } else if (phase_ == Phase::Running) {
+    declareDeaths(now_ns);
     tickRunning(now_ns);
   }
   return take();
@@ -416,13 +417,12 @@ AnsweredCommand CoordinatorCore::answer(const CommandEvent& c, std::int64_t now_
     reply.reason = std::move(a.reason);
     if (a.replan) {
       reply.schedule_version = a.replan->replyVersion();
-      for (const ScheduleVersion& v : a.replan->versions) book_.add(v);
-      replanner_.adopt(*a.replan);
     }
     answered_[c.command_id] = reply;
-    saveState();
     if (a.replan) {
-      for (const ScheduleVersion& v : a.replan->versions) act(PublishVersion{v});
+      adoptAndPublish(*a.replan);
+    } else {
+      saveState();
     }
   } catch (const InputError& error) {
     reply = {false, 0, error.what()};
@@ -515,6 +515,56 @@ CoordinatorCore::Answer CoordinatorCore::replanAmongSurvivors(const CommandEvent
                                          : std::string(refused.what())) +
                               "): schedule unchanged"};
   }
+}
+
+// The versions of `replan` go into the book and its settings hold; journal first, then publish.
+void CoordinatorCore::adoptAndPublish(const Replan& replan) {
+  for (const ScheduleVersion& v : replan.versions) book_.add(v);
+  replanner_.adopt(replan);
+  saveState();
+  for (const ScheduleVersion& v : replan.versions) act(PublishVersion{v});
+}
+
+// ---- deaths seen in liveliness (DeathWitness::Liveliness) ----------------------------------
+
+void CoordinatorCore::onSensorLiveliness(int sensor_id, bool alive, std::int64_t now_ns) {
+  if (config_.sensor_deaths != DeathWitness::Liveliness) return;
+  if (sensor_id < 0 || sensor_id >= run_.scenario.sensorCount()) return;
+  if (alive) {
+    if (lively_lost_ns_.erase(sensor_id) > 0 && phase_ == Phase::Running) {
+      log(info, fmt::format("sensor {} is live again: a stall, not a death", sensor_id));
+    }
+  } else {
+    lively_lost_ns_.try_emplace(sensor_id, now_ns);
+  }
+}
+
+// The sensors without liveliness for the grace, while episodes run, died: one notice for all
+// of them, answered by the failure policy as a launcher's would be.
+void CoordinatorCore::declareDeaths(std::int64_t now_ns) {
+  if (lively_lost_ns_.empty() || phase_ != Phase::Running || stopping_ ||
+      !abort_detail_.empty()) {
+    return;
+  }
+  CommandEvent notice;
+  notice.kind = CommandKind::SensorsFailed;
+  notice.sender = CommandSender::Launcher;
+  const std::int64_t grace = toNs(config_.death_grace_s);
+  for (auto it = lively_lost_ns_.begin(); it != lively_lost_ns_.end();) {
+    if (now_ns - it->second < grace) {
+      ++it;
+      continue;
+    }
+    notice.sensor_ids.push_back(static_cast<std::uint32_t>(it->first));
+    it = lively_lost_ns_.erase(it);
+  }
+  if (notice.sensor_ids.empty()) return;
+  notice.detail = fmt::format("the SensorStatus writer lost its liveliness and stayed without "
+                              "it for {} s (--sensor-deaths liveliness)",
+                              config_.death_grace_s);
+  Answer a = onSensorsFailed(notice, now_ns);
+  log(info, a.reason);
+  if (a.replan) adoptAndPublish(*a.replan);
 }
 
 // EPISODE_SENSORS_FAILED: every failed sensor, from now in the running episode (from the start

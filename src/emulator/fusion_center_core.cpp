@@ -182,12 +182,28 @@ void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_
       silent_from_ns_[j] = heard->second;
     }
   }
+  recordDeaths(failure);
   failed_sensors_.insert(failure.sensors.begin(), failure.sensors.end());
   failures_.push_back(failure);
   releaseClaims(failure.sensors);
   for (auto& [number, open] : open_) {
     applyFailure(number, *open, failure);
     open->last_failure_notice_ns = now;
+  }
+}
+
+// One sensor_died per sensor, the first time a notice names it (every notice names every sensor
+// failed so far, and a resumed process has the entries of its predecessor): the report of a run
+// that no launcher supervised says so too (coordinator serve --sensor-deaths liveliness).
+void FusionCenterCore::recordDeaths(const SensorFailure& failure) {
+  const std::string died(wordOf(FaultKind::SensorDied));
+  for (const int j : failure.sensors) {
+    const bool known = std::any_of(faults_.begin(), faults_.end(), [&](const json& f) {
+      return f.value("kind", "") == died && f.value("sensor", -1) == j;
+    });
+    if (known) continue;
+    recordFault(faultEntry(FaultKind::SensorDied, "sensor_agent", j, failure.episode, failure.at_s,
+                           "the coordinator announced it failed: " + failure.detail));
   }
 }
 

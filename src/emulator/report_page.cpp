@@ -19,6 +19,7 @@
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/emulator/svg_plot.hpp"
 #include "sensornet/io/command_line.hpp"
+#include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -948,6 +949,24 @@ ReportTables reportTables(const json& report, const std::string& source) {
   }
   tables.sensors = s.str();
   return tables;
+}
+
+std::filesystem::path pagePathBeside(const std::filesystem::path& report_path) {
+  std::filesystem::path page = report_path;
+  if (page.extension() == ".json") return page.replace_extension(".html");
+  return page += ".html";
+}
+
+std::optional<std::string> writePageBeside(const std::filesystem::path& report_path) {
+  const std::filesystem::path page = pagePathBeside(report_path);
+  try {
+    const nlohmann::json report = readReportFile(report_path);
+    const std::string html = reportPage(report, report_path.string());
+    writeJsonFile(page.string(), "report page", [&](std::ostream& out) { out << html; });
+    return std::nullopt;
+  } catch (const std::exception& e) {
+    return "no report page " + page.string() + ": " + e.what();
+  }
 }
 
 }  // namespace sensornet::emulator

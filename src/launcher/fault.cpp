@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <optional>
+#include <set>
 
 namespace sensornet::launcher {
 namespace {
@@ -76,7 +77,18 @@ json faultList(const std::vector<Fault>& launcher_faults, const json& reported) 
   for (const Fault& fault : launcher_faults) listed.push_back(fault.toJson());
   const Fault* cause = runEndingCause(launcher_faults);
   if (!reported.is_array()) return listed;
+  std::set<int> accounted;  // sensors whose process's end the launcher saw itself
+  for (const Fault& fault : launcher_faults) {
+    accounted.insert(fault.sensors.begin(), fault.sensors.end());
+  }
   for (json entry : reported) {
+    // The fusion center's sensor_died repeats the coordinator's notice of a death the launcher
+    // reported: the launcher's entry says more (the process, how it ended).
+    const json& sensor = entry.value("sensor", json());
+    if (entry.value("kind", "") == wordOf(emulator::FaultKind::SensorDied) && sensor.is_number() &&
+        accounted.contains(sensor.get<int>())) {
+      continue;
+    }
     if (cause != nullptr && isConsequenceOf(entry, *cause)) {
       entry[emulator::kCausedByField] = {{"kind", std::string(wordOf(cause->kind))},
                                          {"process", cause->process}};

@@ -76,6 +76,12 @@ struct CoordinatorConfig {
   double switch_margin_s = ReplannerOptions{}.switch_margin_s;
   double report_timeout_s = 30.0;  // wall seconds of fusion-center silence before giving up
   FailurePolicy on_sensor_failure = FailurePolicy::Replan;
+  // Who says that sensors died. Liveliness (no launcher: containers, a process manager of the
+  // user's): a sensor whose SensorStatus writer stays without liveliness for death_grace_s wall
+  // seconds while episodes run is dead, and the failure policy answers as for a launcher's
+  // notice; one back within the grace was a stall. Before the first episode readiness decides.
+  DeathWitness sensor_deaths = DeathWitness::Launcher;
+  double death_grace_s = 2.0;
   bool network_aware = false;  // plans for the rates the scenario's network: delivers
   // Closed loop (closed_loop.hpp): re-plan the tail of every episode from the fused covariance
   // at each multiple of this many emulated seconds; absent: open loop.
@@ -207,6 +213,9 @@ class CoordinatorCore {
   [[nodiscard]] CoordinatorActions onReport(const ReportEvent& report, std::int64_t now_ns);
   [[nodiscard]] CoordinatorActions onFusionState(const FusionStateEvent& state,
                                                  std::int64_t now_ns);
+  // A sensor's SensorStatus instance lost every live writer (alive = false) or has one again:
+  // a death after death_grace_s, under DeathWitness::Liveliness; ignored otherwise.
+  void onSensorLiveliness(int sensor_id, bool alive, std::int64_t now_ns);
   // Whether the fusion center's report and state writers are matched (discovery).
   void onFusionCenterMatched(bool matched) { fusion_matched_ = matched; }
   [[nodiscard]] CoordinatorActions onCommand(const CommandEvent& command, std::int64_t now_ns);
@@ -269,6 +278,8 @@ class CoordinatorCore {
   Answer execute(const CommandEvent& c, std::int64_t now_ns);
   Answer onSensorsFailed(const CommandEvent& c, std::int64_t now_ns);
   Answer replanAmongSurvivors(const CommandEvent& c, std::int64_t now_ns);
+  void adoptAndPublish(const Replan& replan);
+  void declareDeaths(std::int64_t now_ns);
   void announceFailure(const std::string& detail, std::int64_t now_ns);
   void replanOnCadence(std::int64_t now_ns);
 
@@ -289,6 +300,7 @@ class CoordinatorCore {
   std::int64_t settled_ns_ = 0;
   bool resumed_with_outstanding_ = false;
   std::set<int> ready_sensors_;
+  std::map<int, std::int64_t> lively_lost_ns_;  // DeathWitness::Liveliness: since when, per sensor
   bool fusion_matched_ = false;
   bool stop_signal_ = false;
   EpisodeSet reported_;  // as ranges: small over millions of episodes

@@ -215,6 +215,7 @@ class FusionCenterCore {
   void countOutside(RejectionReason reason, std::uint64_t count = 1);
 
   void startEpisode(const EpisodeStart& start, std::int64_t now);
+  void recordDeaths(const SensorFailure& failure);
   void applyFailure(std::uint32_t number, OpenEpisode& open, const SensorFailure& failure);
   void applySilentFailure(OpenEpisode& open, int sensor, std::int64_t last_heard_ns);
   void heard(std::uint32_t sensor, std::int64_t now);

@@ -21,6 +21,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 namespace sensornet::emulator {
@@ -34,6 +35,15 @@ void checkReport(const nlohmann::json& report, const std::string& source);
 
 // The HTML page. `source` names the report in errors.
 [[nodiscard]] std::string reportPage(const nlohmann::json& report, const std::string& source);
+
+// The page's path beside a report: report.json -> report.html (any other name gets ".html"
+// appended).
+[[nodiscard]] std::filesystem::path pagePathBeside(const std::filesystem::path& report_path);
+
+// Writes the page beside the report (atomically, as every report file); the problem as one
+// line when it cannot (never throws). The launcher and a fusion center with --page use it:
+//   if (auto problem = writePageBeside(report_path)) spdlog::warn("{}", *problem);
+[[nodiscard]] std::optional<std::string> writePageBeside(const std::filesystem::path& report_path);
 
 // The CSV tables (header row, one row per episode / per sensor, plain numbers, empty for none):
 //   episodes.csv: episode, complete (1/0), realized_cost, realtime_cost, bracket_info,

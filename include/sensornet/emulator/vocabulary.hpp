@@ -81,6 +81,12 @@ enum class FailurePolicy {
   Stop,      // end the run as failed
 };
 
+// Who tells the coordinator that sensors died (`coordinator serve --sensor-deaths`).
+enum class DeathWitness {
+  Launcher,    // the launcher's failure notices: it sees its children exit
+  Liveliness,  // no launcher (containers): a sensor's status writer that lost its liveliness
+};
+
 // A sensor's state as its SensorStatus says it ("starting", ..., what status and watch show).
 enum class SensorState {
   Starting,  // waiting for scenario and schedule
@@ -163,6 +169,13 @@ struct Words<emulator::FailurePolicy> {
   using P = emulator::FailurePolicy;
   static constexpr std::array<WordOf<P>, 3> kTable{
       {{P::Replan, "replan"}, {P::Continue, "continue"}, {P::Stop, "stop"}}};
+};
+
+template <>
+struct Words<emulator::DeathWitness> {
+  using W = emulator::DeathWitness;
+  static constexpr std::array<WordOf<W>, 2> kTable{
+      {{W::Launcher, "launcher"}, {W::Liveliness, "liveliness"}}};
 };
 
 template <>

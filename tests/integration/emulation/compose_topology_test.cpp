@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -40,6 +41,7 @@ using namespace std::chrono_literals;
 
 const fs::path kSourceDir = SENSORNET_SOURCE_DIR;
 const fs::path kCompose = kSourceDir / "docker" / "compose.yaml";
+const fs::path kSwarm = kSourceDir / "docker" / "compose.swarm.yaml";
 const fs::path kCycloneConfig = kSourceDir / "docker" / "cyclonedds-containers.xml";
 // Where the image keeps what the commands name (docker/Dockerfile, compose.yaml).
 const std::string kImageScenarios = "/usr/local/share/sensornet/";
@@ -56,17 +58,21 @@ struct Service {
   std::string name;
   std::vector<std::string> command;
   std::map<std::string, std::string> environment;
+  std::optional<std::string> replicas;  // deploy.replicas, as written
 };
 
 std::vector<Service> readServices(const fs::path& compose) {
   const YAML::Node doc = YAML::LoadFile(compose.string());
   std::vector<Service> services;
   for (const auto& entry : doc["services"]) {
-    Service service{entry.first.as<std::string>(), {}, {}};
+    Service service{entry.first.as<std::string>(), {}, {}, {}};
     for (const auto& arg : entry.second["command"])
       service.command.push_back(arg.as<std::string>());
     for (const auto& variable : entry.second["environment"]) {
       service.environment[variable.first.as<std::string>()] = variable.second.as<std::string>();
+    }
+    if (const YAML::Node replicas = entry.second["deploy"]["replicas"]) {
+      service.replicas = replicas.as<std::string>();
     }
     services.push_back(std::move(service));
   }
@@ -124,6 +130,8 @@ TEST(ComposeTopology, EveryServiceIsAUnicastPeerOfTheContainerConfig) {
     const std::size_t begin = at + attribute.size();
     peers.insert(xml.substr(begin, xml.find('"', begin) - begin));
   }
+  // The services of compose.yaml and those the swarm file adds: the same configuration serves
+  // both (a name that does not resolve in one of them is skipped).
   std::set<std::string> names;
   for (Service& service : readServices(kCompose)) {
     names.insert(service.name);
@@ -131,13 +139,22 @@ TEST(ComposeTopology, EveryServiceIsAUnicastPeerOfTheContainerConfig) {
               "file:///etc/sensornet/cyclonedds-containers.xml")
         << service.name;
   }
+  for (Service& service : readServices(kSwarm)) {
+    if (names.insert(service.name).second) {  // a service of its own: its environment too
+      EXPECT_EQ(service.environment["SENSORNET_CYCLONE_CONFIG"],
+                "file:///etc/sensornet/cyclonedds-containers.xml")
+          << service.name;
+    }
+  }
   EXPECT_EQ(peers, names);
+  EXPECT_NE(xml.find("<NetworkInterface name=\"eth0\""), std::string::npos)
+      << "the stack network's interface, not docker_gwbridge's on a swarm";
   EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
   EXPECT_EQ(xml.find("multicast=\"true\""), std::string::npos);
   // The image puts the file where the services look for it.
   EXPECT_NE(
       readText(kSourceDir / "docker" / "Dockerfile")
-          .find("cp docker/cyclonedds-containers.xml /etc/sensornet/cyclonedds-containers.xml"),
+          .find("cp docker/cyclonedds-containers.xml /opt/sensornet/etc/sensornet/"),
       std::string::npos);
 }
 
@@ -165,6 +182,65 @@ TEST(ComposeTopology, SensorServicesCoverEverySensorOnce) {
   std::multiset<int> expected;
   for (int j = 0; j < model.sensorCount(); ++j) expected.insert(j);
   EXPECT_EQ(hosted, expected);
+}
+
+// On a swarm (compose.swarm.yaml over compose.yaml) the sensor services of compose.yaml get no
+// task and the replicated `sensors` hosts every sensor once: its command, run by sh with each
+// task slot and a stand-in sensor_agent that prints its arguments, names blocks that together
+// are the scenario's sensors.
+TEST(ComposeTopology, SwarmSensorTasksCoverEverySensorOnce) {
+  const std::vector<Service> swarm = readServices(kSwarm);
+  std::optional<Service> sensors;
+  for (const Service& service : swarm) {
+    if (service.name == "sensors") {
+      sensors = service;
+    } else if (service.name.starts_with("sensors-")) {
+      EXPECT_EQ(service.replicas, "0") << service.name << " would host its sensors twice";
+    }
+  }
+  ASSERT_TRUE(sensors.has_value() && sensors->replicas.has_value());
+  const int tasks = std::stoi(withDefaults(*sensors->replicas));
+  // The command after sensornet-await-peers ... --: sh -c SCRIPT NAME RUN_ID.
+  const auto dashes = std::find(sensors->command.begin(), sensors->command.end(), "--");
+  ASSERT_NE(dashes, sensors->command.end());
+  std::vector<std::string> shell(dashes + 1, sensors->command.end());
+  ASSERT_EQ(shell.size(), 5u);
+  ASSERT_EQ(shell[0], "sh");
+  std::string script = shell[2];
+  for (std::size_t at = script.find("$$"); at != std::string::npos; at = script.find("$$", at + 1)) {
+    script.erase(at, 1);  // compose's escape of a literal $
+  }
+
+  char pattern[] = "/tmp/sensornet-swarm-test-XXXXXX";
+  ASSERT_NE(::mkdtemp(pattern), nullptr);
+  const fs::path dir = pattern;
+  const fs::path stand_in = dir / "sensor_agent";
+  std::ofstream(stand_in) << "#!/bin/sh\necho \"$@\"\n";
+  fs::permissions(stand_in, fs::perms::owner_all);
+  const std::string per_task = withDefaults(sensors->environment.at("SENSORNET_SENSORS_PER_TASK"));
+  std::multiset<int> hosted;
+  for (int slot = 1; slot <= tasks; ++slot) {
+    const ProcessResult r = runProcess(
+        {"/usr/bin/env", "PATH=" + dir.string() + ":/usr/bin:/bin",
+         "SENSORNET_TASK_SLOT=" + std::to_string(slot), "SENSORNET_SENSORS_PER_TASK=" + per_task,
+         "sh", "-c", script, shell[3], "run-x"},
+        10s);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::istringstream words(r.out);
+    std::vector<std::string> argv{std::istream_iterator<std::string>(words), {}};
+    EXPECT_EQ(flagValue(argv, "--run-id"), "run-x") << r.out;
+    const auto spec = flagValue(argv, "--sensors");
+    ASSERT_TRUE(spec.has_value()) << r.out;
+    for (int id : sensornet::emulator::parseSensorIds(*spec, "slot " + std::to_string(slot))) {
+      hosted.insert(id);
+    }
+  }
+  const auto model = sensornet::loadScenarioFile((kSourceDir / "scenarios/default.yaml").string());
+  std::multiset<int> expected;
+  for (int j = 0; j < model.sensorCount(); ++j) expected.insert(j);
+  EXPECT_EQ(hosted, expected);
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
 }
 
 // Each service's command as a local process of this host.
@@ -231,6 +307,7 @@ TEST(ComposeTopology, RunsAsLocalProcesses) {
   EXPECT_EQ(report["run_id"], run_id);
   EXPECT_EQ(report["episodes"], 2);
   EXPECT_EQ(report["status"], "completed");
+  EXPECT_TRUE(fs::exists(dir / "report.html")) << "the fusion center's --page";
   EXPECT_TRUE(processesMentioning(run_id).empty());
   std::error_code ignored;
   fs::remove_all(dir, ignored);

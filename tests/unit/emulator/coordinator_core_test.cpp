@@ -429,6 +429,93 @@ TEST_F(CoordinatorPolicy, ASensorReportedDeadTwiceIsNothingNew) {
             "sensor(s) 1 had failed before: nothing new");
 }
 
+// ---- deaths seen in liveliness (--sensor-deaths liveliness: no launcher, e.g. containers) -------
+
+using CoordinatorLiveliness = CoordinatorCoreTest;
+
+TEST_F(CoordinatorLiveliness, ASensorSilentForTheGraceIsDeadAndReplannedAround) {
+  config_.sensor_deaths = DeathWitness::Liveliness;
+  config_.death_grace_s = 2.0;
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  now_ = first[0].start_wall_ns + 500 * kMs;
+  fused(0, 0.4);
+  core_->onSensorLiveliness(3, false, now_);
+  const std::int64_t lost = now_;
+  EXPECT_TRUE(controls(tickAt(lost + 1999 * kMs), ControlKind::SensorsFailed).empty())
+      << "within the grace it may still be a stall";
+  const CoordinatorActions a = tickAt(lost + 2000 * kMs);
+  const std::vector<EpisodeControl> notice = controls(a, ControlKind::SensorsFailed);
+  ASSERT_EQ(notice.size(), 1u);
+  EXPECT_EQ(notice[0].failed_sensors, std::vector<std::uint32_t>{3});
+  EXPECT_NE(notice[0].detail.find("liveliness"), std::string::npos) << notice[0].detail;
+  // The default policy re-plans: rate zero for sensor 3 in every version published.
+  const std::vector<PublishVersion> versions = only<PublishVersion>(a);
+  ASSERT_FALSE(versions.empty());
+  for (const PublishVersion& v : versions) {
+    EXPECT_EQ(v.version.schedule.rates().col(3).cwiseAbs().maxCoeff(), 0.0)
+        << "version " << v.version.version;
+  }
+  EXPECT_TRUE(only<SendReply>(a).empty()) << "nobody asked: nothing to answer";
+  // Journal before publication, as for a launcher's notice.
+  const auto journal = std::find_if(a.begin(), a.end(), [](const CoordinatorAction& x) {
+    return std::holds_alternative<WriteJournal>(x);
+  });
+  ASSERT_NE(journal, a.end());
+  EXPECT_EQ(std::get<WriteJournal>(*journal).journal.settings.failed, std::set<int>{3});
+  EXPECT_TRUE(controls(tickAt(lost + 5 * kSecond), ControlKind::SensorsFailed).empty())
+      << "declared once";
+}
+
+TEST_F(CoordinatorLiveliness, LivelinessBackWithinTheGraceIsAStallNotADeath) {
+  config_.sensor_deaths = DeathWitness::Liveliness;
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  now_ = first[0].start_wall_ns + 500 * kMs;
+  core_->onSensorLiveliness(1, false, now_);
+  core_->onSensorLiveliness(1, true, now_ + 1500 * kMs);
+  EXPECT_TRUE(controls(tickAt(now_ + 10 * kSecond), ControlKind::SensorsFailed).empty());
+}
+
+TEST_F(CoordinatorLiveliness, TwoSensorsLostTogetherAreOneNoticeAndStopEndsTheRun) {
+  config_.sensor_deaths = DeathWitness::Liveliness;
+  config_.on_sensor_failure = FailurePolicy::Stop;
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  now_ = first[0].start_wall_ns + 500 * kMs;
+  core_->onSensorLiveliness(0, false, now_);
+  core_->onSensorLiveliness(2, false, now_ + 100 * kMs);
+  const CoordinatorActions a = tickAt(now_ + 2100 * kMs);
+  const std::vector<EpisodeControl> notice = controls(a, ControlKind::SensorsFailed);
+  ASSERT_EQ(notice.size(), 1u);
+  EXPECT_EQ(notice[0].failed_sensors, (std::vector<std::uint32_t>{0, 2}));
+  const std::vector<ShutDownRun> shutdown = only<ShutDownRun>(tickAt(now_ + 2200 * kMs));
+  ASSERT_EQ(shutdown.size(), 1u);
+  EXPECT_TRUE(shutdown[0].control.aborted);
+  EXPECT_EQ(core_->exitCode(), 0);
+}
+
+TEST_F(CoordinatorLiveliness, BeforeTheFirstEpisodeAndUnderTheLauncherWitnessNothingDies) {
+  config_.sensor_deaths = DeathWitness::Liveliness;
+  (void)make();
+  everySensorReady();
+  core_->onSensorLiveliness(1, false, now_);  // lost while the run waits for its peers
+  (void)tickAt(now_);
+  const CoordinatorActions a = tickAt(now_ + config_.settle.count());
+  EXPECT_TRUE(controls(a, ControlKind::SensorsFailed).empty());
+  core_->onSensorLiveliness(1, true, now_);  // back before the grace ran out: no death
+  EXPECT_TRUE(controls(tickAt(now_ + 5 * kSecond), ControlKind::SensorsFailed).empty());
+
+  config_.sensor_deaths = DeathWitness::Launcher;  // the default: only notices count
+  const std::vector<EpisodeControl> first = starts(startRunning());
+  core_->onSensorLiveliness(1, false, first[0].start_wall_ns);
+  EXPECT_TRUE(
+      controls(tickAt(first[0].start_wall_ns + 5 * kSecond), ControlKind::SensorsFailed).empty());
+}
+
+TEST(DeathWitnessWords, ReadBackAndListTheChoices) {
+  EXPECT_EQ(wordChoices<DeathWitness>(), "launcher or liveliness");
+  EXPECT_EQ(lookUpWord<DeathWitness>("liveliness"), DeathWitness::Liveliness);
+  EXPECT_EQ(lookUpWord<DeathWitness>("heartbeat"), std::nullopt);
+}
+
 // `sensornet replan --include` (issue 24): an excluded sensor comes back into the plan; a dead
 // one cannot, and the reply says why.
 TEST_F(CoordinatorPolicy, IncludeBringsAnExcludedSensorBackButNotADeadOne) {

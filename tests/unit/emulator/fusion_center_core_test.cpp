@@ -284,7 +284,12 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   runUntil(endOf(0) + 100 * kMs);
   ASSERT_EQ(reports_.size(), 1u) << "waited for a dead sensor";
   EXPECT_FALSE(reports_[0].result.complete);
-  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+  // The notice is the report's account of the death (no launcher may add its own).
+  ASSERT_EQ(core_->faults().size(), 1u) << core_->faults().dump();
+  EXPECT_EQ(core_->faults()[0].at("kind"), "sensor_died");
+  EXPECT_EQ(core_->faults()[0].at("sensor"), 1);
+  EXPECT_EQ(core_->faults()[0].at("episode"), 0);
+  EXPECT_DOUBLE_EQ(core_->faults()[0].at("emulated_time_s").get<double>(), 1.0);
   // The next episode starts with it dead: it is complete without it.
   start(1);
   auto next = measurements(1);
@@ -653,6 +658,19 @@ TEST_F(FusionCenterCoreTest, ALauncherThatDiedIsTheCauseOfTheInterruptedRun) {
   EXPECT_EQ(causeCount(final_.at("faults")), 1u);
 }
 
+// Every notice names every sensor failed so far: each gets one sensor_died, at its first notice.
+TEST_F(FusionCenterCoreTest, EachFailedSensorIsRecordedOnceAtItsFirstNotice) {
+  begin(0);
+  core_->onSensorFailure({0, 1.0, {1}, "the SensorStatus writer lost its liveliness"}, now_);
+  core_->onSensorFailure({0, 2.5, {1, 3}, "the SensorStatus writer lost its liveliness"}, now_);
+  core_->onSensorFailure({1, 0.0, {1, 3}, "again"}, now_);
+  std::vector<std::pair<int, double>> died;
+  for (const json& f : core_->faults()) {
+    if (f.at("kind") == "sensor_died") died.emplace_back(f.at("sensor"), f.at("emulated_time_s"));
+  }
+  EXPECT_EQ(died, (std::vector<std::pair<int, double>>{{1, 1.0}, {3, 2.5}}));
+}
+
 // The coordinator's --on-sensor-failure stop: the run is aborted with an episode open.
 TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
   begin(0);
@@ -662,14 +680,15 @@ TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
   runUntil(endOf(0) + kS);
   EXPECT_EQ(finish(RunEnd{1, true, "sensor 1 failed (--on-sensor-failure stop)"}),
             RunStatus::Failed);
-  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"cut_short", "run_aborted"}));
-  EXPECT_EQ(core_->faults()[0].at("ended_by"), "run_aborted");
-  // The abort, recorded here too, is the one cause; the cut is its consequence.
-  EXPECT_EQ(core_->faults()[0].at(kCausedByField),
-            (json{{"kind", "run_aborted"}, {"process", "coordinator"}}));
-  EXPECT_EQ(causeCount(core_->faults()), 1u) << core_->faults().dump();
-  EXPECT_EQ(core_->faults()[0].at("detail").get<std::string>().rfind("episode 0 was open when", 0), 0u)
-      << core_->faults()[0].dump();
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"sensor_died", "cut_short", "run_aborted"}));
+  const json& cut = core_->faults()[1];
+  EXPECT_EQ(cut.at("ended_by"), "run_aborted");
+  // The abort, recorded here too, is the cause of the cut (the launcher names the death as the
+  // abort's cause when it supervises; without one the death stands beside the abort).
+  EXPECT_EQ(cut.at(kCausedByField), (json{{"kind", "run_aborted"}, {"process", "coordinator"}}));
+  EXPECT_EQ(causeCount(core_->faults()), 2u) << core_->faults().dump();
+  EXPECT_EQ(cut.at("detail").get<std::string>().rfind("episode 0 was open when", 0), 0u)
+      << cut.dump();
 }
 
 // Entries of a log a killed fusion center left: episodes 0 .. n-1.
@@ -834,7 +853,7 @@ TEST_F(FusionCenterCoreTest, AResumeThatHearsOnlyAFailureNoticeAnswersForThatEpi
   EXPECT_EQ(reports_[0].result.episode, 4u);
   EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
   EXPECT_EQ(final_.at("summary").at("rejected"), 0);
-  EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"});
+  EXPECT_EQ(faultKinds(), (std::vector<std::string>{"restarted", "sensor_died"}));
 }
 
 // A stall of the fusion center itself is its own, not a sensor's: the silence it slept through

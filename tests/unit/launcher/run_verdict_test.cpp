@@ -143,6 +143,21 @@ TEST(FaultList, EntriesAfterTheRunEndingCauseAreItsConsequences) {
   EXPECT_EQ(emulator::causeCount(faults), 3u);
 }
 
+// The fusion center records sensor_died from the coordinator's notice (what a run without a
+// launcher has); where the launcher saw the process end, its own entry stands for those sensors.
+TEST(FaultList, TheLaunchersDeathReplacesTheFusionCentersAccountOfIt) {
+  Fault death{FaultKind::ProcessKilled, "sensor_agent-3-5", {3, 4, 5}, {2, 0.3}, "killed"};
+  death.survived = true;
+  const json seen = json::array({entry("sensor_died", 2, 3), entry("sensor_died", 2, 4),
+                                 entry("sensor_died", 2, 1), entry("stall", 2, 5)});
+  const json faults = faultList({death}, seen);
+  ASSERT_EQ(faults.size(), 3u) << faults.dump();
+  EXPECT_EQ(faults[0]["process"], "sensor_agent-3-5");
+  EXPECT_EQ(faults[1]["kind"], "sensor_died") << "sensor 1 was no process of the launcher's";
+  EXPECT_EQ(faults[1]["sensor"], 1);
+  EXPECT_EQ(faults[2]["kind"], "stall") << "other kinds of the same sensors stay";
+}
+
 TEST(FaultList, InterruptBeforeTheFirstEpisodeOwnsEveryStopEntry) {
   const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
   const json faults = faultList({signal}, json::array({entry("cut_short", 0, 1)}));
