@@ -8,6 +8,8 @@
 //   if (sensornet::testing::kAddressSanitizer) GTEST_SKIP() << sensornet::testing::kNoGlibcHeap;
 //   runProcess(argv, 60s);   // waits up to 60 s, or 240 s in the sanitizer build
 
+#include <string>
+
 namespace sensornet::testing {
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -25,6 +27,11 @@ inline constexpr int kTimeFactor = kAddressSanitizer ? 4 : 1;
 template <class Duration>
 [[nodiscard]] constexpr Duration scaledLimit(Duration limit) {
   return limit * kTimeFactor;
+}
+
+// A limit in seconds that a test passes to a program (`replan --timeout 60`), scaled alike.
+[[nodiscard]] inline std::string scaledSeconds(int seconds) {
+  return std::to_string(seconds * kTimeFactor);
 }
 
 inline constexpr const char* kNoGlibcHeap =

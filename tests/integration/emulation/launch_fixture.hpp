@@ -30,6 +30,7 @@
 #include "emulation_fixture.hpp"
 #include "support/background_process.hpp"
 #include "support/process.hpp"
+#include "support/sanitizer.hpp"
 
 namespace sensornet::testing {
 
@@ -68,7 +69,7 @@ inline std::optional<pid_t> processOf(const std::string& run_id, const std::stri
 // Waits until `done()` or `limit` passes; returns done().
 template <class Done>
 bool waitUntil(Done done, std::chrono::milliseconds limit) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
+  const auto deadline = std::chrono::steady_clock::now() + scaledLimit(limit);
   while (!done() && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }

@@ -513,7 +513,9 @@ TEST_F(Launcher, StatusAndReplanReachALiveRunWithoutRunId) {
   // Two covariance-form plans (the rest of this episode, then whole episodes): under the
   // sanitizers and a loaded machine they take longer than replan's default 10 s wait.
   const ProcessResult replan =
-      runProcess({kLauncher, "replan", "--surrogate", "cov", "--timeout", "60"}, 70s);
+      runProcess({kLauncher, "replan", "--surrogate", "cov", "--timeout",
+                  sensornet::testing::scaledSeconds(60)},
+                 70s);
   EXPECT_EQ(replan.exit_code, 0) << replan.out << replan.err;
   EXPECT_NE(replan.out.find("accepted: version 2"), std::string::npos) << replan.out;
 

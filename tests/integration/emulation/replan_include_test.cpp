@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "launch_fixture.hpp"
+#include "support/sanitizer.hpp"
 
 namespace {
 
@@ -30,7 +31,8 @@ class ReplanInclude : public sensornet::testing::LaunchTest {
  protected:
   ProcessResult replan(const std::vector<std::string>& change) const {
     std::vector<std::string> argv = {
-        sensornet::testing::kLauncher, "replan", "--run-id", run_id_, "--timeout", "60"};
+        sensornet::testing::kLauncher, "replan", "--run-id", run_id_, "--timeout",
+        sensornet::testing::scaledSeconds(60)};
     argv.insert(argv.end(), change.begin(), change.end());
     return runProcess(argv, 70s);
   }

@@ -207,7 +207,9 @@ TEST_F(TimetableLaunch, ALiveExclusionContinuesTheCountOnTheComposedIntensity) {
   // tries make sure one switch lands within an episode on a loaded machine too.
   for (int attempt = 0; attempt < 4; ++attempt) {
     const ProcessResult replan = runProcess(
-        {kLauncher, "replan", "--run-id", run_id, "--exclude", "0", "--timeout", "60"}, 70s);
+        {kLauncher, "replan", "--run-id", run_id, "--exclude", "0", "--timeout",
+         sensornet::testing::scaledSeconds(60)},
+        70s);
     ASSERT_EQ(replan.exit_code, 0) << replan.out << replan.err;
     if (replan.out.find("not in episode") == std::string::npos) break;
   }
