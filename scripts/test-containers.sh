@@ -3,8 +3,9 @@
 # and a swarm stack (the same file with docker/compose.swarm.yaml over it). CI runs it after the
 # main suite (.ci/run).
 #
-#   scripts/test-containers.sh            everything below
-#   scripts/test-containers.sh --keep     leave the image (sensornet-test:PID) for a look
+#   scripts/test-containers.sh                 everything below
+#   scripts/test-containers.sh --keep          leave the images it built for a look
+#   scripts/test-containers.sh --image NAME    test an image built before instead of building
 #
 # 1. builds the image and prints its size;
 # 2. compose, a clean run (4 episodes, seed 7): every container leaves the run, the coordinator
@@ -34,13 +35,22 @@ log() { docker_host_log "$*"; }
 fail() { log "FAIL: $*"; exit 1; }
 
 keep=false
-[[ "${1:-}" == "--keep" ]] && keep=true
+given_image=""
+while (($# > 0)); do
+  case "$1" in
+    --keep) keep=true ;;
+    --image) given_image=${2:?--image needs a name}; shift ;;
+    *) echo "usage: scripts/test-containers.sh [--keep] [--image NAME]" >&2; exit 2 ;;
+  esac
+  shift
+done
 
 work=$(mktemp -d /tmp/sensornet-containers.XXXXXX)
-tag="sensornet-test:$$"
+tag=${given_image:-sensornet-test:$$}
 projects=()
 stack=""
 swarm_made=false
+gwbridge_made=false
 cleanup() {
   local status=$?
   local project
@@ -49,15 +59,21 @@ cleanup() {
   done
   if [[ -n "$stack" ]]; then
     docker stack rm "$stack" >/dev/null 2>&1 || true
-    local _
-    for _ in $(seq 1 100); do  # the stack's network goes once its tasks have
-      docker network inspect "${stack}_sensornet" >/dev/null 2>&1 || break
+    local _ label="label=com.docker.stack.namespace=$stack"
+    for _ in $(seq 1 100); do  # the tasks' containers go asynchronously, then the network
+      [[ -z "$(docker ps -aq -f "$label")" ]] && \
+        ! docker network inspect "${stack}_sensornet" >/dev/null 2>&1 && break
       sleep 0.3
     done
+    docker ps -aq -f "$label" | xargs -r docker rm -f >/dev/null 2>&1 || true
     docker volume rm "${stack}_reports" >/dev/null 2>&1 || true
   fi
-  if $swarm_made; then docker swarm leave --force >/dev/null 2>&1 || true; fi
-  if ! $keep; then
+  if $swarm_made; then
+    docker swarm leave --force >/dev/null 2>&1 || true
+    # The bridge `swarm init` made for the tasks' way out, unless it was there before.
+    $gwbridge_made && docker network rm docker_gwbridge >/dev/null 2>&1 || true
+  fi
+  if ! $keep && [[ -z "$given_image" ]]; then
     docker rmi -f "$tag" >/dev/null 2>&1 || true
     # The build stage's layers too (untagged images the build left): every image that was not
     # there before the build.
@@ -82,13 +98,16 @@ compose() {
 }
 
 # ---- 1. the image ------------------------------------------------------------------------------
-docker images -aq --no-trunc | sort -u >"$work/images-before"
-log "building the image $tag (docker/Dockerfile; log: $work/build.log)"
-started=$SECONDS
-docker build -f docker/Dockerfile --build-arg "BASE_IMAGE=$docker_host_image" -t "$tag" . \
-  >"$work/build.log" 2>&1 || { tail -n 30 "$work/build.log" >&2; fail "the image did not build"; }
+if [[ -z "$given_image" ]]; then
+  docker images -aq --no-trunc | sort -u >"$work/images-before"
+  log "building the image $tag (docker/Dockerfile; log: $work/build.log)"
+  started=$SECONDS
+  docker build -f docker/Dockerfile --build-arg "BASE_IMAGE=$docker_host_image" -t "$tag" . \
+    >"$work/build.log" 2>&1 || { tail -n 30 "$work/build.log" >&2; fail "the image did not build"; }
+  log "image built in $((SECONDS - started)) s"
+fi
 size=$(docker image inspect -f '{{.Size}}' "$tag")
-log "image built in $((SECONDS - started)) s: $((size / 1000000)) MB"
+log "image $tag: $((size / 1000000)) MB"
 for program in sensornet coordinator fusion_center sensor_agent; do
   docker run --rm "$tag" "$program" --version >/dev/null || fail "$program is not on the image's PATH"
 done
@@ -102,13 +121,15 @@ done
 # The report of a run in a volume: VOLUME FILE -> stdout.
 from_volume() { docker run --rm -v "$1:/reports:ro" "$tag" cat "/reports/$2"; }
 
-# A compose run; PROJECT, then the environment of docker/compose.yaml as NAME=VALUE.
+# A compose run (the caller lists PROJECT in `projects` for the cleanup); PROJECT, then the
+# environment of docker/compose.yaml as NAME=VALUE.
 compose_up() {
   local project=$1
   shift
-  projects+=("$project")
-  env "$@" SENSORNET_IMAGE="$tag" compose -p "$project" -f docker/compose.yaml up --no-build \
-    >"$work/$project.log" 2>&1
+  (
+    export "$@" SENSORNET_IMAGE="$tag"
+    compose -p "$project" -f docker/compose.yaml up --no-build >"$work/$project.log" 2>&1
+  )
 }
 
 container_of() { compose -p "$1" -f docker/compose.yaml ps -q "$2"; }
@@ -131,6 +152,7 @@ fi
 log "compose: a clean run of 4 episodes"
 started=$SECONDS
 project="sntclean$$"
+projects+=("$project")
 compose_up "$project" SENSORNET_RUN_ID="compose-clean-$$" SENSORNET_EPISODES=4 \
   SENSORNET_TIME_SCALE=5 SENSORNET_SEED=7 || { tail -n 30 "$work/$project.log" >&2; fail "compose up"; }
 log "compose run over after $((SECONDS - started)) s"
@@ -138,7 +160,8 @@ code=$(docker inspect -f '{{.State.ExitCode}}' "$(container_of "$project" coordi
 [[ "$code" == 0 ]] || { tail -n 30 "$work/$project.log" >&2; fail "the coordinator exited $code"; }
 from_volume "${project}_reports" report.json >"$work/clean.json"
 from_volume "${project}_reports" report.jsonl >/dev/null || fail "no report.jsonl in the volume"
-from_volume "${project}_reports" report.html | grep -q "<svg" || fail "no report page in the volume"
+from_volume "${project}_reports" report.html >"$work/clean.html" || fail "no report page in the volume"
+grep -q "<svg" "$work/clean.html" || fail "the report page in the volume has no plot"
 build/launcher/sensornet launch scenarios/default.yaml --episodes 4 --time-scale 5 --seed 7 \
   --run-id "native-$$" --report "$work/native.json" --no-html >"$work/native.log" 2>&1 \
   || { tail -n 20 "$work/native.log" >&2; fail "the native run"; }
@@ -161,6 +184,7 @@ PY
 # ---- 3. compose with faults -------------------------------------------------------------------
 log "compose: 8 episodes, sensors 3-5 killed and the fusion center killed after episode 2"
 project="sntfault$$"
+projects+=("$project")
 run_id="compose-faults-$$"
 (compose_up "$project" SENSORNET_RUN_ID="$run_id" SENSORNET_EPISODES=8 SENSORNET_TIME_SCALE=2 \
   SENSORNET_SEED=7) &
@@ -201,6 +225,7 @@ print("test-containers: faults:", ", ".join(sorted(set(kinds))), "; re-planned i
 
 # ---- 4. a swarm -------------------------------------------------------------------------------
 if [[ "$(docker info -f '{{.Swarm.LocalNodeState}}')" != active ]]; then
+  docker network inspect docker_gwbridge >/dev/null 2>&1 || gwbridge_made=true
   docker swarm init --advertise-addr 127.0.0.1 >/dev/null || fail "docker swarm init"
   swarm_made=true
 fi
