@@ -162,9 +162,11 @@ from_volume "${project}_reports" report.json >"$work/clean.json"
 from_volume "${project}_reports" report.jsonl >/dev/null || fail "no report.jsonl in the volume"
 from_volume "${project}_reports" report.html >"$work/clean.html" || fail "no report page in the volume"
 grep -q "<svg" "$work/clean.html" || fail "the report page in the volume has no plot"
+started=$SECONDS
 build/launcher/sensornet launch scenarios/default.yaml --episodes 4 --time-scale 5 --seed 7 \
   --run-id "native-$$" --report "$work/native.json" --no-html >"$work/native.log" 2>&1 \
   || { tail -n 20 "$work/native.log" >&2; fail "the native run"; }
+log "the same run natively (sensornet launch) over after $((SECONDS - started)) s"
 python3 - "$work/clean.json" "$work/native.json" <<'PY' || fail "the compose run's report"
 import json, sys
 c, n = (json.load(open(p)) for p in sys.argv[1:3])
