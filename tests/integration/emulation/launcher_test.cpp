@@ -302,35 +302,39 @@ std::string printedAs(const char* pattern, double value) {
 // the run ends; what it printed is checked against the run's report.
 TEST_F(Launcher, WatchFollowsARunInPlainLinesAndExitsWithIt) {
   const LeftoverGuard guard(run_id_);
+  // The watch first: it waits for the run (--wait), so it has joined before the first episode
+  // starts (episodes of 0.3 s could pass before a watch started beside the launch hears them).
+  BackgroundProcess watching({kLauncher, "watch", "--run-id", run_id_, "--wait", "60"},
+                             (dir_ / "watch.log").string());
   BackgroundProcess launch(launchArgs(3, 10), (dir_ / "launch.log").string());
-  const ProcessResult watch = runProcess({kLauncher, "watch", "--run-id", run_id_}, 60s);
   ASSERT_EQ(launch.waitForExit(30s), std::optional<int>(0)) << launch.log();
-  EXPECT_EQ(watch.exit_code, 0) << watch.err;
+  EXPECT_EQ(watching.waitForExit(30s), std::optional<int>(0)) << watching.log();
+  const std::string watched = watching.log();  // its output (stdout and stderr)
 
   const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
   ASSERT_TRUE(report.is_object());
   const json& v1 = report["schedule_versions"][0];
-  EXPECT_NE(watch.out.find("schedule v1 (" + v1["surrogate"].get<std::string>() +
+  EXPECT_NE(watched.find("schedule v1 (" + v1["surrogate"].get<std::string>() +
                            ") from episode 0 at t = 0 s, bracket [" +
                            printedAs("%.4g", v1["bracket"]["info"].get<double>()) + ", " +
                            printedAs("%.4g", v1["bracket"]["cov"].get<double>()) + "]"),
             std::string::npos)
-      << watch.out;
+      << watched;
   for (const json& e : report["per_episode"]) {
     const int k = e["episode"].get<int>();
-    EXPECT_NE(watch.out.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
+    EXPECT_NE(watched.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
                              " started"),
               std::string::npos)
-        << watch.out;
-    EXPECT_NE(watch.out.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
+        << watched;
+    EXPECT_NE(watched.find("[" + std::to_string(k + 1) + "/3] episode " + std::to_string(k) +
                              ": realized " +
                              printedAs("%.4g", e["realized_cost"].get<double>())),
               std::string::npos)
-        << watch.out;
+        << watched;
   }
-  EXPECT_NE(watch.out.find("run ended: 3 episode(s), 3 reported"), std::string::npos)
-      << watch.out;
-  EXPECT_EQ(watch.out.find("\x1b["), std::string::npos) << "no terminal codes into a pipe";
+  EXPECT_NE(watched.find("run ended: 3 episode(s), 3 reported"), std::string::npos)
+      << watched;
+  EXPECT_EQ(watched.find("\x1b["), std::string::npos) << "no terminal codes into a pipe";
 }
 
 TEST_F(Launcher, WatchWithoutARunGivesUpAfterWait) {
