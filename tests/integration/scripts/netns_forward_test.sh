@@ -28,17 +28,22 @@ in_outer ip link set lo up
 in_outer iptables -P FORWARD DROP  # what dockerd does
 in_outer sysctl -qw net.bridge.bridge-nf-call-iptables=1
 
-# One UDP datagram from host 1 to host 2 across the bridge: prints "got" or "nothing".
+# One UDP datagram from host 1 to host 2 across the bridge: prints "got" or "nothing". The
+# datagram goes once the listener is bound (a loaded machine may take seconds to start python).
 send_across() {
-  in_outer ip netns exec "$name-h2" timeout 5 python3 -c "
+  local bound
+  bound=$(mktemp -u /tmp/snfwd-bound.XXXXXX)
+  in_outer ip netns exec "$name-h2" timeout 20 python3 -c "
 import socket
 s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM); s.bind(('$subnet.2', 7399)); s.settimeout(3)
+open('$bound', 'w').close()
 try:
     s.recv(16); print('got')
 except OSError:
     print('nothing')" &
-  local listener=$!
-  sleep 0.5
+  local listener=$! _
+  for _ in $(seq 1 150); do [[ -e "$bound" ]] && break; sleep 0.1; done
+  rm -f "$bound"
   in_outer ip netns exec "$name-h1" python3 -c "
 import socket
 socket.socket(socket.AF_INET, socket.SOCK_DGRAM).sendto(b'x', ('$subnet.2', 7399))"
