@@ -178,7 +178,18 @@ class CoordinatorNode {
     }
   }
 
+  // Commands first: answering one can plan for many seconds (at -O0 under the sanitizers, half a
+  // minute), and what the sensors and the fusion center sent meanwhile must be read before the
+  // tick judges anyone silent (a report that came during the plan is not a missing report).
   void readSamples() {
+    for (auto& received : launcher_commands_.take(8).samples) {
+      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Launcher),
+                               wallNowNs()));
+    }
+    for (auto& received : operator_commands_.take(8).samples) {
+      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Operator),
+                               wallNowNs()));
+    }
     auto statuses = status_reader_.take(64);
     for (const auto& change : statuses.changes) {
       core_.onSensorLiveliness(static_cast<int>(change.key->sensor_id),
@@ -208,14 +219,6 @@ class CoordinatorNode {
       carryOut(core_.onFusionState(fusionStateOf(*received.sample), wallNowNs()));
     }
     core_.onFusionCenterMatched(fusionCenterPresent());
-    for (auto& received : launcher_commands_.take(8).samples) {
-      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Launcher),
-                               wallNowNs()));
-    }
-    for (auto& received : operator_commands_.take(8).samples) {
-      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Operator),
-                               wallNowNs()));
-    }
   }
 
   // The fusion center counts as present once one participant matched all three: a reader of

@@ -81,35 +81,52 @@ std::int64_t EmulatedPlant::tickAt(double t) const {
 }
 
 Eigen::VectorXd EmulatedPlant::stateAt(std::uint32_t episode, std::int64_t tick) const {
+  Path path;
+  return stateAt(episode, tick, path);
+}
+
+Eigen::VectorXd EmulatedPlant::stateAt(std::uint32_t episode, std::int64_t tick,
+                                       Path& path) const {
   if (tick < 0 || tick > tickCount()) {
     throw InputError(kSource, "tick",
                      "an integer in [0, " + std::to_string(tickCount()) + "], got " +
                          std::to_string(tick));
   }
-  const Eigen::Index n = m0_.size();
-  Rng start = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 0);
-  VectorXd left = m0_ + p0_root_ * normals(start, n);
-  if (tick == 0) return left;
-  Rng end = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 1);
-  VectorXd right = phi_horizon_ * left + qd_root_ * normals(end, n);
-  std::int64_t a = 0;
-  std::int64_t b = tickCount();
-  for (int depth = 1; tick != a && tick != b; ++depth) {
+  std::vector<Path::Block>& blocks = path.blocks_;
+  if (path.plant_ != this || path.episode_ != episode || blocks.empty()) {
+    const Eigen::Index n = m0_.size();
+    Rng start = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 0);
+    VectorXd left = m0_ + p0_root_ * normals(start, n);
+    Rng end = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 1);
+    VectorXd right = phi_horizon_ * left + qd_root_ * normals(end, n);
+    blocks.clear();
+    blocks.reserve(static_cast<std::size_t>(levels_) + 1);
+    blocks.push_back(Path::Block{0, tickCount(), std::move(left), std::move(right)});
+    path.plant_ = this;
+    path.episode_ = episode;
+  }
+  // The smallest block of the last descent that holds `tick` (the whole horizon always does).
+  std::size_t depth = blocks.size() - 1;
+  while (tick < blocks[depth].a || tick > blocks[depth].b) --depth;
+  blocks.resize(depth + 1);
+  while (tick != blocks.back().a && tick != blocks.back().b) {
+    const Path::Block& outer = blocks.back();
+    const std::int64_t a = outer.a;
+    const std::int64_t b = outer.b;
     const std::int64_t c = a + (b - a) / 2;
-    const std::int64_t block = a >> (levels_ - depth + 1);  // index of [a, b] at depth - 1
-    const Level& level = bridge_[static_cast<std::size_t>(depth - 1)];
-    Rng rng = Rng::keyed(seed_, kPlantTruthStream, episode, depth, block);
-    VectorXd middle =
-        level.from_left * left + level.from_right * right + level.noise * normals(rng, n);
+    const int inner_depth = static_cast<int>(blocks.size());
+    const std::int64_t block = a >> (levels_ - inner_depth + 1);  // index of [a, b]
+    const Level& level = bridge_[static_cast<std::size_t>(inner_depth - 1)];
+    Rng rng = Rng::keyed(seed_, kPlantTruthStream, episode, inner_depth, block);
+    VectorXd middle = level.from_left * outer.left + level.from_right * outer.right +
+                      level.noise * normals(rng, m0_.size());
     if (tick < c) {
-      b = c;
-      right = std::move(middle);
+      blocks.push_back(Path::Block{a, c, outer.left, std::move(middle)});
     } else {
-      a = c;
-      left = std::move(middle);
+      blocks.push_back(Path::Block{c, b, std::move(middle), outer.right});
     }
   }
-  return tick == a ? left : right;
+  return tick == blocks.back().a ? blocks.back().left : blocks.back().right;
 }
 
 Eigen::VectorXd EmulatedPlant::measure(const Eigen::VectorXd& x, int sensor, std::uint32_t episode,

@@ -238,7 +238,7 @@ void SensorAgentCore::transmit(Episode& e, const TimedArrival& a, SensorAgentAct
                     seq,
                     a.time_s,
                     a.version,
-                    plant.measure(plant.stateAt(e.number, a.tick), a.sensor, e.number, seq),
+                    plant.measure(plant.stateAt(e.number, a.tick, e.plant_path), a.sensor, e.number, seq),
                     fate.delay_s};
   const int copies = fate.duplicated ? 2 : 1;
   if (fate.duplicated) ++e.duplicated_by_network[a.sensor];

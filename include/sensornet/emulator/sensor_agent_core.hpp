@@ -135,6 +135,7 @@ class SensorAgentCore {
     EpisodeClock clock;
     std::vector<TimedArrival> timeline;
     std::size_t next = 0;  // first arrival not yet handed out
+    EmulatedPlant::Path plant_path;  // the timeline is sorted: each state starts from the last
     double last_published_s = -1.0;
     std::map<int, std::uint64_t> sent;  // per live hosted sensor: every drawn arrival (its seq)
     std::map<int, std::uint64_t> dropped_by_network;     // of sent: never written

@@ -7,11 +7,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/random.hpp"
+#include "sensornet/core/scenario.hpp"
 
 namespace sensornet {
 namespace {
@@ -90,6 +95,53 @@ TEST(EmulatedPlant, EveryProcessGetsTheSameTruthWhateverItAsksFirst) {
   EXPECT_EQ(one.tickAt(one.timeOf(777)), 777);
   EXPECT_EQ(one.tickAt(-1.0), 0);
   EXPECT_EQ(one.tickAt(10 * kT), one.tickCount());
+}
+
+// A Path only saves work: whatever it went through before (sorted ticks as a sensor asks them,
+// a tick asked twice, the ends, ticks out of order, another episode, another plant), each state
+// is bit for bit that of a descent from the top. A non-symmetric n = 4 plant, so that every
+// bridge matrix has all its entries.
+TEST(EmulatedPlant, APathGivesTheSameStatesBitForBitAsADescentFromTheTop) {
+  RandomPlantSpec spec;
+  spec.state_dim = 4;
+  spec.sensor_count = 3;
+  spec.seed = 21;
+  Scenario scenario = generateRandomScenario(spec);  // the family's A is symmetric
+  scenario.plant.A(0, 1) += 0.7;
+  scenario.plant.A(3, 2) -= 0.4;
+  ASSERT_FALSE(scenario.plant.A.isApprox(scenario.plant.A.transpose()));
+  const EmulatedPlant plant(scenario, 7);
+  const EmulatedPlant other(scenario, 8);
+  Rng rng(3);
+  std::vector<std::int64_t> sorted;
+  for (int i = 0; i < 2000; ++i) {
+    sorted.push_back(static_cast<std::int64_t>(rng.uniform() * static_cast<double>(plant.tickCount())));
+  }
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<std::int64_t> asked = sorted;  // then the same tick twice, the ends, neighbours
+  asked.insert(asked.end(), {sorted.back(), plant.tickCount(), 0, 1, plant.tickCount() - 1,
+                             plant.tickCount() / 2, plant.tickCount() / 2 - 1});
+  for (int i = 0; i < 500; ++i) {  // and out of order
+    asked.push_back(static_cast<std::int64_t>(rng.uniform() * static_cast<double>(plant.tickCount())));
+  }
+  EmulatedPlant::Path path;
+  int compared = 0;
+  for (const std::uint32_t episode : {2u, 3u, 2u}) {
+    for (const std::int64_t tick : asked) {
+      const Eigen::VectorXd fresh = plant.stateAt(episode, tick);
+      const Eigen::VectorXd reused = plant.stateAt(episode, tick, path);
+      ASSERT_EQ(fresh.size(), 4);
+      for (Eigen::Index i = 0; i < fresh.size(); ++i) {
+        ASSERT_EQ(std::bit_cast<std::uint64_t>(reused(i)), std::bit_cast<std::uint64_t>(fresh(i)))
+            << "episode " << episode << ", tick " << tick << ", component " << i;
+      }
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 3 * static_cast<int>(asked.size()));
+  // The same Path on another plant (another seed) starts over.
+  EXPECT_EQ(other.stateAt(2, sorted[7], path), other.stateAt(2, sorted[7]));
+  EXPECT_EQ(plant.stateAt(2, sorted[7], path), plant.stateAt(2, sorted[7]));
 }
 
 TEST(EmulatedPlant, MeasurementNoiseHasTheSensorsCovariance) {
