@@ -667,6 +667,7 @@ struct OverloadRun {
   std::string status;
   std::vector<long long> sent, received, lost;  // per sensor, episode 0
   long long sent_total = 0, received_total = 0, lost_total = 0, rejected_total = 0;
+  long long late_total = 0;  // arrived after the filter had passed them: the episode is re-fused
   double drain_s = 0.0;
   long long backlog = 0;
   double median_us = 0.0, p99_us = 0.0;
@@ -769,6 +770,7 @@ std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate
   o.received_total = s["received"].get<long long>();
   o.lost_total = s["lost"].get<long long>();
   o.rejected_total = s["rejected"].get<long long>();
+  for (const long long late : e["late"].get<std::vector<long long>>()) o.late_total += late;
   o.drain_s = e["drain_s"].get<double>();
   o.backlog = e["backlog"].get<long long>();
   o.median_us = 1e6 * r["latency_s"]["median"].get<double>();
@@ -781,10 +783,11 @@ std::optional<OverloadRun> overloadRun(const std::string& run, double total_rate
 }
 
 void printOverloadRun(double total_rate_hz, const OverloadRun& o) {
-  std::printf("  %7.0f/s  %-9s sent %lld, received %lld, lost %lld, rejected %lld; drain %.3f s, "
-              "backlog %lld; latency median %.0f us, p99 %.0f us; wall %.1f s -> %s\n",
+  std::printf("  %7.0f/s  %-9s sent %lld, received %lld, lost %lld, rejected %lld, late %lld; "
+              "drain %.3f s, backlog %lld; latency median %.0f us, p99 %.0f us; wall %.1f s -> "
+              "%s\n",
               total_rate_hz, o.status.c_str(), o.sent_total, o.received_total, o.lost_total,
-              o.rejected_total, o.drain_s, o.backlog, o.median_us, o.p99_us, o.wall_s,
+              o.rejected_total, o.late_total, o.drain_s, o.backlog, o.median_us, o.p99_us, o.wall_s,
               o.keepsUp() ? "keeps up" : "does not keep up");
   std::printf("            per sensor: sent [%s], received [%s], lost [%s]; faults: %s\n",
               joined(o.sent).c_str(), joined(o.received).c_str(), joined(o.lost).c_str(),
@@ -1192,7 +1195,8 @@ int main(int argc, char** argv) {
   }
   if (what == "overload") {
     const std::vector<double> rates =
-        parseRates(argc > 2 ? argv[2] : "30000,45000,60000,90000,120000,180000,250000,500000");
+        parseRates(argc > 2 ? argv[2]
+                            : "30000,45000,60000,90000,120000,180000,250000,500000,750000,1000000");
     if (rates.empty()) {
       std::fprintf(stderr, "emulator_bench overload: expected rates such as 30000,60000\n");
       return 2;

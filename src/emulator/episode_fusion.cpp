@@ -2,9 +2,11 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <functional>
 
 #include "sensornet/core/network.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
@@ -29,6 +31,7 @@ class RealtimeCost {
         zero_mean_(Eigen::VectorXd::Zero(scenario.stateDim())) {
     work_.reset();
     initial_ = work_.covariance();
+    for (auto& [length, step] : steps_) length = std::numeric_limits<double>::quiet_NaN();
   }
 
   // NaN when it would re-fuse more than max_refused measurements (see realtimeCost).
@@ -134,13 +137,35 @@ class RealtimeCost {
     if (to == from) return covariance;
     work_.reset(from, zero_mean_, covariance);
     if (from < switch_time_s_ && switch_time_s_ < to) {
-      work_.propagateTo(switch_time_s_);
+      advanceTo(switch_time_s_);
       if (cost != nullptr) *cost += work_.runningCost();
       work_.reset(switch_time_s_, zero_mean_, work_.covariance());
     }
-    work_.propagateTo(to);
+    advanceTo(to);
     if (cost != nullptr) *cost += work_.runningCost();
     return work_.covariance();
+  }
+
+  // work_.propagateTo(t), the step taken from those computed last when one has the same length:
+  // a measurement's set and the set without it go from its time to its arrival over the same
+  // interval, and a re-fusion goes again over intervals it went over just before. The same
+  // length gives the same step (LtiTransition::over is a function of dt), so the numbers are
+  // propagateTo's; only the filter's clock is left at time() + dt, which nothing here reads.
+  void advanceTo(double t) {
+    const double dt = t - work_.time();
+    if (dt == 0.0) return;
+    work_.propagateBy(stepOver(dt), dt);
+  }
+
+  [[nodiscard]] const IntervalTransition& stepOver(double dt) {
+    for (const auto& [length, step] : steps_) {
+      if (length == dt) return step;
+    }
+    auto& [length, step] = steps_[next_step_];
+    next_step_ = (next_step_ + 1) % steps_.size();
+    length = dt;
+    work_.transition().over(dt, step);
+    return step;
   }
 
   [[nodiscard]] Eigen::MatrixXd update(double t, const Eigen::MatrixXd& covariance, int sensor) {
@@ -156,6 +181,9 @@ class RealtimeCost {
   Eigen::MatrixXd initial_;  // P0
   std::deque<Checkpoint> checkpoints_;  // the set so far, in timestamp order
   std::size_t refused_ = 0;             // measurements fused again by refuseFrom
+  // The last steps computed, by length (NaN: none yet), replaced in turn.
+  std::array<std::pair<double, IntervalTransition>, 8> steps_;
+  std::size_t next_step_ = 0;
 };
 
 }  // namespace
@@ -188,6 +216,7 @@ EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plan
       failed_at_(tallies_.size()),
       failed_before_(tallies_.size(), false),
       failed_silent_(tallies_.size(), false) {
+  seen_.resize(tallies_.size());
   scheduleChanged();
 }
 
@@ -222,6 +251,17 @@ std::optional<Rejection> malformedMeasurement(const Scenario& scenario,
   return std::nullopt;
 }
 
+bool EpisodeFusion::SeenSeqs::insert(std::uint64_t seq) {
+  if (seq < below) return false;
+  if (seq > below) return above.insert(seq).second;
+  ++below;
+  while (!above.empty() && *above.begin() == below) {
+    above.erase(above.begin());
+    ++below;
+  }
+  return true;
+}
+
 std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   if (auto rejection = malformedMeasurement(scenario_, m)) {
     ++rejected_[rejection->reason];
@@ -230,7 +270,7 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   const std::string who = "sensor " + std::to_string(m.sensor);
   const auto j = static_cast<std::size_t>(m.sensor);
   SensorTally& tally = tallies_[j];
-  if (!seen_.insert({m.sensor, m.seq}).second) {
+  if (!seen_[j].insert(m.seq)) {
     // Counted by finish(): the network's copies and the rest apart, once the tally says how many
     // copies the network made.
     ++tally.duplicates;
@@ -245,7 +285,8 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
     ++tally.late;
     replay_ = true;  // fused again, in order, by finish()
   } else {
-    pending_.insert({key, index});
+    pending_.emplace_back(key, index);
+    std::push_heap(pending_.begin(), pending_.end(), std::greater<>());
   }
   all_.push_back(std::move(m));
   arrived_late_.push_back(late);
@@ -327,9 +368,10 @@ void EpisodeFusion::fuse(const FusedMeasurement& m) {
 
 void EpisodeFusion::fuseUpTo(double t) {
   t = std::min(t, scenario_.horizon_s);
-  while (!pending_.empty() && std::get<0>(pending_.begin()->first) <= t) {
-    fuse(all_[pending_.begin()->second]);
-    pending_.erase(pending_.begin());
+  while (!pending_.empty() && std::get<0>(pending_.front().first) <= t) {
+    fuse(all_[pending_.front().second]);
+    std::pop_heap(pending_.begin(), pending_.end(), std::greater<>());
+    pending_.pop_back();
   }
 }
 

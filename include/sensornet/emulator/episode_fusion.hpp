@@ -258,8 +258,18 @@ class EpisodeFusion {
   CdKalmanFilter filter_;
   std::vector<FusedMeasurement> all_;
   std::vector<bool> arrived_late_;  // per entry of all_: it came after the filter had passed it
-  std::set<std::pair<Key, std::size_t>> pending_;  // indices into all_, in timestamp order
-  std::set<std::pair<int, std::uint64_t>> seen_;   // (sensor, seq)
+  // The sequence numbers of one sensor that arrived: all below `below`, and those in `above`.
+  // A sensor's seqs mostly arrive in order, so `above` stays empty and an arrival costs a
+  // comparison.
+  struct SeenSeqs {
+    std::uint64_t below = 0;
+    std::set<std::uint64_t> above;
+    bool insert(std::uint64_t seq);  // false: it had arrived
+  };
+  // Indices into all_ not fused yet, as a min-heap on the key (std::greater): fused in
+  // timestamp order, and an arrival later than every buffered one (the usual case) costs O(1).
+  std::vector<std::pair<Key, std::size_t>> pending_;
+  std::vector<SeenSeqs> seen_;  // per sensor
   std::vector<SensorTally> tallies_;
   std::vector<std::uint64_t> sent_at_least_;  // status and highest seq + 1
   std::vector<std::optional<double>> failed_at_;  // died during the episode, at this time

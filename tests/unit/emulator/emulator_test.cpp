@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <set>
 
 #include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/input_error.hpp"
@@ -195,6 +196,30 @@ TEST_F(EpisodeFusionTest, FusesInTimestampOrderWhateverTheArrivalOrder) {
     EXPECT_EQ(r.bracket.cov, bracket.cov);
     EXPECT_EQ(r.latencies_s.size(), all.size());
   }
+}
+
+// Every measurement delivered twice, both copies in a random order (a sensor's seqs out of order,
+// a copy before or after the original): each second copy, and only it, is a duplicate, and the
+// cost is that of the measurements once, in order.
+TEST_F(EpisodeFusionTest, ASecondCopyIsADuplicateInWhateverOrderTheCopiesCome) {
+  const std::vector<FusedMeasurement> all = measurements(3);
+  std::vector<FusedMeasurement> twice = all;
+  twice.insert(twice.end(), all.begin(), all.end());
+  std::shuffle(twice.begin(), twice.end(), std::mt19937(7));
+  EpisodeFusion fusion(scenario_, plant_, book_, 3, bracketOf());
+  std::set<std::pair<int, std::uint64_t>> seen;  // by hand
+  std::size_t duplicates = 0;
+  for (const FusedMeasurement& m : twice) {
+    const bool first = seen.insert({m.sensor, m.seq}).second;
+    const std::optional<Rejection> rejection = fusion.add(m);
+    EXPECT_EQ(rejection.has_value(), !first) << "sensor " << m.sensor << " seq " << m.seq;
+    if (rejection) {
+      EXPECT_EQ(rejection->reason, "duplicate");
+      ++duplicates;
+    }
+  }
+  EXPECT_EQ(duplicates, all.size());
+  EXPECT_EQ(fusion.finish().realized_cost, inOrderCost(all));
 }
 
 TEST_F(EpisodeFusionTest, RejectsMalformedAndDuplicateMeasurementsAndCountsLosses) {
