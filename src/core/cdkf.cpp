@@ -28,7 +28,8 @@ Eigen::MatrixXd weightOrZero(const Eigen::MatrixXd& W, Eigen::Index n) {
 CdKalmanFilter::CdKalmanFilter(const Scenario& scenario, TransitionMethod method)
     : transition_(scenario.plant.A, scenario.plant.Q,
                   weightOrZero(scenario.cost.W, scenario.plant.A.rows()), method),
-      sensors_(scenario.sensors) {
+      sensors_(scenario.sensors),
+      steps_(transition_, 1) {
   const Eigen::Index n = scenario.plant.A.rows();
   requireShape(scenario.plant.P0, n, n, "plant.P0");
   initial_covariance_ = scenario.plant.P0;
@@ -85,8 +86,7 @@ void CdKalmanFilter::propagateTo(double t) {
         "a finite time >= time() = " + std::to_string(time_) + ", got " + std::to_string(t));
   }
   if (t == time_) return;
-  transition_.over(t - time_, step_);
-  propagateBy(step_, t - time_);
+  propagateBy(steps_.over(t - time_), t - time_);
   time_ = t;  // exactly, not time_ + (t - time_)
 }
 

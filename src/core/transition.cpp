@@ -5,12 +5,14 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <complex>
 #include <limits>
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
@@ -482,5 +484,35 @@ int LtiTransition::stateDim() const { return static_cast<int>(impl_->A.rows()); 
 TransitionMethod LtiTransition::method() const { return impl_->method; }
 
 double LtiTransition::eigenvectorCondition() const { return impl_->condition; }
+
+TransitionCache::TransitionCache(LtiTransition transition, std::size_t slots)
+    : transition_(std::move(transition)) {
+  std::size_t size = 1;
+  while (size < slots) {
+    size *= 2;
+    --shift_;
+  }
+  lengths_.assign(size, std::numeric_limits<double>::quiet_NaN());
+  steps_.resize(size);
+}
+
+const IntervalTransition& TransitionCache::over(double dt) {
+  // Fibonacci hashing: the high bits of the product depend on every bit of dt (lengths that are
+  // multiples of one tick differ in their high mantissa bits only).
+  const std::size_t slot =
+      shift_ >= 64 ? 0
+                   : static_cast<std::size_t>((std::bit_cast<std::uint64_t>(dt) *
+                                               0x9E3779B97F4A7C15ULL) >>
+                                              shift_);
+  if (lengths_[slot] == dt) {
+    ++hits_;
+    return steps_[slot];
+  }
+  ++misses_;
+  transition_.over(dt, computed_);  // a bad dt throws here, before the cache changes
+  std::swap(steps_[slot], computed_);
+  lengths_[slot] = dt;
+  return steps_[slot];
+}
 
 }  // namespace sensornet

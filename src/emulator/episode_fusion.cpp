@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -18,6 +17,14 @@ using Key = std::tuple<double, int, std::uint64_t>;  // (time, sensor, seq): tim
 
 Key keyOf(const FusedMeasurement& m) { return {m.time_s, m.sensor, m.seq}; }
 
+// How many steps the fusion's filters keep (TransitionCache): gaps between measurements are
+// whole ticks of the emulated plant, so at high rates a few hundred lengths come again and
+// again. Each step is three n x n matrices: at most about 4 MB of them.
+std::size_t stepSlots(const Scenario& scenario) {
+  const auto bytes = static_cast<std::size_t>(24 * scenario.stateDim() * scenario.stateDim());
+  return std::clamp<std::size_t>((std::size_t{4} << 20) / bytes, 1, 256);
+}
+
 // The real-time cost of an episode (see the header): the covariance of what had arrived by each
 // instant, integrated exactly. Every step is one of CdKalmanFilter's exact steps, split at the
 // switch point as EpisodeFusion's own filter splits it, so that with zero delays the sequence of
@@ -30,34 +37,44 @@ class RealtimeCost {
         switch_time_s_(switch_time_s),
         zero_mean_(Eigen::VectorXd::Zero(scenario.stateDim())) {
     work_.reset();
+    work_.cacheSteps(stepSlots(scenario));
     initial_ = work_.covariance();
-    for (auto& [length, step] : steps_) length = std::numeric_limits<double>::quiet_NaN();
   }
 
+  // A measurement as this pass sees it: its key and the instant it arrives.
+  struct Arrival {
+    Key key;
+    double at = 0.0;
+  };
+
   // NaN when it would re-fuse more than max_refused measurements (see realtimeCost).
-  [[nodiscard]] double of(const std::vector<FusedMeasurement>& all, std::size_t max_refused) {
-    const std::vector<std::size_t> order = arrivalOrder(all);
-    const std::vector<Key> earliest = earliestKeyFrom(all, order);
+  [[nodiscard]] double of(std::vector<Arrival> all, std::size_t max_refused) {
+    // By arrival (ties in timestamp order); what arrives after T plays no part.
+    std::erase_if(all, [this](const Arrival& a) { return a.at > horizon_s_; });
+    std::sort(all.begin(), all.end(), [](const Arrival& a, const Arrival& b) {
+      return std::tie(a.at, a.key) < std::tie(b.at, b.key);
+    });
+    const std::vector<Key> earliest = earliestKeyFrom(all);
     double now = 0.0;
     Eigen::MatrixXd current = initial_;  // the covariance of what had arrived by `now`
     double cost = 0.0;
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      const FusedMeasurement& m = all[order[i]];
-      const double arrival = m.time_s + m.network_delay_s;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const Key& key = all[i].key;
+      const double time_s = std::get<0>(key);
+      const double arrival = all[i].at;
       // No measurement still to come is before the second checkpoint: the first is never a
       // starting point again.
       while (checkpoints_.size() >= 2 && checkpoints_[1].key < earliest[i]) {
         checkpoints_.pop_front();
       }
-      const Key key = keyOf(m);
       const auto after = std::upper_bound(
           checkpoints_.begin(), checkpoints_.end(), key,
           [](const Key& k, const Checkpoint& c) { return k < c.key; });
-      if (after == checkpoints_.end() && m.time_s >= now) {
+      if (after == checkpoints_.end() && time_s >= now) {
         // The last of the set in timestamp order: its filter is the current one up to time_s.
-        current = propagate(now, current, m.time_s, &cost);
-        now = m.time_s;
-        Eigen::MatrixXd fused = update(now, current, m.sensor);
+        current = propagate(now, current, time_s, &cost);
+        now = time_s;
+        Eigen::MatrixXd fused = update(now, current, std::get<1>(key));
         checkpoints_.push_back({key, fused});
         if (arrival > now) {
           current = propagate(now, current, arrival, &cost);  // not arrived yet on [time_s, a)
@@ -83,27 +100,12 @@ class RealtimeCost {
     Eigen::MatrixXd covariance;  // right after the measurement `key` was fused
   };
 
-  // The measurements that arrive by T, by arrival (ties in timestamp order).
-  [[nodiscard]] std::vector<std::size_t> arrivalOrder(const std::vector<FusedMeasurement>& all) const {
-    std::vector<std::size_t> order;
-    for (std::size_t i = 0; i < all.size(); ++i) {
-      if (all[i].time_s + all[i].network_delay_s <= horizon_s_) order.push_back(i);
-    }
-    const auto arrivalKey = [&all](std::size_t i) {
-      return std::make_pair(all[i].time_s + all[i].network_delay_s, keyOf(all[i]));
-    };
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return arrivalKey(a) < arrivalKey(b); });
-    return order;
-  }
-
-  // earliest[i]: the smallest key among order[i..] (the measurements still to arrive).
-  [[nodiscard]] static std::vector<Key> earliestKeyFrom(const std::vector<FusedMeasurement>& all,
-                                                        const std::vector<std::size_t>& order) {
-    std::vector<Key> earliest(order.size());
-    for (std::size_t i = order.size(); i-- > 0;) {
-      earliest[i] = keyOf(all[order[i]]);
-      if (i + 1 < order.size()) earliest[i] = std::min(earliest[i], earliest[i + 1]);
+  // earliest[i]: the smallest key among all[i..] (the measurements still to arrive).
+  [[nodiscard]] static std::vector<Key> earliestKeyFrom(const std::vector<Arrival>& all) {
+    std::vector<Key> earliest(all.size());
+    for (std::size_t i = all.size(); i-- > 0;) {
+      earliest[i] = all[i].key;
+      if (i + 1 < all.size()) earliest[i] = std::min(earliest[i], earliest[i + 1]);
     }
     return earliest;
   }
@@ -146,27 +148,10 @@ class RealtimeCost {
     return work_.covariance();
   }
 
-  // work_.propagateTo(t), the step taken from those computed last when one has the same length:
-  // a measurement's set and the set without it go from its time to its arrival over the same
-  // interval, and a re-fusion goes again over intervals it went over just before. The same
-  // length gives the same step (LtiTransition::over is a function of dt), so the numbers are
-  // propagateTo's; only the filter's clock is left at time() + dt, which nothing here reads.
-  void advanceTo(double t) {
-    const double dt = t - work_.time();
-    if (dt == 0.0) return;
-    work_.propagateBy(stepOver(dt), dt);
-  }
-
-  [[nodiscard]] const IntervalTransition& stepOver(double dt) {
-    for (const auto& [length, step] : steps_) {
-      if (length == dt) return step;
-    }
-    auto& [length, step] = steps_[next_step_];
-    next_step_ = (next_step_ + 1) % steps_.size();
-    length = dt;
-    work_.transition().over(dt, step);
-    return step;
-  }
+  // work_.propagateTo(t). Its steps are cached by length: a measurement's set and the set
+  // without it go from its time to its arrival over the same interval, a re-fusion goes again
+  // over intervals it went over just before, and gaps of whole ticks repeat.
+  void advanceTo(double t) { work_.propagateTo(t); }
 
   [[nodiscard]] Eigen::MatrixXd update(double t, const Eigen::MatrixXd& covariance, int sensor) {
     work_.reset(t, zero_mean_, covariance);
@@ -181,16 +166,18 @@ class RealtimeCost {
   Eigen::MatrixXd initial_;  // P0
   std::deque<Checkpoint> checkpoints_;  // the set so far, in timestamp order
   std::size_t refused_ = 0;             // measurements fused again by refuseFrom
-  // The last steps computed, by length (NaN: none yet), replaced in turn.
-  std::array<std::pair<double, IntervalTransition>, 8> steps_;
-  std::size_t next_step_ = 0;
 };
 
 }  // namespace
 
 double realtimeCost(const Scenario& scenario, double switch_time_s,
                     const std::vector<FusedMeasurement>& measurements, std::size_t max_refused) {
-  return RealtimeCost(scenario, switch_time_s).of(measurements, max_refused);
+  std::vector<RealtimeCost::Arrival> arrivals;
+  arrivals.reserve(measurements.size());
+  for (const FusedMeasurement& m : measurements) {
+    arrivals.push_back({keyOf(m), m.time_s + m.network_delay_s});
+  }
+  return RealtimeCost(scenario, switch_time_s).of(std::move(arrivals), max_refused);
 }
 
 std::uint64_t faultyRejections(const RejectionCounts& rejected) {
@@ -216,6 +203,7 @@ EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plan
       failed_at_(tallies_.size()),
       failed_before_(tallies_.size(), false),
       failed_silent_(tallies_.size(), false) {
+  filter_.cacheSteps(stepSlots(scenario));
   seen_.resize(tallies_.size());
   scheduleChanged();
 }
@@ -437,17 +425,29 @@ std::string EpisodeFusion::incompleteReason() const {
 
 double EpisodeFusion::receivedRealtimeCost(double realtime_cost) const {
   // As a delay: a measurement received at received_s arrives at time_s + (received_s - time_s).
-  const auto receivedLate = [](const FusedMeasurement& m) {
-    return m.received_s - m.time_s > m.network_delay_s;
+  // The instant it was received is taken up to the plant's next tick, the grid measurements are
+  // taken on (it counts as arrived at most a tick later: 2.9 µs when T = 3 s). Then the pass
+  // goes over whole ticks only, and its steps repeat.
+  const auto receivedAt = [this](const FusedMeasurement& m) {
+    if (!(m.received_s < scenario_.horizon_s)) return m.received_s;  // after T stays after T
+    std::int64_t tick = plant_.tickAt(m.received_s);
+    if (plant_.timeOf(tick) < m.received_s) ++tick;
+    return plant_.timeOf(tick);
   };
-  if (std::none_of(all_.begin(), all_.end(), receivedLate)) return realtime_cost;
-  std::vector<FusedMeasurement> received = all_;
-  for (FusedMeasurement& m : received) {
-    if (receivedLate(m)) m.network_delay_s = m.received_s - m.time_s;
+  bool any_late = false;
+  std::vector<RealtimeCost::Arrival> arrivals;
+  arrivals.reserve(all_.size());
+  for (const FusedMeasurement& m : all_) {
+    const double due = m.time_s + m.network_delay_s;
+    const double received = m.received_s > 0.0 ? receivedAt(m) : 0.0;
+    any_late = any_late || received > due;
+    arrivals.push_back({keyOf(m), std::max(due, received)});
   }
+  if (!any_late) return realtime_cost;
   // Bounded: under overload the fusion center receives whole bursts of one sensor after later
   // measurements of others, and each such measurement re-fuses everything after it.
-  return realtimeCost(scenario_, switch_time_s_, received, 2 * received.size() + 10000);
+  const std::size_t max_refused = 2 * arrivals.size() + 10000;
+  return RealtimeCost(scenario_, switch_time_s_).of(std::move(arrivals), max_refused);
 }
 
 // Measurements their sensor never sent: a sequence number at or past the count its tally gives

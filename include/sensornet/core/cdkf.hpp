@@ -20,6 +20,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <cstddef>
 #include <vector>
 
 #include "sensornet/core/scenario.hpp"
@@ -45,6 +46,10 @@ class CdKalmanFilter {
   void propagateTo(double t);
   // The same with a precomputed step = transition().over(dt), for callers that reuse steps.
   void propagateBy(const IntervalTransition& step, double dt);
+  // propagateTo keeps the steps of the last `slots` distinct interval lengths (1 by default;
+  // see TransitionCache): the same numbers, fewer computed where lengths repeat.
+  void cacheSteps(std::size_t slots) { steps_ = TransitionCache(transition_, slots); }
+  [[nodiscard]] const TransitionCache& steps() const { return steps_; }
 
   // Eq. (4) and the mean update m += K (z - H_j m), for a measurement z (p_j values) of sensor j.
   void update(int sensor, const Eigen::Ref<const Eigen::VectorXd>& z);
@@ -83,7 +88,7 @@ class CdKalmanFilter {
   double running_cost_ = 0.0;
 
   // Work space reused across calls so that the per-arrival path does not allocate.
-  IntervalTransition step_;
+  TransitionCache steps_;
   Eigen::MatrixXd PHt_;             // P H', later K R
   Eigen::MatrixXd innovation_cov_;  // H P H' + R
   Eigen::LLT<Eigen::MatrixXd> innovation_llt_;

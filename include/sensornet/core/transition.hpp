@@ -21,7 +21,10 @@
 // defective A falls back to the Van Loan (1978) block exponential of one 3n x 3n matrix.
 
 #include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace sensornet {
 
@@ -76,6 +79,37 @@ class LtiTransition {
  private:
   struct Impl;
   std::shared_ptr<const Impl> impl_;
+};
+
+// The steps over the interval lengths met last, found by their exact length. over() is a
+// function of dt, so a step found here is, bit for bit, the one LtiTransition::over computes.
+// It pays where lengths repeat: instants on a tick grid (the emulated plant's arrivals, whose
+// gaps are whole ticks) and a filter that goes over the same intervals again (the fusion
+// center's real-time cost). `slots` steps at most, direct-mapped by the bits of dt, so a
+// look-up is a hash and one comparison; with 1 slot it remembers the last step only.
+//
+//   TransitionCache steps(transition, 256);
+//   const IntervalTransition& step = steps.over(dt);  // valid until the next over()
+class TransitionCache {
+ public:
+  TransitionCache(LtiTransition transition, std::size_t slots);
+
+  // transition().over(dt), from the cache when a step of exactly this length is in it.
+  [[nodiscard]] const IntervalTransition& over(double dt);
+
+  [[nodiscard]] const LtiTransition& transition() const { return transition_; }
+  [[nodiscard]] std::size_t slots() const { return steps_.size(); }
+  [[nodiscard]] std::uint64_t hits() const { return hits_; }
+  [[nodiscard]] std::uint64_t misses() const { return misses_; }
+
+ private:
+  LtiTransition transition_;
+  std::vector<double> lengths_;  // of the step in each slot; NaN: empty
+  std::vector<IntervalTransition> steps_;
+  IntervalTransition computed_;  // a new step, swapped into its slot once over() succeeded
+  int shift_ = 64;  // slot = (bits of dt * a Fibonacci constant) >> shift_
+  std::uint64_t hits_ = 0;
+  std::uint64_t misses_ = 0;
 };
 
 }  // namespace sensornet

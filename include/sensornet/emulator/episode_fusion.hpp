@@ -34,8 +34,10 @@
 // The real-time cost depends on the emulated network only, so a run reproduces it exactly. What
 // the fusion center really had by each instant is `received_realtime_cost`: the same cost with
 // each measurement arriving at max(time_s + network_delay_s, received_s), the instant it was
-// received on the episode's clock; it adds the real network's delay (a netem delay, a cut link)
-// and any stall of a process, and at high time scales the loopback latency times the scale.
+// received on the episode's clock, taken up to the emulated plant's next tick (at most 2.9 µs
+// later when T = 3 s; it keeps every step a whole number of ticks long, and such steps repeat).
+// It adds the real network's delay (a netem delay, a cut link) and any stall of a process, and
+// at high time scales the loopback latency times the scale.
 //
 // Accounting, per sensor (docs/ARCHITECTURE.md): sent = received + lost + dropped_by_network. `sent` is the
 // sensor's own end-of-episode tally; without one, the best lower bound known (its last status,

@@ -36,6 +36,7 @@
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "support/in_order_cost.hpp"
 #include "support/sanitizer.hpp"
 
 namespace sensornet {
@@ -69,11 +70,12 @@ std::string writeFile(const std::filesystem::path& path, const std::string& text
   return path.string();
 }
 
-// How many measurements each sensor must send in each episode: its exact timeline.
-std::vector<std::vector<std::uint64_t>> timelineCounts(const std::string& scenario_path,
-                                                       const std::string& schedule_path,
-                                                       std::uint64_t seed, int episodes) {
-  const Scenario scenario = loadScenarioFile(scenario_path);
+// The measurements the sensors of a seeded run must draw in each episode, in time order: each
+// sensor's exact timeline (the run seed and the schedule file), the emulated plant's state at
+// each instant and the sensor's noise for its sequence number, as a sensor agent draws them.
+std::vector<std::vector<emulator::FusedMeasurement>> drawnMeasurements(
+    const Scenario& scenario, const std::string& schedule_path, std::uint64_t seed,
+    int episodes) {
   emulator::ScheduleBook book;
   emulator::ScheduleVersion v;
   v.version = 1;
@@ -82,13 +84,35 @@ std::vector<std::vector<std::uint64_t>> timelineCounts(const std::string& scenar
   const EmulatedPlant plant(scenario, seed);
   std::vector<int> sensors(static_cast<std::size_t>(scenario.sensorCount()));
   for (std::size_t j = 0; j < sensors.size(); ++j) sensors[j] = static_cast<int>(j);
-  std::vector<std::vector<std::uint64_t>> counts;
+  std::vector<std::vector<emulator::FusedMeasurement>> drawn;
   for (int e = 0; e < episodes; ++e) {
-    std::vector<std::uint64_t> per_sensor(sensors.size(), 0);
-    for (const auto& a : emulator::sensorTimeline(book, plant, seed, static_cast<std::uint32_t>(e),
-                                                  sensors, scenario.horizon_s)) {
-      ++per_sensor[static_cast<std::size_t>(a.sensor)];
+    const auto episode = static_cast<std::uint32_t>(e);
+    std::vector<std::uint64_t> seq(sensors.size(), 0);
+    std::vector<emulator::FusedMeasurement> measurements;
+    for (const auto& a :
+         emulator::sensorTimeline(book, plant, seed, episode, sensors, scenario.horizon_s)) {
+      emulator::FusedMeasurement m;
+      m.sensor = a.sensor;
+      m.seq = seq[static_cast<std::size_t>(a.sensor)]++;
+      m.time_s = a.time_s;
+      m.version = a.version;
+      m.z = plant.measure(plant.stateAt(episode, a.tick), a.sensor, episode, m.seq);
+      measurements.push_back(std::move(m));
     }
+    drawn.push_back(std::move(measurements));
+  }
+  return drawn;
+}
+
+// How many measurements each sensor must send in each episode.
+std::vector<std::vector<std::uint64_t>> timelineCounts(const std::string& scenario_path,
+                                                       const std::string& schedule_path,
+                                                       std::uint64_t seed, int episodes) {
+  const Scenario scenario = loadScenarioFile(scenario_path);
+  std::vector<std::vector<std::uint64_t>> counts;
+  for (const auto& measurements : drawnMeasurements(scenario, schedule_path, seed, episodes)) {
+    std::vector<std::uint64_t> per_sensor(static_cast<std::size_t>(scenario.sensorCount()), 0);
+    for (const auto& m : measurements) ++per_sensor[static_cast<std::size_t>(m.sensor)];
     counts.push_back(per_sensor);
   }
   return counts;
@@ -188,6 +212,25 @@ class Trust : public ::testing::Test {
   std::filesystem::path dir_;
   std::string schedule_;
 };
+
+// The whole measurement path changes no result (issue 28): the realized cost of every episode of
+// a seeded run of real processes is, bit for bit, the in-order CD-KF over the measurements
+// recomputed here in-process from the seed (timelines, plant states, noise). A change to how the
+// agents sample, send or the fusion center orders and fuses that alters a single rounding fails.
+TEST_F(Trust, ASeededRunsCostsAreTheInProcessComputationBitForBit) {
+  constexpr int kEpisodes = 3;
+  const std::vector<double> costs = cleanCosts("in-process", kEpisodes);
+  ASSERT_EQ(costs.size(), static_cast<std::size_t>(kEpisodes));
+  const Scenario scenario = loadScenarioFile(kDefaultScenario);
+  const auto drawn = drawnMeasurements(scenario, schedule_, kSeed, kEpisodes);
+  for (int e = 0; e < kEpisodes; ++e) {
+    const auto& measurements = drawn[static_cast<std::size_t>(e)];
+    ASSERT_GT(measurements.size(), 10u) << "episode " << e;  // a real episode, not an empty one
+    EXPECT_EQ(costs[static_cast<std::size_t>(e)],
+              sensornet::testing::inOrderCost(scenario, measurements))
+        << "episode " << e;
+  }
+}
 
 // A 3 s stall (SIGSTOP, SIGCONT) of one process in episode 1 of 3, at real time (an episode is
 // 3 s of wall time): shorter than the 10 s a run absorbs.

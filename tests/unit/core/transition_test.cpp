@@ -406,5 +406,55 @@ TEST(LtiTransition, RejectsBadIntervalsShapesAndForcedMethodsThatDoNotApply) {
             LtiTransition::kDefectiveEigenvectorCondition);
 }
 
+// The cache gives over()'s numbers bit for bit, whether a length is new, repeated or evicted by
+// another that maps to its slot; what it counts as hits are exactly the repeats still held.
+TEST(TransitionCache, GivesExactlyTheStepOfEveryLengthWhetherCachedOrNot) {
+  Rng rng(31);
+  // A is not symmetric.
+  const LtiTransition transition(gaussianMatrix(4, 4, rng), randomSpd(4, rng), randomSpd(4, rng));
+  for (const std::size_t slots : {1, 4, 256}) {
+    TransitionCache cache(transition, slots);
+    EXPECT_EQ(cache.slots(), slots);
+    // Lengths of whole ticks (3 s / 2^20), as the fusion center sees, and a few that are not.
+    const double tick = 3.0 / 1048576.0;
+    std::vector<double> lengths;
+    for (int i = 0; i < 400; ++i) {
+      const int ticks = 1 + static_cast<int>(rng.uniform() * 12.0);
+      lengths.push_back(i % 7 == 0 ? rng.uniform() : tick * ticks);
+    }
+    std::vector<double> held(cache.slots(), -1.0);  // what a cache of that size must hold
+    std::uint64_t repeats = 0;
+    for (const double dt : lengths) {
+      const IntervalTransition expected = transition.over(dt);
+      const IntervalTransition& got = cache.over(dt);
+      EXPECT_EQ(got.Phi, expected.Phi) << dt;
+      EXPECT_EQ(got.Qd, expected.Qd) << dt;
+      EXPECT_EQ(got.cost_gramian, expected.cost_gramian) << dt;
+      EXPECT_EQ(got.noise_cost, expected.noise_cost) << dt;
+      if (std::find(held.begin(), held.end(), dt) != held.end()) ++repeats;
+      if (slots == 1) held[0] = dt;
+    }
+    EXPECT_EQ(cache.hits() + cache.misses(), lengths.size());
+    if (slots == 1) {
+      EXPECT_EQ(cache.hits(), repeats);
+    }
+    if (slots == 256) {
+      EXPECT_GT(cache.hits(), lengths.size() / 2);  // 12 tick lengths repeat
+    }
+  }
+}
+
+TEST(TransitionCache, ABadLengthThrowsAndLeavesTheCacheWhole) {
+  Rng rng(32);
+  const LtiTransition transition(gaussianMatrix(3, 3, rng), randomSpd(3, rng), randomSpd(3, rng));
+  TransitionCache cache(transition, 8);
+  const IntervalTransition expected = transition.over(0.25);
+  (void)cache.over(0.25);
+  EXPECT_THROW((void)cache.over(-1.0), InputError);
+  EXPECT_THROW((void)cache.over(std::numeric_limits<double>::quiet_NaN()), InputError);
+  EXPECT_EQ(cache.over(0.25).Phi, expected.Phi);
+  EXPECT_EQ(cache.hits(), 1u);
+}
+
 }  // namespace
 }  // namespace sensornet

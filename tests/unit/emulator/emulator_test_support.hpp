@@ -2,16 +2,15 @@
 // Shared fixtures of the emulator unit tests: a small random scenario (n = 3, M = 4, N = 6
 // intervals of 0.5 s: plans and rollouts take milliseconds) and a schedule version made by hand.
 
-#include <algorithm>
 #include <cstdint>
-#include <tuple>
+#include <utility>
 #include <vector>
 
-#include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "support/in_order_cost.hpp"
 
 namespace sensornet::emulator::test {
 
@@ -38,16 +37,7 @@ inline ScheduleVersion versionOf(std::uint32_t number, const RateSchedule& sched
 
 // The CD-KF over the measurements in time order, by hand: what the fusion must equal bit for bit.
 inline double inOrderCost(const Scenario& scenario, std::vector<FusedMeasurement> all) {
-  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.time_s, a.sensor) < std::tie(b.time_s, b.sensor);
-  });
-  CdKalmanFilter filter(scenario);
-  for (const auto& m : all) {
-    filter.propagateTo(m.time_s);
-    filter.update(m.sensor, m.z);
-  }
-  filter.propagateTo(scenario.horizon_s);
-  return filter.cost();
+  return sensornet::testing::inOrderCost(scenario, std::move(all));
 }
 
 }  // namespace sensornet::emulator::test

@@ -240,6 +240,7 @@ TEST(RealtimeCost, MatchesABruteForceScalarComputation) {
 // emulated network held back is received "earlier" than it was due (clock skew between hosts):
 // it counts from when it was due. The emulated real-time cost sees only the emulated delay:
 //   [0, 0.2): none;  [0.2, 0.5): measurement 1;  [0.5, 0.9): 1 and 2;  [0.9, 1]: all three.
+// A receipt counts from the plant's next tick (1/256 s here): 0.7 s from 180/256 = 0.703125 s.
 TEST(RealtimeCost, OfWhatWasReceivedMatchesABruteForceScalarComputation) {
   const Scenario s = ScalarExample::scenario();
   const EmulatedPlant plant(s, 1, 8);
@@ -255,7 +256,10 @@ TEST(RealtimeCost, OfWhatWasReceivedMatchesABruteForceScalarComputation) {
                           X::integral({0.2, 0.4}, 0.5, 0.9) +
                           X::integral({0.2, 0.4, 0.9}, 0.9, 1.0) +
                           X::covarianceAt({0.2, 0.4, 0.9}, X::horizon);
-  const double received = X::realtimeCost();
+  const double tick = std::ceil(0.7 * 256.0) / 256.0;
+  const double received = X::integral({}, 0.0, 0.5) + X::integral({0.4}, 0.5, tick) +
+                          X::integral({0.2, 0.4}, tick, 1.0) +
+                          X::covarianceAt({0.2, 0.4}, X::horizon);
   EXPECT_NEAR(result.realtime_cost, emulated, 1e-11 * emulated);
   EXPECT_NEAR(result.received_realtime_cost, received, 1e-11 * received);
   EXPECT_GT(received - emulated, 0.05);  // the example tells the two apart
