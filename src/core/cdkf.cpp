@@ -1,5 +1,6 @@
 #include "sensornet/core/cdkf.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -10,8 +11,11 @@ namespace {
 
 constexpr const char* kSource = "CdKalmanFilter";
 
-void requireShape(const Eigen::MatrixXd& m, Eigen::Index rows, Eigen::Index cols,
-                  const std::string& field) {
+// Takes any matrix or vector as it is and names the field only when it throws: reset() calls
+// it for every re-fusion, where a temporary copy or string would be a heap allocation each.
+template <typename Derived>
+void requireShape(const Eigen::EigenBase<Derived>& m, Eigen::Index rows, Eigen::Index cols,
+                  const char* field) {
   if (m.rows() != rows || m.cols() != cols) {
     throw InputError(kSource, field,
                      std::to_string(rows) + " x " + std::to_string(cols) + " matrix, got " +
@@ -49,9 +53,12 @@ CdKalmanFilter::CdKalmanFilter(const Scenario& scenario, TransitionMethod method
     const std::string field = "sensors[" + std::to_string(j) + "]";
     const Eigen::Index p = sensors_[j].H.rows();
     if (p < 1) throw InputError(kSource, field + ".H", "at least one row");
-    requireShape(sensors_[j].H, p, n, field + ".H");
-    requireShape(sensors_[j].R, p, p, field + ".R");
+    requireShape(sensors_[j].H, p, n, (field + ".H").c_str());
+    requireShape(sensors_[j].R, p, p, (field + ".R").c_str());
   }
+  Eigen::Index rows = 0;
+  for (const SensorModel& sensor : sensors_) rows = std::max(rows, sensor.H.rows());
+  update_work_.resize(static_cast<std::size_t>(rows) + 1);
   work_.resize(n, n);
   IKH_.resize(n, n);
   mean_work_.resize(n);
@@ -117,8 +124,9 @@ void CdKalmanFilter::update(int sensor, const Eigen::Ref<const Eigen::VectorXd>&
                      std::to_string(model.H.rows()) + " values for sensor " +
                          std::to_string(sensor) + ", got " + std::to_string(z.size()));
   }
-  innovation_ = z;
-  innovation_.noalias() -= model.H * mean_;
+  UpdateWork& w = update_work_[static_cast<std::size_t>(model.H.rows())];
+  w.innovation = z;
+  w.innovation.noalias() -= model.H * mean_;
   applyUpdate(sensor, /*update_mean=*/true);
 }
 
@@ -145,22 +153,23 @@ void CdKalmanFilter::applyUpdate(int sensor, bool update_mean) {
   const Eigen::MatrixXd& H = model.H;
   const Eigen::MatrixXd& R = model.R;
 
-  PHt_.noalias() = covariance_ * H.transpose();
-  innovation_cov_.noalias() = H * PHt_;
-  innovation_cov_ += R;
-  innovation_llt_.compute(innovation_cov_);
-  gain_t_ = PHt_.transpose();
-  innovation_llt_.solveInPlace(gain_t_);  // K' = (H P H' + R)^{-1} H P
+  UpdateWork& w = update_work_[static_cast<std::size_t>(H.rows())];
+  w.PHt.noalias() = covariance_ * H.transpose();
+  w.innovation_cov.noalias() = H * w.PHt;
+  w.innovation_cov += R;
+  w.innovation_llt.compute(w.innovation_cov);
+  w.gain_t = w.PHt.transpose();
+  w.innovation_llt.solveInPlace(w.gain_t);  // K' = (H P H' + R)^{-1} H P
 
   IKH_.setIdentity();
-  IKH_.noalias() -= gain_t_.transpose() * H;
+  IKH_.noalias() -= w.gain_t.transpose() * H;
   work_.noalias() = IKH_ * covariance_;
   covariance_.noalias() = work_ * IKH_.transpose();
-  PHt_.noalias() = gain_t_.transpose() * R;
-  covariance_.noalias() += PHt_ * gain_t_;
+  w.PHt.noalias() = w.gain_t.transpose() * R;
+  covariance_.noalias() += w.PHt * w.gain_t;
   symmetrizeCovariance();
 
-  if (update_mean) mean_.noalias() += gain_t_.transpose() * innovation_;
+  if (update_mean) mean_.noalias() += w.gain_t.transpose() * w.innovation;
 }
 
 // The one place the covariance is made exactly symmetric, after every change to it.

@@ -85,48 +85,62 @@ Eigen::VectorXd EmulatedPlant::stateAt(std::uint32_t episode, std::int64_t tick)
   return stateAt(episode, tick, path);
 }
 
-Eigen::VectorXd EmulatedPlant::stateAt(std::uint32_t episode, std::int64_t tick,
-                                       Path& path) const {
+const Eigen::VectorXd& EmulatedPlant::stateAt(std::uint32_t episode, std::int64_t tick,
+                                              Path& path) const {
   if (tick < 0 || tick > tickCount()) {
     throw InputError(kSource, "tick",
                      "an integer in [0, " + std::to_string(tickCount()) + "], got " +
                          std::to_string(tick));
   }
   std::vector<Path::Block>& blocks = path.blocks_;
-  if (path.plant_ != this || path.episode_ != episode || blocks.empty()) {
+  if (path.plant_ != this || path.episode_ != episode || path.depth_ == 0) {
     const Eigen::Index n = m0_.size();
     Rng start = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 0);
     VectorXd left = m0_ + p0_root_ * normals(start, n);
     Rng end = Rng::keyed(seed_, kPlantTruthStream, episode, 0, 1);
     VectorXd right = phi_horizon_ * left + qd_root_ * normals(end, n);
-    blocks.clear();
-    blocks.reserve(static_cast<std::size_t>(levels_) + 1);
-    blocks.push_back(Path::Block{0, tickCount(), std::move(left), std::move(right)});
+    blocks.resize(static_cast<std::size_t>(levels_) + 1);
+    blocks[0] = Path::Block{0, tickCount(), std::move(left), std::move(right)};
+    path.depth_ = 1;
     path.plant_ = this;
     path.episode_ = episode;
   }
   // The smallest block of the last descent that holds `tick` (the whole horizon always does).
-  std::size_t depth = blocks.size() - 1;
+  std::size_t depth = path.depth_ - 1;
   while (tick < blocks[depth].a || tick > blocks[depth].b) --depth;
-  blocks.resize(depth + 1);
-  while (tick != blocks.back().a && tick != blocks.back().b) {
-    const Path::Block& outer = blocks.back();
+  path.depth_ = depth + 1;
+  while (tick != blocks[path.depth_ - 1].a && tick != blocks[path.depth_ - 1].b) {
+    const Path::Block& outer = blocks[path.depth_ - 1];
+    Path::Block& inner = blocks[path.depth_];
     const std::int64_t a = outer.a;
     const std::int64_t b = outer.b;
     const std::int64_t c = a + (b - a) / 2;
-    const int inner_depth = static_cast<int>(blocks.size());
+    const int inner_depth = static_cast<int>(path.depth_);
     const std::int64_t block = a >> (levels_ - inner_depth + 1);  // index of [a, b]
     const Level& level = bridge_[static_cast<std::size_t>(inner_depth - 1)];
     Rng rng = Rng::keyed(seed_, kPlantTruthStream, episode, inner_depth, block);
-    VectorXd middle = level.from_left * outer.left + level.from_right * outer.right +
-                      level.noise * normals(rng, m0_.size());
+    // from_left x(a) + from_right x(b) + noise xi, each product evaluated on its own and then
+    // summed left to right, as Eigen evaluates the one expression of these three products.
+    path.xi_.resize(m0_.size());
+    for (Eigen::Index i = 0; i < path.xi_.size(); ++i) path.xi_(i) = rng.normal();
+    path.from_left_.noalias() = level.from_left * outer.left;
+    path.from_right_.noalias() = level.from_right * outer.right;
+    path.noise_.noalias() = level.noise * path.xi_;
+    Eigen::VectorXd& middle = tick < c ? inner.right : inner.left;
+    middle = path.from_left_ + path.from_right_ + path.noise_;
     if (tick < c) {
-      blocks.push_back(Path::Block{a, c, outer.left, std::move(middle)});
+      inner.a = a;
+      inner.b = c;
+      inner.left = outer.left;
     } else {
-      blocks.push_back(Path::Block{c, b, std::move(middle), outer.right});
+      inner.a = c;
+      inner.b = b;
+      inner.right = outer.right;
     }
+    ++path.depth_;
   }
-  return tick == blocks.back().a ? blocks.back().left : blocks.back().right;
+  const Path::Block& last = blocks[path.depth_ - 1];
+  return tick == last.a ? last.left : last.right;
 }
 
 Eigen::VectorXd EmulatedPlant::measure(const Eigen::VectorXd& x, int sensor, std::uint32_t episode,

@@ -57,6 +57,7 @@ class RealtimeCost {
     const std::vector<Key> earliest = earliestKeyFrom(all);
     double now = 0.0;
     Eigen::MatrixXd current = initial_;  // the covariance of what had arrived by `now`
+    Eigen::MatrixXd fused;               // of the set with the measurement just arrived
     double cost = 0.0;
     for (std::size_t i = 0; i < all.size(); ++i) {
       const Key& key = all[i].key;
@@ -65,6 +66,7 @@ class RealtimeCost {
       // No measurement still to come is before the second checkpoint: the first is never a
       // starting point again.
       while (checkpoints_.size() >= 2 && checkpoints_[1].key < earliest[i]) {
+        spare_.push_back(std::move(checkpoints_.front().covariance));
         checkpoints_.pop_front();
       }
       const auto after = std::upper_bound(
@@ -72,24 +74,24 @@ class RealtimeCost {
           [](const Key& k, const Checkpoint& c) { return k < c.key; });
       if (after == checkpoints_.end() && time_s >= now) {
         // The last of the set in timestamp order: its filter is the current one up to time_s.
-        current = propagate(now, current, time_s, &cost);
+        propagate(now, current, time_s, &cost, current);
         now = time_s;
-        Eigen::MatrixXd fused = update(now, current, std::get<1>(key));
-        checkpoints_.push_back({key, fused});
+        update(now, current, std::get<1>(key), fused);
+        checkpoints_.push_back({key, spareCopyOf(fused)});
         if (arrival > now) {
-          current = propagate(now, current, arrival, &cost);  // not arrived yet on [time_s, a)
-          fused = propagate(now, fused, arrival, nullptr);
+          propagate(now, current, arrival, &cost, current);  // not arrived yet on [time_s, a)
+          propagate(now, fused, arrival, nullptr, fused);
           now = arrival;
         }
-        current = std::move(fused);
+        std::swap(current, fused);
       } else {
-        current = propagate(now, current, arrival, &cost);
+        propagate(now, current, arrival, &cost, current);
         now = arrival;
-        current = refuseFrom(checkpoints_.insert(after, {key, Eigen::MatrixXd()}), now);
+        refuseFrom(checkpoints_.insert(after, {key, spareCopyOf(current)}), now, current);
         if (refused_ > max_refused) return std::numeric_limits<double>::quiet_NaN();
       }
     }
-    current = propagate(now, current, horizon_s_, &cost);
+    propagate(now, current, horizon_s_, &cost, current);
     work_.reset(horizon_s_, zero_mean_, current);
     return cost + work_.terminalCost();
   }
@@ -110,33 +112,46 @@ class RealtimeCost {
     return earliest;
   }
 
+  // A copy of `covariance` in a matrix of a checkpoint dropped before (no allocation once the
+  // pass holds as many as it ever keeps).
+  [[nodiscard]] Eigen::MatrixXd spareCopyOf(const Eigen::MatrixXd& covariance) {
+    if (spare_.empty()) return covariance;
+    Eigen::MatrixXd copy = std::move(spare_.back());
+    spare_.pop_back();
+    copy = covariance;
+    return copy;
+  }
+
   // The filter of the set again from the checkpoint before `inserted` (P0 at 0 when none), with
-  // the new measurement fused at its time; returns the set's covariance at `arrival`.
-  [[nodiscard]] Eigen::MatrixXd refuseFrom(std::deque<Checkpoint>::iterator inserted,
-                                           double arrival) {
+  // the new measurement fused at its time; puts the set's covariance at `arrival` in *out.
+  void refuseFrom(std::deque<Checkpoint>::iterator inserted, double arrival,
+                  Eigen::MatrixXd& out) {
     double t = 0.0;
-    Eigen::MatrixXd covariance = initial_;
+    refused_covariance_ = initial_;
     if (inserted != checkpoints_.begin()) {
       const Checkpoint& before = *std::prev(inserted);
       t = std::get<0>(before.key);
-      covariance = before.covariance;
+      refused_covariance_ = before.covariance;
     }
     for (auto it = inserted; it != checkpoints_.end(); ++it) {
       const double at = std::get<0>(it->key);
-      covariance = propagate(t, covariance, at, nullptr);
+      propagate(t, refused_covariance_, at, nullptr, refused_covariance_);
       t = at;
-      covariance = update(t, covariance, std::get<1>(it->key));
-      it->covariance = covariance;
+      update(t, refused_covariance_, std::get<1>(it->key), refused_covariance_);
+      it->covariance = refused_covariance_;
       ++refused_;
     }
-    return propagate(t, covariance, arrival, nullptr);
+    propagate(t, refused_covariance_, arrival, nullptr, out);
   }
 
-  // P at `to` from P at `from`, in the hindsight filter's steps (split at the switch point);
-  // adds ∫ <W, P> of each step to *cost when given.
-  [[nodiscard]] Eigen::MatrixXd propagate(double from, const Eigen::MatrixXd& covariance,
-                                          double to, double* cost) {
-    if (to == from) return covariance;
+  // P at `to` from P at `from` (`out` may be `covariance`), in the hindsight filter's steps
+  // (split at the switch point); adds ∫ <W, P> of each step to *cost when given.
+  void propagate(double from, const Eigen::MatrixXd& covariance, double to, double* cost,
+                 Eigen::MatrixXd& out) {
+    if (to == from) {
+      if (&out != &covariance) out = covariance;
+      return;
+    }
     work_.reset(from, zero_mean_, covariance);
     if (from < switch_time_s_ && switch_time_s_ < to) {
       advanceTo(switch_time_s_);
@@ -145,7 +160,7 @@ class RealtimeCost {
     }
     advanceTo(to);
     if (cost != nullptr) *cost += work_.runningCost();
-    return work_.covariance();
+    out = work_.covariance();
   }
 
   // work_.propagateTo(t). Its steps are cached by length: a measurement's set and the set
@@ -153,10 +168,11 @@ class RealtimeCost {
   // over intervals it went over just before, and gaps of whole ticks repeat.
   void advanceTo(double t) { work_.propagateTo(t); }
 
-  [[nodiscard]] Eigen::MatrixXd update(double t, const Eigen::MatrixXd& covariance, int sensor) {
+  // `covariance` updated with a measurement of `sensor` at t, into `out` (may be `covariance`).
+  void update(double t, const Eigen::MatrixXd& covariance, int sensor, Eigen::MatrixXd& out) {
     work_.reset(t, zero_mean_, covariance);
     work_.updateCovariance(sensor);
-    return work_.covariance();
+    out = work_.covariance();
   }
 
   CdKalmanFilter work_;
@@ -165,6 +181,8 @@ class RealtimeCost {
   Eigen::VectorXd zero_mean_;
   Eigen::MatrixXd initial_;  // P0
   std::deque<Checkpoint> checkpoints_;  // the set so far, in timestamp order
+  std::vector<Eigen::MatrixXd> spare_;  // the matrices of checkpoints dropped, for new ones
+  Eigen::MatrixXd refused_covariance_;  // refuseFrom's running covariance
   std::size_t refused_ = 0;             // measurements fused again by refuseFrom
 };
 

@@ -234,7 +234,7 @@ void SensorAgentCore::transmit(Episode& e, const TimedArrival& a, SensorAgentAct
     return;
   }
   const EmulatedPlant& plant = inputs_.plant();
-  const Eigen::VectorXd x = plant.stateAt(e.number, a.tick, e.plant_path);
+  const Eigen::VectorXd& x = plant.stateAt(e.number, a.tick, e.plant_path);
   HeldMeasurement m{a.sensor, seq, a.time_s, a.version, plant.measure(x, a.sensor, e.number, seq),
                     fate.delay_s};
   const int copies = fate.duplicated ? 2 : 1;

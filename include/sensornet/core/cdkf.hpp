@@ -71,7 +71,8 @@ class CdKalmanFilter {
   [[nodiscard]] int sensorCount() const { return static_cast<int>(sensors_.size()); }
 
  private:
-  // Joseph-form covariance update for sensor j; with update_mean, also m += K innovation_.
+  // Joseph-form covariance update for sensor j; with update_mean, also m += K (z - H m) of the
+  // innovation update() put in its work space.
   void applyUpdate(int sensor, bool update_mean);
   [[nodiscard]] const SensorModel& sensorModel(int sensor) const;
   void symmetrizeCovariance();
@@ -89,13 +90,18 @@ class CdKalmanFilter {
 
   // Work space reused across calls so that the per-arrival path does not allocate.
   TransitionCache steps_;
-  Eigen::MatrixXd PHt_;             // P H', later K R
-  Eigen::MatrixXd innovation_cov_;  // H P H' + R
-  Eigen::LLT<Eigen::MatrixXd> innovation_llt_;
-  Eigen::MatrixXd gain_t_;      // K' (p x n)
+  // An update's matrices for p measured values (sensors of different row counts each keep
+  // theirs, instead of resizing one set at every change of sensor).
+  struct UpdateWork {
+    Eigen::MatrixXd PHt;             // P H', later K R
+    Eigen::MatrixXd innovation_cov;  // H P H' + R
+    Eigen::LLT<Eigen::MatrixXd> innovation_llt;
+    Eigen::MatrixXd gain_t;      // K' (p x n)
+    Eigen::VectorXd innovation;  // z - H m
+  };
+  std::vector<UpdateWork> update_work_;  // by p
   Eigen::MatrixXd IKH_;         // I - K H
   Eigen::MatrixXd work_;        // n x n products
-  Eigen::VectorXd innovation_;  // z - H m
   Eigen::VectorXd mean_work_;
 };
 

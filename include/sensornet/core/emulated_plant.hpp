@@ -70,14 +70,19 @@ class EmulatedPlant {
     };
     const EmulatedPlant* plant_ = nullptr;
     std::uint32_t episode_ = 0;
-    std::vector<Block> blocks_;  // blocks_[d]: the block of depth d the last tick fell in
+    // blocks_[d], d < depth_: the block of depth d the last tick fell in; those beyond are kept
+    // with their vectors, so that a descent allocates nothing.
+    std::vector<Block> blocks_;
+    std::size_t depth_ = 0;
+    Eigen::VectorXd xi_, from_left_, from_right_, noise_;  // one level's terms
   };
 
   // x at `tick` (0 <= tick <= tickCount()) of `episode`.
   [[nodiscard]] Eigen::VectorXd stateAt(std::uint32_t episode, std::int64_t tick) const;
-  // The same value, from where `path` parts from the last descent it went through.
-  [[nodiscard]] Eigen::VectorXd stateAt(std::uint32_t episode, std::int64_t tick,
-                                        Path& path) const;
+  // The same value, from where `path` parts from the last descent it went through; the
+  // reference is into `path`, valid until its next use.
+  [[nodiscard]] const Eigen::VectorXd& stateAt(std::uint32_t episode, std::int64_t tick,
+                                               Path& path) const;
 
   // z = H_j x + v_j with v_j ~ N(0, R_j) keyed by (seed, episode, sensor, seq).
   [[nodiscard]] Eigen::VectorXd measure(const Eigen::VectorXd& x, int sensor,

@@ -111,8 +111,11 @@ TEST_F(Turnaround, LiveExclusionBetweenBackToBackEpisodesLandsAtAnEpisodeStart) 
   RunningProgram launcher(launchArgs(kEpisodes, "1000"), 120s);
   ASSERT_TRUE(waitUntil([&] { return readJsonLines(dir_ / "report.jsonl").size() >= 100; }, 60s))
       << "the run never reached 100 episodes";
-  const ProcessResult replan =
-      runProcess({kLauncher, "replan", "--run-id", run_id_, "--exclude", "0"}, 30s);
+  // The coordinator plans the exclusion before it answers: seconds at -O0 under ASan, so the
+  // wait for its answer follows the build's time factor.
+  const ProcessResult replan = runProcess({kLauncher, "replan", "--run-id", run_id_, "--exclude",
+                                           "0", "--timeout", scaledSeconds(30)},
+                                          40s);
   EXPECT_EQ(replan.exit_code, 0) << replan.out << replan.err;
   const ProcessResult& r = launcher.result();
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
