@@ -573,6 +573,7 @@ int main(int argc, char** argv) {
   }
   if (reports > 0) (void)dds_wait_for_acks(reports, DDS_SECS(2));
   dds_delete(participant);
+  run_book_free(&s.book);
   for (int o = 0; o < MAX_OPEN; ++o) { /* what the run ended with still unreported, and why */
     if (!s.open[o].open) continue;
     fprintf(stderr, "external_fusion_center: episode %u not reported:", s.open[o].number);

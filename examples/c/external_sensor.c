@@ -291,6 +291,7 @@ int main(int argc, char** argv) {
   dds_sleepfor(DDS_MSECS(200));
   (void)dds_wait_for_acks(tallies, DDS_SECS(2));
   dds_delete(participant);
+  run_book_free(&s.book);
   printf("external_sensor: sensor %u sent %llu measurements\n", s.sensor,
          (unsigned long long)s.sent_total);
   return 0;

@@ -32,6 +32,14 @@ int run_book_add_version(struct run_book* book, uint32_t number, uint32_t effect
   return 1;
 }
 
+void run_book_free(struct run_book* book) {
+  for (int i = 0; i < book->version_count; ++i) {
+    free(book->versions[i].rates);
+    book->versions[i].rates = NULL;
+  }
+  book->version_count = 0;
+}
+
 const struct run_version* run_book_in_force(const struct run_book* book, uint32_t episode,
                                             double t) {
   const struct run_version* best = NULL;

@@ -40,6 +40,9 @@ struct run_book {
 void run_book_set_scenario(struct run_book* book, double horizon_s, uint32_t intervals,
                            uint32_t sensors, uint32_t state_dim, uint64_t seed, const char* yaml,
                            const char* arrivals);
+/* Frees what the versions hold (their rates); the book is empty afterwards. */
+void run_book_free(struct run_book* book);
+
 /* Adds a version (from a Schedule sample); refused (0) when the book is full or the rates are
  * not intervals x sensors. */
 int run_book_add_version(struct run_book* book, uint32_t number, uint32_t effective_episode,

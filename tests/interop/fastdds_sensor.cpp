@@ -336,6 +336,7 @@ int run(const Options& o) {
   (void)statuses->wait_for_acknowledgments(seconds(2.0));
   participant->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(participant);
+  run_book_free(&book);
   std::printf("fastdds_sensor: sensor %u sent %llu measurements\n", o.sensor,
               static_cast<unsigned long long>(sent_total));
   return 0;
