@@ -100,8 +100,12 @@ TEST_F(WatchStatus, WatchersEndWithTheRunAndALateOneNumbersEpisodesAsTheLauncher
   // Time scale 3: the late watcher joins with about four seconds left, time for the sensor
   // agents (discovery leaves, announcing themselves once a second) to find it.
   constexpr int kEpisodes = 6;
+  // The early watcher first: it waits for the run (--wait), so it has joined before episode 0
+  // starts (started beside the launch, under load it could join after that start: seen in the
+  // fresh-clone suite, 1 run in 3).
+  BackgroundProcess early({kLauncher, "watch", "--run-id", run_id_, "--wait", "60"},
+                          (dir_ / "early.log").string());
   BackgroundProcess launch(launchArgs(kEpisodes, "3"), (dir_ / "launch.log").string());
-  BackgroundProcess early({kLauncher, "watch", "--run-id", run_id_}, (dir_ / "early.log").string());
   ASSERT_TRUE(waitUntil([&] { return readJsonLines(dir_ / "report.jsonl").size() >= 2; }, 60s))
       << launch.log();
   BackgroundProcess late({kLauncher, "watch", "--plain", "--run-id", run_id_},
