@@ -27,9 +27,15 @@ MatrixXd semidefiniteRoot(const MatrixXd& X) {
   return solver.eigenvectors() * roots.asDiagonal();
 }
 
-VectorXd normals(Rng& rng, Eigen::Index count) {
-  VectorXd xi(count);
+// xi (resized to count) filled with standard normal deviates of rng, in order.
+void fillNormals(Rng& rng, Eigen::Index count, VectorXd& xi) {
+  xi.resize(count);
   for (Eigen::Index i = 0; i < count; ++i) xi(i) = rng.normal();
+}
+
+VectorXd normals(Rng& rng, Eigen::Index count) {
+  VectorXd xi;
+  fillNormals(rng, count, xi);
   return xi;
 }
 
@@ -121,8 +127,7 @@ const Eigen::VectorXd& EmulatedPlant::stateAt(std::uint32_t episode, std::int64_
     Rng rng = Rng::keyed(seed_, kPlantTruthStream, episode, inner_depth, block);
     // from_left x(a) + from_right x(b) + noise xi, each product evaluated on its own and then
     // summed left to right, as Eigen evaluates the one expression of these three products.
-    path.xi_.resize(m0_.size());
-    for (Eigen::Index i = 0; i < path.xi_.size(); ++i) path.xi_(i) = rng.normal();
+    fillNormals(rng, m0_.size(), path.xi_);
     path.from_left_.noalias() = level.from_left * outer.left;
     path.from_right_.noalias() = level.from_right * outer.right;
     path.noise_.noalias() = level.noise * path.xi_;

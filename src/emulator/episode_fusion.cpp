@@ -87,7 +87,7 @@ class RealtimeCost {
       } else {
         propagate(now, current, arrival, &cost, current);
         now = arrival;
-        refuseFrom(checkpoints_.insert(after, {key, spareCopyOf(current)}), now, current);
+        refuseFrom(checkpoints_.insert(after, {key, spareMatrix()}), now, current);
         if (refused_ > max_refused) return std::numeric_limits<double>::quiet_NaN();
       }
     }
@@ -112,12 +112,18 @@ class RealtimeCost {
     return earliest;
   }
 
-  // A copy of `covariance` in a matrix of a checkpoint dropped before (no allocation once the
-  // pass holds as many as it ever keeps).
-  [[nodiscard]] Eigen::MatrixXd spareCopyOf(const Eigen::MatrixXd& covariance) {
-    if (spare_.empty()) return covariance;
-    Eigen::MatrixXd copy = std::move(spare_.back());
+  // A matrix of a checkpoint dropped before, or a new one: no allocation once the pass holds as
+  // many as it ever keeps. Its contents are whatever they were.
+  [[nodiscard]] Eigen::MatrixXd spareMatrix() {
+    if (spare_.empty()) return Eigen::MatrixXd(initial_.rows(), initial_.cols());
+    Eigen::MatrixXd spare = std::move(spare_.back());
     spare_.pop_back();
+    return spare;
+  }
+
+  // A copy of `covariance` in a spare matrix.
+  [[nodiscard]] Eigen::MatrixXd spareCopyOf(const Eigen::MatrixXd& covariance) {
+    Eigen::MatrixXd copy = spareMatrix();
     copy = covariance;
     return copy;
   }
