@@ -90,6 +90,13 @@ const std::string& hubConfigXml() {
   return xml;
 }
 
+const std::string& writeBatchConfigXml() {
+  static const std::string xml =
+      R"(<CycloneDDS><Domain Id="any"><Internal><WriteBatch>true</WriteBatch></Internal>)"
+      R"(</Domain></CycloneDDS>)";
+  return xml;
+}
+
 const std::string& loopbackConfigXml() {
   static const std::string xml(detail::kLoopbackConfigXml);
   return xml;
@@ -99,10 +106,9 @@ Domain::Domain(DomainConfig config, const CApi& api)
     : Entity(api,
              [&] {
                validateDomainConfig(config);
-               const std::string xml =
-                   config.security_xml.empty()
-                       ? config.cyclone_config
-                       : config.cyclone_config + "," + config.security_xml;
+               std::string xml = config.cyclone_config;
+               if (config.write_batching) xml += "," + writeBatchConfigXml();
+               if (!config.security_xml.empty()) xml += "," + config.security_xml;
                return check(api.create_domain(config.domain_id, xml.c_str()),
                             "dds_create_domain");
              }()),

@@ -22,7 +22,8 @@ dds_entity_t createParticipant(const Domain& domain, const Qos& qos) {
 Participant::Participant(const Domain& domain, const Qos& qos)
     : Entity(domain.api(), createParticipant(domain, qos)),
       domain_id_(domain.config().domain_id),
-      partition_(domain.config().partition) {}
+      partition_(domain.config().partition),
+      write_batching_(domain.config().write_batching) {}
 
 Qos Participant::endpointQos(const Qos& qos) const {
   Qos joined(qos);

@@ -32,22 +32,34 @@ WriterCore::WriterCore(const Participant& participant, dds_entity_t topic, const
              check(participant.api().create_writer(participant.handle(), topic,
                                                    participant.endpointQos(qos).get(), nullptr),
                    "dds_create_writer")),
-      participant_(participant.handle()) {}
+      participant_(participant.handle()),
+      batching_(participant.writeBatching()) {}
+
+WriteResult WriterCore::sentUnlessInBurst(WriteResult result) {
+  if (open_bursts_ == 0) flush();
+  return result;
+}
+
+void WriterCore::flush() {
+  if (batching_) api().write_flush(handle());
+}
 
 WriteResult WriterCore::writeUntyped(const void* sample) {
-  return interpret(api().write(handle(), sample), "dds_write");
+  return sentUnlessInBurst(interpret(api().write(handle(), sample), "dds_write"));
 }
 
 WriteResult WriterCore::writeUntyped(const void* sample, std::int64_t source_time_ns) {
-  return interpret(api().write_ts(handle(), sample, source_time_ns), "dds_write_ts");
+  return sentUnlessInBurst(
+      interpret(api().write_ts(handle(), sample, source_time_ns), "dds_write_ts"));
 }
 
 WriteResult WriterCore::disposeUntyped(const void* key_sample) {
-  return interpret(api().dispose(handle(), key_sample), "dds_dispose");
+  return sentUnlessInBurst(interpret(api().dispose(handle(), key_sample), "dds_dispose"));
 }
 
 WriteResult WriterCore::unregisterUntyped(const void* key_sample) {
-  return interpret(api().unregister_instance(handle(), key_sample), "dds_unregister_instance");
+  return sentUnlessInBurst(
+      interpret(api().unregister_instance(handle(), key_sample), "dds_unregister_instance"));
 }
 
 WriteResult WriterCore::unregisterWrittenUntyped(const void* key_sample) {
@@ -76,7 +88,8 @@ bool WriterCore::waitForReaders(std::uint32_t count, std::chrono::nanoseconds ti
       [&] { return matchedReaders() >= count; }, timeout);
 }
 
-bool WriterCore::waitForAcks(std::chrono::nanoseconds timeout) const {
+bool WriterCore::waitForAcks(std::chrono::nanoseconds timeout) {
+  flush();
   const dds_return_t result = api().wait_for_acks(handle(), timeout.count());
   if (result == DDS_RETCODE_TIMEOUT) return false;
   check(result, "dds_wait_for_acks");

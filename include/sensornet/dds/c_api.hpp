@@ -46,6 +46,7 @@ struct CApi {
   // Writing.
   dds_return_t (*write)(dds_entity_t, const void*) = ::dds_write;
   dds_return_t (*write_ts)(dds_entity_t, const void*, dds_time_t) = ::dds_write_ts;
+  void (*write_flush)(dds_entity_t) = ::dds_write_flush;
   dds_return_t (*dispose)(dds_entity_t, const void*) = ::dds_dispose;
   dds_return_t (*unregister_instance)(dds_entity_t, const void*) = ::dds_unregister_instance;
   dds_return_t (*wait_for_acks)(dds_entity_t, dds_duration_t) = ::dds_wait_for_acks;

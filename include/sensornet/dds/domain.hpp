@@ -56,6 +56,11 @@ struct DomainConfig {
   // refusal is one line naming the files, not a bare return code.
   std::string security_xml;
   std::string security_hint;
+  // Cyclone's write batching (Internal/WriteBatch) for this domain's writers. Each write still
+  // goes out at once, except inside a Writer's burst (writer.hpp), whose writes share packets
+  // and go out when the burst ends: fewer sendmsg calls for the writer and fewer datagrams for
+  // the readers when a process has several samples ready at once.
+  bool write_batching = false;
 
   // The shipped loopback configuration on `domain_id`, with `partition`, for `role`.
   [[nodiscard]] static DomainConfig loopback(dds_domainid_t domain_id, std::string partition,
@@ -85,6 +90,8 @@ void validateRunId(std::string_view run_id, const std::string& source);
 [[nodiscard]] const std::string& leafConfigXml();
 // What a hub adds: heartbeats once a second (see DiscoveryRole).
 [[nodiscard]] const std::string& hubConfigXml();
+// What DomainConfig::write_batching adds.
+[[nodiscard]] const std::string& writeBatchConfigXml();
 
 class Domain : public Entity {
  public:

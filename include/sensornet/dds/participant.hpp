@@ -23,6 +23,8 @@ class Participant : public Entity {
 
   [[nodiscard]] dds_domainid_t domainId() const noexcept { return domain_id_; }
   [[nodiscard]] const std::string& partition() const noexcept { return partition_; }
+  // DomainConfig::write_batching of its domain.
+  [[nodiscard]] bool writeBatching() const noexcept { return write_batching_; }
 
   // `qos` for a writer or reader of this participant: with the run's partition added unless
   // `qos` already names a partition.
@@ -31,6 +33,7 @@ class Participant : public Entity {
  private:
   dds_domainid_t domain_id_ = 0;
   std::string partition_;
+  bool write_batching_ = false;
 };
 
 }  // namespace sensornet::dds

@@ -11,6 +11,15 @@
 //     case WriteResult::Written: break;
 //     case WriteResult::TimedOut: ++timeouts; /* retry, or give up */ break;
 //   }
+//
+// On a domain with DomainConfig::write_batching, the writes of a burst share packets:
+//
+//   {
+//     const auto burst = writer.burst();
+//     for (const auto& s : ready) (void)writer.write(s);  // queued in the writer's packet
+//   }                                                     // sent here, in as few as fit
+//
+// Outside a burst, and on any other domain, a write is sent before write() returns.
 
 #include <dds/dds.h>
 
@@ -39,7 +48,27 @@ class WriterCore : public Entity {
   // Waits until at least `count` readers are matched; false on timeout.
   [[nodiscard]] bool waitForReaders(std::uint32_t count, std::chrono::nanoseconds timeout) const;
   // Waits until every matched reliable reader acknowledged everything written; false on timeout.
-  [[nodiscard]] bool waitForAcks(std::chrono::nanoseconds timeout) const;
+  // Sends what an open burst holds first.
+  [[nodiscard]] bool waitForAcks(std::chrono::nanoseconds timeout);
+
+  // Ends with the scope: until then writes on a batching domain wait in the writer's packet
+  // (a full packet, or a full history that blocks the write, sends them earlier). Bursts nest.
+  class [[nodiscard]] Burst {
+   public:
+    explicit Burst(WriterCore& writer) : writer_(&writer) { ++writer_->open_bursts_; }
+    ~Burst() {
+      if (--writer_->open_bursts_ == 0) writer_->flush();
+    }
+    Burst(const Burst&) = delete;
+    Burst& operator=(const Burst&) = delete;
+
+   private:
+    WriterCore* writer_;
+  };
+  [[nodiscard]] Burst burst() { return Burst(*this); }
+  // Sends what the writer's packet holds now (before the process dies, say). Nothing to do
+  // outside a batching domain.
+  void flush();
 
  protected:
   WriterCore(const Participant& participant, dds_entity_t topic, const Qos& qos);
@@ -50,7 +79,12 @@ class WriterCore : public Entity {
   WriteResult unregisterWrittenUntyped(const void* key_sample);
 
  private:
+  // Sends at once unless a burst is open (on a batching domain).
+  WriteResult sentUnlessInBurst(WriteResult result);
+
   dds_entity_t participant_ = 0;
+  bool batching_ = false;
+  int open_bursts_ = 0;
 };
 
 }  // namespace detail

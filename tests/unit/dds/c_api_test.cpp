@@ -20,6 +20,11 @@ namespace {
 
 using namespace std::chrono_literals;
 
+int& flushes() {
+  static int count = 0;
+  return count;
+}
+
 int& loansReturned() {
   static int count = 0;
   return count;
@@ -140,6 +145,62 @@ TEST(CApiSeam, LoanIsReturnedEvenWhenTheVisitorThrows) {
                 8, [](const sensornet_Measurement&, const SampleInfo&) {}, no_change),
             0u);
   EXPECT_EQ(loansReturned(), 1);
+}
+
+// What DomainConfig::write_batching promises, in the calls made: on a batching domain a write
+// outside a burst is flushed at once, the writes of a burst once when the outermost burst ends,
+// and waitForAcks flushes first; on any other domain nothing is ever flushed.
+TEST(CApiSeam, ABatchingDomainFlushesEachWriteOutsideABurstAndABurstOnceAtItsEnd) {
+  CApi api = realCApi();
+  api.write_flush = [](dds_entity_t writer) {
+    ++flushes();
+    ::dds_write_flush(writer);
+  };
+  DomainConfig config = testing::isolatedDomain();
+  config.write_batching = true;
+  Domain domain(config, api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  Writer<sensornet_Measurement> writer(participant, topic);
+  sensornet_Measurement sample{};
+  flushes() = 0;
+  ASSERT_EQ(writer.write(sample), WriteResult::Written);
+  EXPECT_EQ(flushes(), 1);
+  {
+    const auto burst = writer.burst();
+    for (int i = 0; i < 5; ++i) ASSERT_EQ(writer.write(sample), WriteResult::Written);
+    {
+      const auto inner = writer.burst();
+      ASSERT_EQ(writer.write(sample), WriteResult::Written);
+    }
+    EXPECT_EQ(flushes(), 1);
+  }
+  EXPECT_EQ(flushes(), 2);
+  {
+    const auto burst = writer.burst();
+    ASSERT_EQ(writer.write(sample), WriteResult::Written);
+    EXPECT_TRUE(writer.waitForAcks(1s));  // no reader: nothing to wait for
+    EXPECT_EQ(flushes(), 3);
+  }
+  EXPECT_EQ(flushes(), 4);
+}
+
+TEST(CApiSeam, ADomainWithoutBatchingNeverFlushes) {
+  CApi api = realCApi();
+  api.write_flush = [](dds_entity_t) { ++flushes(); };
+  Domain domain(testing::isolatedDomain(), api);
+  Participant participant(domain);
+  Topic<sensornet_Measurement> topic(participant);
+  Writer<sensornet_Measurement> writer(participant, topic);
+  sensornet_Measurement sample{};
+  flushes() = 0;
+  {
+    const auto burst = writer.burst();
+    ASSERT_EQ(writer.write(sample), WriteResult::Written);
+  }
+  ASSERT_EQ(writer.write(sample), WriteResult::Written);
+  writer.flush();
+  EXPECT_EQ(flushes(), 0);
 }
 
 }  // namespace
