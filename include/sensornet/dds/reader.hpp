@@ -20,6 +20,8 @@
 
 #include <dds/dds.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <utility>
@@ -167,12 +169,31 @@ class Reader : public detail::ReaderCore {
   // Removes up to `max_samples` samples and calls on_sample(const T&, const SampleInfo&) for each
   // valid one and on_change(const T& key, const SampleInfo&) for each instance change, on loaned
   // memory that is valid only during the call. Returns how many it visited.
+  // Cyclone 0.10 lends a buffer kept on the reader and fills the caller's array with a pointer
+  // for each of that buffer's samples: as many as the largest max_samples any earlier call
+  // asked for, not this call's. The array is sized for that (a smaller one overflows). Up to
+  // kTakeOnStack samples it lives on the stack: a listener calls this for nearly every sample.
   template <class OnSample, class OnChange>
   std::size_t takeEach(std::size_t max_samples, OnSample&& on_sample, OnChange&& on_change) {
-    std::vector<void*> samples(max_samples, nullptr);  // null first entry: Cyclone lends memory
+    loan_slots_ = std::max(loan_slots_, max_samples);
+    if (loan_slots_ <= kTakeOnStack) {
+      std::array<void*, kTakeOnStack> samples{};  // null first entry: Cyclone lends memory
+      std::array<dds_sample_info_t, kTakeOnStack> infos;
+      return visitTaken(samples.data(), infos.data(), max_samples, on_sample, on_change);
+    }
+    std::vector<void*> samples(loan_slots_, nullptr);
     std::vector<dds_sample_info_t> infos(max_samples);
-    const std::int32_t count = fetch(Access::Take, samples.data(), infos.data(), max_samples);
-    detail::LoanGuard loan(api(), handle(), samples.data(), count);
+    return visitTaken(samples.data(), infos.data(), max_samples, on_sample, on_change);
+  }
+
+ private:
+  static constexpr std::size_t kTakeOnStack = 32;
+
+  template <class OnSample, class OnChange>
+  std::size_t visitTaken(void** samples, dds_sample_info_t* infos, std::size_t max_samples,
+                         OnSample& on_sample, OnChange& on_change) {
+    const std::int32_t count = fetch(Access::Take, samples, infos, max_samples);
+    detail::LoanGuard loan(api(), handle(), samples, count);
     for (std::int32_t i = 0; i < count; ++i) {
       const T& sample = *static_cast<const T*>(samples[i]);
       if (infos[i].valid_data) {
@@ -183,8 +204,9 @@ class Reader : public detail::ReaderCore {
     }
     return static_cast<std::size_t>(count);
   }
+  std::size_t loan_slots_ = 0;  // the largest max_samples of a takeEach so far
 
- private:
+
   Batch<T> copyOut(Access access, std::size_t max_samples) {
     // Cyclone fills zeroed samples in place, allocating their strings and sequences; every
     // filled sample is adopted by an OwnedSample before anything else can throw.

@@ -192,6 +192,33 @@ TEST_F(ReaderWriter, ReadLeavesSamplesAndTakeRemovesThem) {
   EXPECT_TRUE(reader.take(16).empty());
 }
 
+// takeEach with few samples a call (its arrays on the stack) and with many (on the heap): each
+// call visits what it took, in the order written, and leaves the rest.
+TEST_F(ReaderWriter, TakeEachVisitsUpToItsMaximumInOrderWhateverTheMaximum) {
+  Topic<sensornet_Measurement> pub_topic(publisher_side_);
+  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
+  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
+  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
+  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  constexpr std::uint64_t kWritten = 100;
+  for (std::uint64_t seq = 0; seq < kWritten; ++seq)
+    ASSERT_EQ(writer.write(measurement(4, seq)), WriteResult::Written);
+
+  std::vector<std::uint64_t> seqs;
+  const auto takeUpTo = [&](std::size_t max) {
+    return reader.takeEach(
+        max, [&](const sensornet_Measurement& m, const SampleInfo&) { seqs.push_back(m.seq); },
+        [](const sensornet_Measurement&, const SampleInfo&) {});
+  };
+  EXPECT_EQ(takeUpTo(40), 40u);  // more than fit on the stack
+  EXPECT_EQ(takeUpTo(1), 1u);
+  EXPECT_EQ(takeUpTo(32), 32u);  // as many as fit
+  EXPECT_EQ(takeUpTo(64), kWritten - 73);
+  EXPECT_EQ(takeUpTo(8), 0u);
+  ASSERT_EQ(seqs.size(), kWritten);
+  for (std::uint64_t i = 0; i < kWritten; ++i) EXPECT_EQ(seqs[i], i);
+}
+
 TEST_F(ReaderWriter, ReliableKeepAllWriterTimesOutWhenAReaderStopsTaking) {
   // A reader that holds at most 5 samples and never takes: once it is full, the reliable writer
   // cannot deliver, blocks for max_blocking_time and reports a timeout.
