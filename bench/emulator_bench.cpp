@@ -95,6 +95,7 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_options.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/run_recorder.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
@@ -188,7 +189,11 @@ double startupSeconds(int process_count, int sensors, int repeat) {
   sensornet::dds::Domain domain(options.domainConfig());
   sensornet::dds::Participant participant(domain);
   sensornet::dds::Topic<sensornet_SensorStatus> topic(participant);
-  sensornet::dds::Reader<sensornet_SensorStatus> statuses(participant, topic);
+  // Sensors write in their blocks' partitions (emulator/run_partitions.hpp).
+  sensornet::dds::Reader<sensornet_SensorStatus> statuses(
+      participant, topic,
+      sensornet::dds::readerQosMatching<sensornet_SensorStatus>(
+          sensornet::emulator::sensorPartitionPattern(participant.partition())));
 
   processes.start("fusion_center", {kFusionCenter, "serve", "--run-id", run});
   BackgroundProcess& coordinator = processes.start(
