@@ -36,7 +36,11 @@ WriterCore::WriterCore(const Participant& participant, dds_entity_t topic, const
       batching_(participant.writeBatching()) {}
 
 WriteResult WriterCore::sentUnlessInBurst(WriteResult result) {
-  if (open_bursts_ == 0) flush();
+  if (open_bursts_ == 0) {
+    flush();
+  } else {
+    held_ = true;
+  }
   return result;
 }
 

@@ -204,8 +204,6 @@ class Reader : public detail::ReaderCore {
     }
     return static_cast<std::size_t>(count);
   }
-  std::size_t loan_slots_ = 0;  // the largest max_samples of a takeEach so far
-
 
   Batch<T> copyOut(Access access, std::size_t max_samples) {
     // Cyclone fills zeroed samples in place, allocating their strings and sequences; every
@@ -229,6 +227,8 @@ class Reader : public detail::ReaderCore {
     }
     return batch;
   }
+
+  std::size_t loan_slots_ = 0;  // the largest max_samples of a takeEach so far
 };
 
 }  // namespace sensornet::dds

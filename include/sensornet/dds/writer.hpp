@@ -25,6 +25,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <utility>
 
 #include "sensornet/dds/entity.hpp"
 #include "sensornet/dds/participant.hpp"
@@ -52,12 +53,13 @@ class WriterCore : public Entity {
   [[nodiscard]] bool waitForAcks(std::chrono::nanoseconds timeout);
 
   // Ends with the scope: until then writes on a batching domain wait in the writer's packet
-  // (a full packet, or a full history that blocks the write, sends them earlier). Bursts nest.
+  // (a full packet, or a full history that blocks the write, sends them earlier). Bursts nest;
+  // one without writes (an agent's idle wake) costs no call into Cyclone at its end.
   class [[nodiscard]] Burst {
    public:
     explicit Burst(WriterCore& writer) : writer_(&writer) { ++writer_->open_bursts_; }
     ~Burst() {
-      if (--writer_->open_bursts_ == 0) writer_->flush();
+      if (--writer_->open_bursts_ == 0 && std::exchange(writer_->held_, false)) writer_->flush();
     }
     Burst(const Burst&) = delete;
     Burst& operator=(const Burst&) = delete;
@@ -85,6 +87,7 @@ class WriterCore : public Entity {
   dds_entity_t participant_ = 0;
   bool batching_ = false;
   int open_bursts_ = 0;
+  bool held_ = false;  // written to since the outermost burst opened: its end sends
 };
 
 }  // namespace detail
