@@ -10,10 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <iterator>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -30,6 +28,7 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/arrival_inbox.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
 #include "sensornet/emulator/fusion_center_events.hpp"
 #include "sensornet/emulator/fusion_metrics.hpp"
@@ -90,35 +89,6 @@ std::string utcNow() {
 }
 
 using Arrival = emulator::MeasurementArrival;
-
-// Arrivals handed from Cyclone's receive thread (the listener) to the main loop. Buffers are
-// swapped, not allocated: after the first few calls neither side allocates for the hand-off.
-class Inbox {
- public:
-  // Moves `arrivals` in and leaves it empty (its capacity kept for the next call). Returns true
-  // if the inbox was empty before: the main loop may be asleep and needs a wake.
-  bool push(std::vector<Arrival>& arrivals) {
-    std::lock_guard lock(mutex_);
-    const bool was_empty = arrivals_.empty();
-    if (was_empty) {
-      std::swap(arrivals_, arrivals);
-    } else {
-      std::move(arrivals.begin(), arrivals.end(), std::back_inserter(arrivals_));
-    }
-    arrivals.clear();
-    return was_empty;
-  }
-  // Everything pushed so far, swapped into `into` (whose old contents are dropped).
-  void drainInto(std::vector<Arrival>& into) {
-    into.clear();
-    std::lock_guard lock(mutex_);
-    std::swap(arrivals_, into);
-  }
-
- private:
-  std::mutex mutex_;
-  std::vector<Arrival> arrivals_;
-};
 
 // The participant (process) of a writer the reader has matched; nullopt when it has not.
 std::optional<dds_guid_t> participantOf(const dds::detail::ReaderCore& reader,
@@ -299,7 +269,7 @@ class FusionCenter {
         metrics_->publish(emulator::fusionCenterMetrics(core_, inputs_.book()));
         metrics_due = std::chrono::steady_clock::now() + kMetricsPeriod;
       }
-      (void)waitset_.wait(10ms);
+      if (inbox_.mayWait()) (void)waitset_.wait(10ms);
       const std::int64_t now = wallNowNs();
       inbox_.drainInto(drained_);
       for (Arrival& arrival : drained_) core_.onMeasurement(std::move(arrival), now);
@@ -355,7 +325,8 @@ class FusionCenter {
       const std::size_t count = measurement_reader_.takeEach(
           kBatch,
           [&](const sensornet_Measurement& m, const dds::SampleInfo& info) {
-            arrivals.push_back(emulator::arrivalOfSample(m, received_ns, info.publication));
+            arrivals.push_back(emulator::arrivalOfSample(m, received_ns, info.publication,
+                                                         options_.run.run_id));
           },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
             if (info.instance_state == dds::InstanceState::NoWriters) {
@@ -504,7 +475,7 @@ class FusionCenter {
   emulator::FusionCenterCore core_;
   std::optional<emulator::EpisodeLog> episode_log_;
   std::optional<emulator::EpisodeLog> fault_log_;  // faultLogPath: what a restart carries over
-  Inbox inbox_;
+  emulator::ArrivalInbox<Arrival> inbox_;
   std::vector<Arrival> taken_;    // the listener's batch (receive thread only)
   std::vector<Arrival> drained_;  // the main loop's (main thread only)
   std::deque<std::uint32_t> reports_registered_;  // episodes whose Report instance is registered

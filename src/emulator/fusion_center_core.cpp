@@ -296,8 +296,8 @@ void FusionCenterCore::rejectOutside(RejectionReason reason, const std::string& 
 
 void FusionCenterCore::onMeasurement(MeasurementArrival arrival, std::int64_t now) {
   ++waiting_;
-  if (arrival.run_id != config_.run_id) {
-    rejectOutside(RejectionReason::OtherRun, "of another run '" + arrival.run_id + "'");
+  if (arrival.other_run) {
+    rejectOutside(RejectionReason::OtherRun, "of another run '" + *arrival.other_run + "'");
     return;
   }
   const std::uint32_t episode = arrival.episode;

@@ -11,7 +11,7 @@ namespace sensornet::emulator {
 
 // Touches nothing but the sample: safe in Cyclone's receive thread.
 MeasurementArrival arrivalOfSample(const sensornet_Measurement& m, std::int64_t received_ns,
-                                   WriterId writer) {
+                                   WriterId writer, std::string_view own_run) {
   MeasurementArrival a;
   FusedMeasurement& fused = a.measurement;
   fused.sensor = static_cast<int>(m.sensor_id);
@@ -24,7 +24,9 @@ MeasurementArrival arrivalOfSample(const sensornet_Measurement& m, std::int64_t 
   fused.receive_wall_ns = received_ns;
   fused.network_delay_s = m.network_delay_s;
   a.episode = m.episode;
-  a.run_id = std::string(dds::viewString(m.run_id));
+  if (const std::string_view run = dds::viewString(m.run_id); run != own_run) {
+    a.other_run = std::string(run);
+  }
   a.writer = writer;
   return a;
 }

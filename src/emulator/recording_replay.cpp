@@ -150,7 +150,8 @@ ReplayResult replayRecording(const McapReader& file, const std::string& source,
       inputs.onControl(sample.as<sensornet_EpisodeControl>(), update);
       follow(update, now);
     } else if (topic == "sensornet/Measurement") {
-      core.onMeasurement(arrivalOfSample(sample.as<sensornet_Measurement>(), now, writer), now);
+      core.onMeasurement(
+          arrivalOfSample(sample.as<sensornet_Measurement>(), now, writer, config.run_id), now);
       ++result.samples_fused;
     } else if (topic == "sensornet/EpisodeTally") {
       if (!core.hasScenario()) {

@@ -56,7 +56,6 @@ struct CApi {
   // Reading.
   dds_return_t (*take)(dds_entity_t, void**, dds_sample_info_t*, size_t, uint32_t) = ::dds_take;
   dds_return_t (*read)(dds_entity_t, void**, dds_sample_info_t*, size_t, uint32_t) = ::dds_read;
-  dds_return_t (*return_loan)(dds_entity_t, void**, int32_t) = ::dds_return_loan;
   dds_return_t (*get_subscription_matched_status)(
       dds_entity_t, dds_subscription_matched_status_t*) = ::dds_get_subscription_matched_status;
 };

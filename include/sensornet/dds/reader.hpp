@@ -3,8 +3,9 @@
 // - take(n) / read(n) copy up to n samples out into a Batch: `samples` holds the valid ones
 //   (each an OwnedSample that frees what Cyclone allocated for it), `changes` the instance
 //   state changes (an instance disposed, or left without writers: a sensor that died);
-// - takeEach(n, on_sample, on_change) calls a visitor on each loaned sample in place, and
-//   returns the loan when it leaves, on every path (a scope guard, never by hand).
+// - takeEach(n, on_sample, on_change) calls a visitor on each sample in place, in samples the
+//   reader keeps and Cyclone fills again on the next call (reusing their string and sequence
+//   buffers): nothing is allocated or freed per sample once they are big enough.
 //
 //   Reader<sensornet_Measurement> reader(participant, topic);
 //   Batch<sensornet_Measurement> batch = reader.take(256);
@@ -21,7 +22,6 @@
 #include <dds/dds.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cstdint>
 #include <utility>
@@ -75,6 +75,8 @@ class OwnedSample {
 
   [[nodiscard]] const T& operator*() const noexcept { return value_; }
   [[nodiscard]] const T* operator->() const noexcept { return &value_; }
+  // For Cyclone to deserialize into, reusing (or growing) the strings and sequences it holds.
+  [[nodiscard]] T* fill() noexcept { return &value_; }
 
  private:
   void release() noexcept {
@@ -106,24 +108,6 @@ struct Batch {
 
 namespace detail {
 
-// Returns a loan of samples to the reader when the scope ends.
-class LoanGuard {
- public:
-  LoanGuard(const CApi& api, dds_entity_t reader, void** samples, std::int32_t count) noexcept
-      : api_(api), reader_(reader), samples_(samples), count_(count) {}
-  LoanGuard(const LoanGuard&) = delete;
-  LoanGuard& operator=(const LoanGuard&) = delete;
-  ~LoanGuard() {
-    if (count_ > 0) (void)api_.return_loan(reader_, samples_, count_);
-  }
-
- private:
-  const CApi& api_;
-  dds_entity_t reader_;
-  void** samples_;
-  std::int32_t count_;
-};
-
 // The untyped half of Reader<T>.
 class ReaderCore : public Entity {
  public:
@@ -138,7 +122,7 @@ class ReaderCore : public Entity {
  protected:
   enum class Access { Take, Read };
   ReaderCore(const Participant& participant, dds_entity_t topic, const Qos& qos);
-  // dds_take or dds_read into `samples` (null first entry: loan); returns the count.
+  // dds_take or dds_read into `samples`; returns the count.
   std::int32_t fetch(Access access, void** samples, dds_sample_info_t* infos, std::size_t max);
 
  private:
@@ -167,44 +151,36 @@ class Reader : public detail::ReaderCore {
   }
 
   // Removes up to `max_samples` samples and calls on_sample(const T&, const SampleInfo&) for each
-  // valid one and on_change(const T& key, const SampleInfo&) for each instance change, on loaned
-  // memory that is valid only during the call. Returns how many it visited.
-  // Cyclone 0.10 lends a buffer kept on the reader and fills the caller's array with a pointer
-  // for each of that buffer's samples: as many as the largest max_samples any earlier call
-  // asked for, not this call's. The array is sized for that (a smaller one overflows). Up to
-  // kTakeOnStack samples it lives on the stack: a listener calls this for nearly every sample.
+  // valid one and on_change(const T& key, const SampleInfo&) for each instance change. The
+  // samples live in the reader and are valid only during the call; one thread at a time.
+  // Returns how many it visited.
+  //
+  // Not Cyclone's loan: returning a loan frees each sample's string and sequence, and the next
+  // take allocates them again; in a listener that runs for nearly every sample that was about a
+  // tenth of the fusion center's receive thread (bench/README.md, "Issue 28, fourth step").
   template <class OnSample, class OnChange>
   std::size_t takeEach(std::size_t max_samples, OnSample&& on_sample, OnChange&& on_change) {
-    loan_slots_ = std::max(loan_slots_, max_samples);
-    if (loan_slots_ <= kTakeOnStack) {
-      std::array<void*, kTakeOnStack> samples{};  // null first entry: Cyclone lends memory
-      std::array<dds_sample_info_t, kTakeOnStack> infos;
-      return visitTaken(samples.data(), infos.data(), max_samples, on_sample, on_change);
+    while (kept_.size() < max_samples) {
+      kept_.emplace_back();  // zeroed: Cyclone allocates its strings and sequences on first use
+      infos_.emplace_back();
     }
-    std::vector<void*> samples(loan_slots_, nullptr);
-    std::vector<dds_sample_info_t> infos(max_samples);
-    return visitTaken(samples.data(), infos.data(), max_samples, on_sample, on_change);
-  }
-
- private:
-  static constexpr std::size_t kTakeOnStack = 32;
-
-  template <class OnSample, class OnChange>
-  std::size_t visitTaken(void** samples, dds_sample_info_t* infos, std::size_t max_samples,
-                         OnSample& on_sample, OnChange& on_change) {
-    const std::int32_t count = fetch(Access::Take, samples, infos, max_samples);
-    detail::LoanGuard loan(api(), handle(), samples, count);
+    std::vector<void*>& slots = slots_;
+    slots.resize(kept_.size());
+    for (std::size_t i = 0; i < kept_.size(); ++i) slots[i] = kept_[i].fill();
+    const std::int32_t count = fetch(Access::Take, slots.data(), infos_.data(), max_samples);
     for (std::int32_t i = 0; i < count; ++i) {
-      const T& sample = *static_cast<const T*>(samples[i]);
-      if (infos[i].valid_data) {
-        on_sample(sample, toSampleInfo(infos[i]));
+      const T& sample = *kept_[static_cast<std::size_t>(i)];
+      const SampleInfo info = toSampleInfo(infos_[static_cast<std::size_t>(i)]);
+      if (infos_[static_cast<std::size_t>(i)].valid_data) {
+        on_sample(sample, info);
       } else {
-        on_change(sample, toSampleInfo(infos[i]));
+        on_change(sample, info);
       }
     }
     return static_cast<std::size_t>(count);
   }
 
+ private:
   Batch<T> copyOut(Access access, std::size_t max_samples) {
     // Cyclone fills zeroed samples in place, allocating their strings and sequences; every
     // filled sample is adopted by an OwnedSample before anything else can throw.
@@ -228,7 +204,11 @@ class Reader : public detail::ReaderCore {
     return batch;
   }
 
-  std::size_t loan_slots_ = 0;  // the largest max_samples of a takeEach so far
+  // takeEach's samples (whose strings and sequences Cyclone reuses from call to call), their
+  // infos and the pointer array Cyclone fills them through.
+  std::vector<OwnedSample<T>> kept_;
+  std::vector<dds_sample_info_t> infos_;
+  std::vector<void*> slots_;
 };
 
 }  // namespace sensornet::dds

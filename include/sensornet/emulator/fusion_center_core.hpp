@@ -102,7 +102,9 @@ struct ScenarioAnnounced {
 struct MeasurementArrival {
   FusedMeasurement measurement;
   std::uint32_t episode = 0;
-  std::string run_id;
+  // The run the sample named, when that is not the fusion center's own run; nullopt for the
+  // fusion center's own (arrivalOfSample compares, so nearly every arrival copies no string).
+  std::optional<std::string> other_run;
   WriterId writer = 0;  // the DDS writer that sent it (publication handle)
 };
 

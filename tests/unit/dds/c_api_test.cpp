@@ -25,11 +25,6 @@ int& flushes() {
   return count;
 }
 
-int& loansReturned() {
-  static int count = 0;
-  return count;
-}
-
 TEST(CApiSeam, WriteThatTimesOutIsATimeoutResult) {
   CApi api = realCApi();
   api.write = [](dds_entity_t, const void*) -> dds_return_t { return DDS_RETCODE_TIMEOUT; };
@@ -108,43 +103,6 @@ TEST(CApiSeam, FailedTakeThrowsAndAFailedWaitForAcksIsFalse) {
   Writer<sensornet_Measurement> writer(participant, topic);
   EXPECT_THROW((void)reader.take(), DdsError);
   EXPECT_FALSE(writer.waitForAcks(10ms));
-}
-
-TEST(CApiSeam, LoanIsReturnedEvenWhenTheVisitorThrows) {
-  CApi api = realCApi();
-  api.return_loan = [](dds_entity_t reader, void** samples, int32_t count) -> dds_return_t {
-    ++loansReturned();
-    return dds_return_loan(reader, samples, count);
-  };
-  loansReturned() = 0;
-  Domain domain(testing::isolatedDomain(), api);
-  Participant participant(domain);
-  Topic<sensornet_Measurement> topic(participant);
-  Reader<sensornet_Measurement> reader(participant, topic);
-  Writer<sensornet_Measurement> writer(participant, topic);
-  ASSERT_TRUE(writer.waitForReaders(1, 5s));
-  const std::string run = "run";
-  for (std::uint32_t id = 0; id < 3; ++id) {
-    sensornet_Measurement m{};
-    m.sensor_id = id;
-    m.run_id = borrowString(run);
-    ASSERT_EQ(writer.write(m), WriteResult::Written);
-  }
-  const auto no_change = [](const sensornet_Measurement&, const SampleInfo&) {};
-  EXPECT_THROW(reader.takeEach(
-                   8,
-                   [](const sensornet_Measurement&, const SampleInfo&) {
-                     throw std::runtime_error("visitor failed");
-                   },
-                   no_change),
-               std::runtime_error);
-  EXPECT_EQ(loansReturned(), 1);
-
-  // An empty take lends nothing and returns nothing.
-  EXPECT_EQ(reader.takeEach(
-                8, [](const sensornet_Measurement&, const SampleInfo&) {}, no_change),
-            0u);
-  EXPECT_EQ(loansReturned(), 1);
 }
 
 // What DomainConfig::write_batching promises, in the calls made: on a batching domain a write

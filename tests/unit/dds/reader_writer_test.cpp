@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -192,8 +194,8 @@ TEST_F(ReaderWriter, ReadLeavesSamplesAndTakeRemovesThem) {
   EXPECT_TRUE(reader.take(16).empty());
 }
 
-// takeEach with few samples a call (its arrays on the stack) and with many (on the heap): each
-// call visits what it took, in the order written, and leaves the rest.
+// takeEach with a maximum that grows and shrinks from call to call: each call visits what it
+// took, in the order written, and leaves the rest.
 TEST_F(ReaderWriter, TakeEachVisitsUpToItsMaximumInOrderWhateverTheMaximum) {
   Topic<sensornet_Measurement> pub_topic(publisher_side_);
   Topic<sensornet_Measurement> sub_topic(subscriber_side_);
@@ -217,6 +219,74 @@ TEST_F(ReaderWriter, TakeEachVisitsUpToItsMaximumInOrderWhateverTheMaximum) {
   EXPECT_EQ(takeUpTo(8), 0u);
   ASSERT_EQ(seqs.size(), kWritten);
   for (std::uint64_t i = 0; i < kWritten; ++i) EXPECT_EQ(seqs[i], i);
+}
+
+// takeEach refills the samples it keeps: a run id or a z longer, shorter or emptier than the one
+// the same slot held before comes out whole, never a stale tail or a stale length.
+TEST_F(ReaderWriter, TakeEachRefillsItsSamplesWhateverTheyHeldBefore) {
+  Topic<sensornet_Measurement> pub_topic(publisher_side_);
+  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
+  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
+  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
+  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  const std::vector<std::string> runs = {"short", "a-much-longer-run-identifier-than-before", "",
+                                         "mid-length-run", "x"};
+  const std::vector<std::vector<double>> zs = {{1.5}, {2.5, -3.0, 4.25, 8.0}, {}, {7.0, 9.0}, {}};
+  std::vector<std::string> seen_runs;
+  std::vector<std::vector<double>> seen_zs;
+  for (std::size_t round = 0; round < runs.size(); ++round) {
+    for (std::uint32_t sensor = 0; sensor < 2; ++sensor) {  // two slots filled a call
+      const std::size_t k = (round + sensor) % runs.size();
+      sensornet_Measurement m = measurement(sensor, round);
+      m.run_id = borrowString(runs[k]);
+      borrowSequence(m.z, std::span<const double>(zs[k]));
+      ASSERT_EQ(writer.write(m), WriteResult::Written);
+    }
+    ASSERT_EQ(reader.takeEach(
+                  4,
+                  [&](const sensornet_Measurement& m, const SampleInfo&) {
+                    seen_runs.emplace_back(viewString(m.run_id));
+                    const auto z = viewSequence(m.z);
+                    seen_zs.emplace_back(z.begin(), z.end());
+                  },
+                  [](const sensornet_Measurement&, const SampleInfo&) {}),
+              2u);
+  }
+  ASSERT_EQ(seen_runs.size(), 2 * runs.size());
+  for (std::size_t round = 0; round < runs.size(); ++round) {
+    for (std::size_t sensor = 0; sensor < 2; ++sensor) {
+      const std::size_t k = (round + sensor) % runs.size();
+      EXPECT_EQ(seen_runs[2 * round + sensor], runs[k]) << "round " << round;
+      EXPECT_EQ(seen_zs[2 * round + sensor], zs[k]) << "round " << round;
+    }
+  }
+}
+
+// A visitor that throws loses only the sample it was given: the next call visits the rest.
+TEST_F(ReaderWriter, TakeEachGoesOnAfterAVisitorThrows) {
+  Topic<sensornet_Measurement> pub_topic(publisher_side_);
+  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
+  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
+  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
+  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  for (std::uint64_t seq = 0; seq < 3; ++seq)
+    ASSERT_EQ(writer.write(measurement(1, seq)), WriteResult::Written);
+  const auto no_change = [](const sensornet_Measurement&, const SampleInfo&) {};
+  EXPECT_THROW(reader.takeEach(
+                   1,
+                   [](const sensornet_Measurement&, const SampleInfo&) {
+                     throw std::runtime_error("visitor failed");
+                   },
+                   no_change),
+               std::runtime_error);
+  std::vector<std::uint64_t> seqs;
+  EXPECT_EQ(reader.takeEach(
+                8, [&](const sensornet_Measurement& m, const SampleInfo&) { seqs.push_back(m.seq); },
+                no_change),
+            2u);
+  EXPECT_EQ(seqs, (std::vector<std::uint64_t>{1, 2}));
+  EXPECT_EQ(reader.takeEach(8, [&](const sensornet_Measurement&, const SampleInfo&) {}, no_change),
+            0u);
 }
 
 TEST_F(ReaderWriter, ReliableKeepAllWriterTimesOutWhenAReaderStopsTaking) {

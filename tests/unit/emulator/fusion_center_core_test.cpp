@@ -8,13 +8,16 @@
 #include <cstdio>
 #include <map>
 #include <set>
+#include <span>
 #include <string>
 #include <tuple>
 #include <vector>
 
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
+#include "sensornet/emulator/fusion_center_events.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "emulator_test_support.hpp"
 
@@ -108,7 +111,6 @@ class FusionCenterCoreTest : public ::testing::Test {
       m.measurement.publish_wall_ns = startOf(e) + static_cast<std::int64_t>(1e9 * a.time_s);
       m.measurement.receive_wall_ns = m.measurement.publish_wall_ns + kMs;
       m.episode = e;
-      m.run_id = kRun;
       m.writer = measurementWriter(a.sensor);
       all.push_back(m);
     }
@@ -467,6 +469,57 @@ TEST_F(FusionCenterCoreTest, ASensorFarBehindTheClockIsLagAndItsStallIsListed) {
   ASSERT_EQ(core_->stalls().size(), 1u);
   EXPECT_EQ(core_->stalls()[0].at("process"), "sensor 1");
   EXPECT_EQ(core_->stalls()[0].at("seconds"), 2.0);
+}
+
+// The decoder compares a sample's run with the fusion center's own: only another run's id is
+// copied, and one that merely shares a prefix, or is empty, is another run.
+TEST(ArrivalOfSample, NamesTheRunOnlyWhenItIsAnother) {
+  const std::vector<double> z = {0.25, -1.5};
+  const auto decode = [&](const std::string& run) {
+    sensornet_Measurement m{};
+    m.sensor_id = 3;
+    m.run_id = dds::borrowString(run);
+    m.episode = 2;
+    m.seq = 17;
+    m.emulated_time_s = 0.75;
+    dds::borrowSequence(m.z, std::span<const double>(z));
+    return arrivalOfSample(m, 1234, 99, kRun);
+  };
+  const MeasurementArrival own = decode(kRun);
+  EXPECT_FALSE(own.other_run.has_value());
+  EXPECT_EQ(own.measurement.sensor, 3);
+  EXPECT_EQ(own.measurement.seq, 17u);
+  EXPECT_EQ(own.measurement.time_s, 0.75);
+  EXPECT_EQ(own.measurement.receive_wall_ns, 1234);
+  ASSERT_EQ(own.measurement.z.size(), 2);
+  EXPECT_EQ(own.measurement.z(0), 0.25);
+  EXPECT_EQ(own.measurement.z(1), -1.5);
+  EXPECT_EQ(own.episode, 2u);
+  EXPECT_EQ(own.writer, 99u);
+  for (const std::string& other : {kRun + "0", kRun.substr(0, kRun.size() - 1), std::string()}) {
+    const MeasurementArrival a = decode(other);
+    ASSERT_TRUE(a.other_run.has_value()) << "'" << other << "'";
+    EXPECT_EQ(*a.other_run, other);
+  }
+}
+
+// A measurement of another run is counted as such and left out of the fusion.
+TEST_F(FusionCenterCoreTest, AMeasurementOfAnotherRunIsCountedAndLeftOut) {
+  begin(0);
+  const auto all = measurements(0);
+  deliver(all);
+  MeasurementArrival stray = all.front();
+  stray.other_run = "someone-else";
+  stray.measurement.z *= 1000.0;  // would move the cost if it were fused
+  core_->onMeasurement(stray, now_);
+  core_->onMeasurement(stray, now_);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 50 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
+  (void)finish(RunEnd{1, false, ""});
+  EXPECT_EQ(final_.at("summary").at("rejected_by_reason").at("other_run"), 2);
 }
 
 TEST_F(FusionCenterCoreTest, ASecondWriterOfASensorIsKeptOutWhileTheFirstLives) {
