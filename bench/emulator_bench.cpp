@@ -30,7 +30,9 @@
 //               (reliable, keep-all, 2 processes) before and after the sweep.
 //   fleet       (issue 28) the same measurement of many sensors in many processes: by
 //               default 1000 one-row sensors (n = 4) in 50 processes of 20, each at 100 Hz
-//               (100,000 measurements/s), one episode at time scale 1, 3 rounds.
+//               (100,000 measurements/s), one episode at time scale 1, 3 rounds. Then, as
+//               the yardstick, ddsperf of the same shape (as many publishers, each at the
+//               same rate, one subscriber) and how busy it keeps the machine.
 //
 //   security    (issue 12) the cost of DDS Security: per round, unsecured then secured (every
 //               process with --security DIR from one `sensornet pki init`), the latency run
@@ -940,6 +942,16 @@ void fleet(int rounds, int process_count, int sensors, double rate_hz) {
               "the rounds)\n",
               kept_up, rounds, medians.empty() ? 0.0 : median(medians),
               p99s.empty() ? 0.0 : median(p99s));
+  // The yardstick of the same shape: the transport alone, without sampling or fusion.
+  const double each_hz = sensors * rate_hz / process_count;
+  const auto d = sensornet::bench::ddsperfFleet(
+      fs::temp_directory_path() / runId("ddsperf-fleet", 0), 200 + static_cast<int>(::getpid() % 30),
+      process_count, each_hz, 64, 9);
+  std::printf("fleet: ddsperf alone, %d publishers at %.0f samples/s each (64 bytes, reliable "
+              "keep-all) and one subscriber: received %.0f/s, lost %ld; the machine %.0f%% busy "
+              "(%d cores), %.1f us of CPU per sample\n",
+              process_count, each_hz, d.samples_per_s, d.lost, 100.0 * d.busy_share, d.cores,
+              d.samples_per_s > 0.0 ? 1e6 * d.busy_share * d.cores / d.samples_per_s : 0.0);
 }
 
 // ---- security (issue 12, part 3): the cost of DDS Security, secured against unsecured ----

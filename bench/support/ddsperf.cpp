@@ -7,6 +7,8 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "sensornet/dds/domain.hpp"
 #include "sensornet/emulator/run_report.hpp"
@@ -137,6 +139,74 @@ DdsperfThroughput ddsperfThroughput(const fs::path& dir, int domain_id, int samp
   if (result.samples_per_s.size() <= 2) return {{}, result.lost, result.peers};
   result.samples_per_s.erase(result.samples_per_s.begin());
   result.samples_per_s.pop_back();
+  return result;
+}
+
+namespace {
+
+// Busy and total jiffies of all cores (/proc/stat's first line).
+std::pair<long long, long long> cpuJiffies() {
+  std::ifstream stat("/proc/stat");
+  std::string cpu;
+  long long user = 0, nice = 0, system = 0, idle = 0, iowait = 0, irq = 0, softirq = 0,
+            steal = 0;
+  stat >> cpu >> user >> nice >> system >> idle >> iowait >> irq >> softirq >> steal;
+  const long long busy = user + nice + system + irq + softirq + steal;
+  return {busy, busy + idle + iowait};
+}
+
+}  // namespace
+
+DdsperfFleet ddsperfFleet(const fs::path& dir, int domain_id, int publishers, double rate_hz_each,
+                          int sample_bytes, int seconds) {
+  const LoopbackEnvironment environment(dir);
+  const std::string domain = std::to_string(domain_id);
+  const std::string hub_uri = std::getenv("CYCLONEDDS_URI");
+  fs::remove(dir / "ddsperf-fleet-sub.log");
+  testing::BackgroundProcess sub(
+      {"/usr/bin/ddsperf", "-i", domain, "-k", "all", "-D", std::to_string(seconds + 3), "sub"},
+      (dir / "ddsperf-fleet-sub.log").string());
+  std::this_thread::sleep_for(500ms);
+  // More publishers than participant indices: as leaves, like sensor agents.
+  ::setenv("CYCLONEDDS_URI", (hub_uri + "," + dds::leafConfigXml()).c_str(), 1);
+  std::vector<testing::BackgroundProcess> pubs;
+  for (int i = 0; i < publishers; ++i) {
+    const fs::path log = dir / ("ddsperf-fleet-pub-" + std::to_string(i) + ".log");
+    fs::remove(log);
+    pubs.emplace_back(std::vector<std::string>{"/usr/bin/ddsperf", "-i", domain, "-k", "all", "-D",
+                                               std::to_string(seconds), "pub",
+                                               std::to_string(rate_hz_each) + "Hz", "size",
+                                               std::to_string(sample_bytes)},
+                      log.string());
+  }
+  // The middle of the run: after discovery, before the first publisher stops.
+  std::this_thread::sleep_for(std::chrono::seconds(seconds / 3));
+  const auto [busy0, total0] = cpuJiffies();
+  std::this_thread::sleep_for(std::chrono::seconds(seconds / 3));
+  const auto [busy1, total1] = cpuJiffies();
+  for (auto& pub : pubs) (void)pub.waitForExit(std::chrono::seconds(seconds + 10));
+  (void)sub.waitForExit(std::chrono::seconds(10));
+
+  DdsperfFleet result;
+  result.cores = static_cast<int>(std::thread::hardware_concurrency());
+  result.busy_share = total1 > total0 ? static_cast<double>(busy1 - busy0) /
+                                            static_cast<double>(total1 - total0)
+                                      : 0.0;
+  std::vector<double> rates;
+  std::istringstream log(sub.log());
+  for (std::string line; std::getline(log, line);) {
+    if (const auto rate = subscriberRate(line)) {
+      rates.push_back(*rate);
+      double lost = 0.0;
+      if (numberAfter(line, " lost ", lost)) result.lost = static_cast<long>(lost);
+    }
+  }
+  // Whole seconds with every publisher running: the first holds discovery, the last ones stop.
+  if (rates.size() > 3) {
+    rates.erase(rates.begin());
+    rates.resize(rates.size() - 2);
+    result.samples_per_s = median(rates);
+  }
   return result;
 }
 

@@ -46,4 +46,17 @@ struct DdsperfThroughput {
 [[nodiscard]] DdsperfThroughput ddsperfThroughput(const std::filesystem::path& dir, int domain_id,
                                                   int sample_bytes, int seconds);
 
+// `ddsperf sub` and `publishers` processes of `ddsperf pub <rate_hz_each>Hz size <sample_bytes>`,
+// reliable and keep-all, publishers as leaves (participant index none, as sensor agents): the
+// transport alone at a fleet's shape. Logs go to `dir`.
+struct DdsperfFleet {
+  double samples_per_s = 0.0;  // what the subscriber received, median over whole seconds
+  long lost = 0;
+  double busy_share = 0.0;     // of all cores, from /proc/stat, over the middle seconds
+  int cores = 0;
+};
+[[nodiscard]] DdsperfFleet ddsperfFleet(const std::filesystem::path& dir, int domain_id,
+                                        int publishers, double rate_hz_each, int sample_bytes,
+                                        int seconds);
+
 }  // namespace sensornet::bench
