@@ -9,6 +9,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -317,9 +318,12 @@ void makeLogDirectory(const LaunchPlan& plan) {
 // before it creates, removes or truncates anything of that run's. Then makes the log folder,
 // checks what goes in it and removes an earlier run's results. Returns the lock that keeps the
 // run's log folder this launch's own. (A --report given by the user is checked before.)
+// `id_is_new`: the launch made the run id up and only this host can be heard, so no live run
+// can have it, and the probe (kLiveRunProbe of every launch) is skipped.
 std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher& progress,
-                                  const dds::DomainConfig& domain, bool external_fusion_center) {
-  if (progress.seesLiveRun(kLiveRunProbe, !external_fusion_center)) {
+                                  const dds::DomainConfig& domain, bool external_fusion_center,
+                                  bool id_is_new) {
+  if (!id_is_new && progress.seesLiveRun(kLiveRunProbe, !external_fusion_center)) {
     throw InputError("--run-id " + plan.run_id, "",
                      "a run id not in use on this host: run " + plan.run_id +
                          " is live (its coordinator or fusion center answers on DDS domain " +
@@ -458,7 +462,13 @@ int runLaunch(LaunchOptions options) {
   // Bad input fails here, before anything starts.
   const Scenario scenario = loadScenarioFile(options.scenario_path);
   if (!options.schedule_path.empty()) (void)loadScheduleFile(options.schedule_path, scenario);
-  if (options.run.run_id.empty()) options.run.run_id = generateRunId();
+  // A made-up id (run-<launcher pid>-<random>) cannot be live where only this host is heard
+  // (the loopback configuration, no hosts file): a live run's launcher is alive, and pids on one
+  // host are unique among the living.
+  const bool made_up_id = options.run.run_id.empty();
+  if (made_up_id) options.run.run_id = generateRunId();
+  const bool loopback_only = options.run.cyclone_config.empty() &&
+                             std::getenv(emulator::kCycloneConfigVariable) == nullptr;
   dds::DomainConfig domain = options.run.domainConfig();
   std::optional<emulator::HostsFile> hosts;
   std::optional<HostPlacement> placement;
@@ -513,7 +523,9 @@ int runLaunch(LaunchOptions options) {
   }
   if (plan.default_log_dir) ensurePrivateDirectory(userScratchDirectory());
   ProgressWatcher progress(domain, options.episodes, scenario.horizon_s, scenario.sensorCount());
-  const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain, options.external_fusion_center);
+  const std::unique_ptr<RunLock> lock = claimRun(plan, progress, domain,
+                                                 options.external_fusion_center,
+                                                 made_up_id && loopback_only && !hosts);
   if (placement) writeLauncherConfig(plan, domain);
   // An external fusion center's Reports are the run's results: the launcher keeps them in the
   // episode log, as our fusion center would, and builds the report from it.
