@@ -50,6 +50,19 @@ std::vector<std::uint32_t> versionsOf(const Batch<sensornet_Schedule>& batch) {
   return versions;
 }
 
+// A Measurement writer on one participant and a reader on the other, both with the topic's QoS.
+struct MeasurementLink {
+  MeasurementLink(const Participant& publisher_side, const Participant& subscriber_side)
+      : pub_topic(publisher_side),
+        sub_topic(subscriber_side),
+        reader(subscriber_side, sub_topic),
+        writer(publisher_side, pub_topic) {}
+  Topic<sensornet_Measurement> pub_topic;
+  Topic<sensornet_Measurement> sub_topic;
+  Reader<sensornet_Measurement> reader;
+  Writer<sensornet_Measurement> writer;
+};
+
 class ReaderWriter : public ::testing::Test {
  protected:
   Domain domain_{testing::isolatedDomain()};
@@ -170,45 +183,39 @@ TEST_F(ReaderWriter, DisposeReachesTheReaderAsAnInstanceChangeWithTheKey) {
 }
 
 TEST_F(ReaderWriter, ReadLeavesSamplesAndTakeRemovesThem) {
-  Topic<sensornet_Measurement> pub_topic(publisher_side_);
-  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
-  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
-  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
-  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  MeasurementLink link(publisher_side_, subscriber_side_);
+  ASSERT_TRUE(link.writer.waitForReaders(1, 5s));
   for (std::uint64_t seq = 0; seq < 3; ++seq)
-    ASSERT_EQ(writer.write(measurement(2, seq)), WriteResult::Written);
+    ASSERT_EQ(link.writer.write(measurement(2, seq)), WriteResult::Written);
 
-  ReadCondition unread(reader);
+  ReadCondition unread(link.reader);
   WaitSet waitset(subscriber_side_);
   waitset.attach(unread, 5);
   const auto deadline = Clock::now() + 5s;
   std::size_t seen = 0;
   while (seen < 3 && Clock::now() < deadline) {
-    seen += reader.read(16).samples.size();  // marks them read: `unread` stops triggering
+    seen += link.reader.read(16).samples.size();  // marks them read: `unread` stops triggering
     if (seen < 3) (void)waitset.wait(100ms);
   }
   ASSERT_EQ(seen, 3u);
   EXPECT_TRUE(waitset.wait(0ns).timedOut());
-  EXPECT_EQ(reader.read(16).samples.size(), 3u);  // still there
-  EXPECT_EQ(reader.take(16).samples.size(), 3u);
-  EXPECT_TRUE(reader.take(16).empty());
+  EXPECT_EQ(link.reader.read(16).samples.size(), 3u);  // still there
+  EXPECT_EQ(link.reader.take(16).samples.size(), 3u);
+  EXPECT_TRUE(link.reader.take(16).empty());
 }
 
 // takeEach with a maximum that grows and shrinks from call to call: each call visits what it
 // took, in the order written, and leaves the rest.
 TEST_F(ReaderWriter, TakeEachVisitsUpToItsMaximumInOrderWhateverTheMaximum) {
-  Topic<sensornet_Measurement> pub_topic(publisher_side_);
-  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
-  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
-  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
-  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  MeasurementLink link(publisher_side_, subscriber_side_);
+  ASSERT_TRUE(link.writer.waitForReaders(1, 5s));
   constexpr std::uint64_t kWritten = 100;
   for (std::uint64_t seq = 0; seq < kWritten; ++seq)
-    ASSERT_EQ(writer.write(measurement(4, seq)), WriteResult::Written);
+    ASSERT_EQ(link.writer.write(measurement(4, seq)), WriteResult::Written);
 
   std::vector<std::uint64_t> seqs;
   const auto takeUpTo = [&](std::size_t max) {
-    return reader.takeEach(
+    return link.reader.takeEach(
         max, [&](const sensornet_Measurement& m, const SampleInfo&) { seqs.push_back(m.seq); },
         [](const sensornet_Measurement&, const SampleInfo&) {});
   };
@@ -224,11 +231,8 @@ TEST_F(ReaderWriter, TakeEachVisitsUpToItsMaximumInOrderWhateverTheMaximum) {
 // takeEach refills the samples it keeps: a run id or a z longer, shorter or emptier than the one
 // the same slot held before comes out whole, never a stale tail or a stale length.
 TEST_F(ReaderWriter, TakeEachRefillsItsSamplesWhateverTheyHeldBefore) {
-  Topic<sensornet_Measurement> pub_topic(publisher_side_);
-  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
-  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
-  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
-  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  MeasurementLink link(publisher_side_, subscriber_side_);
+  ASSERT_TRUE(link.writer.waitForReaders(1, 5s));
   const std::vector<std::string> runs = {"short", "a-much-longer-run-identifier-than-before", "",
                                          "mid-length-run", "x"};
   const std::vector<std::vector<double>> zs = {{1.5}, {2.5, -3.0, 4.25, 8.0}, {}, {7.0, 9.0}, {}};
@@ -240,9 +244,9 @@ TEST_F(ReaderWriter, TakeEachRefillsItsSamplesWhateverTheyHeldBefore) {
       sensornet_Measurement m = measurement(sensor, round);
       m.run_id = borrowString(runs[k]);
       borrowSequence(m.z, std::span<const double>(zs[k]));
-      ASSERT_EQ(writer.write(m), WriteResult::Written);
+      ASSERT_EQ(link.writer.write(m), WriteResult::Written);
     }
-    ASSERT_EQ(reader.takeEach(
+    ASSERT_EQ(link.reader.takeEach(
                   4,
                   [&](const sensornet_Measurement& m, const SampleInfo&) {
                     seen_runs.emplace_back(viewString(m.run_id));
@@ -264,15 +268,12 @@ TEST_F(ReaderWriter, TakeEachRefillsItsSamplesWhateverTheyHeldBefore) {
 
 // A visitor that throws loses only the sample it was given: the next call visits the rest.
 TEST_F(ReaderWriter, TakeEachGoesOnAfterAVisitorThrows) {
-  Topic<sensornet_Measurement> pub_topic(publisher_side_);
-  Topic<sensornet_Measurement> sub_topic(subscriber_side_);
-  Reader<sensornet_Measurement> reader(subscriber_side_, sub_topic);
-  Writer<sensornet_Measurement> writer(publisher_side_, pub_topic);
-  ASSERT_TRUE(writer.waitForReaders(1, 5s));
+  MeasurementLink link(publisher_side_, subscriber_side_);
+  ASSERT_TRUE(link.writer.waitForReaders(1, 5s));
   for (std::uint64_t seq = 0; seq < 3; ++seq)
-    ASSERT_EQ(writer.write(measurement(1, seq)), WriteResult::Written);
+    ASSERT_EQ(link.writer.write(measurement(1, seq)), WriteResult::Written);
   const auto no_change = [](const sensornet_Measurement&, const SampleInfo&) {};
-  EXPECT_THROW(reader.takeEach(
+  EXPECT_THROW(link.reader.takeEach(
                    1,
                    [](const sensornet_Measurement&, const SampleInfo&) {
                      throw std::runtime_error("visitor failed");
@@ -280,12 +281,12 @@ TEST_F(ReaderWriter, TakeEachGoesOnAfterAVisitorThrows) {
                    no_change),
                std::runtime_error);
   std::vector<std::uint64_t> seqs;
-  EXPECT_EQ(reader.takeEach(
+  EXPECT_EQ(link.reader.takeEach(
                 8, [&](const sensornet_Measurement& m, const SampleInfo&) { seqs.push_back(m.seq); },
                 no_change),
             2u);
   EXPECT_EQ(seqs, (std::vector<std::uint64_t>{1, 2}));
-  EXPECT_EQ(reader.takeEach(8, [&](const sensornet_Measurement&, const SampleInfo&) {}, no_change),
+  EXPECT_EQ(link.reader.takeEach(8, [&](const sensornet_Measurement&, const SampleInfo&) {}, no_change),
             0u);
 }
 

@@ -158,6 +158,13 @@ class FusionCenterCoreTest : public ::testing::Test {
       core_->onTally(tally(j, e, sent[static_cast<std::size_t>(j)], now_), now_);
     }
   }
+  // Runs episode 0 past its end, hands in every sensor's tally of `all` and runs on until its
+  // report is due.
+  void closeEpisode0(const std::vector<MeasurementArrival>& all) {
+    runUntil(endOf(0) + 10 * kMs);
+    deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
+    runUntil(endOf(0) + 50 * kMs);
+  }
   void take() {
     for (FusionAction& a : core_->takeActions()) {
       if (auto* r = std::get_if<PublishReport>(&a)) reports_.push_back(*r);
@@ -513,9 +520,7 @@ TEST_F(FusionCenterCoreTest, AMeasurementOfAnotherRunIsCountedAndLeftOut) {
   stray.measurement.z *= 1000.0;  // would move the cost if it were fused
   core_->onMeasurement(stray, now_);
   core_->onMeasurement(stray, now_);
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
-  runUntil(endOf(0) + 50 * kMs);
+  closeEpisode0(all);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
   (void)finish(RunEnd{1, false, ""});
@@ -531,9 +536,7 @@ TEST_F(FusionCenterCoreTest, ASecondWriterOfASensorIsKeptOutWhileTheFirstLives) 
   rogue.measurement.seq = 1000;  // a new seq: only the writer tells it apart
   core_->onMeasurement(rogue, now_);
   core_->onMeasurement(rogue, now_);
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
-  runUntil(endOf(0) + 50 * kMs);
+  closeEpisode0(all);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_TRUE(reports_[0].result.complete);
   EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
@@ -567,9 +570,7 @@ TEST_F(FusionCenterCoreTest, AWriterSpeaksOnlyForTheSensorsOfItsIdentityWhatever
   forged_tally.writer = kImpostorTally;
   core_->onTally(forged_tally, now_);  // before sensor 2's own tally
   deliver(all);
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
-  runUntil(endOf(0) + 50 * kMs);
+  closeEpisode0(all);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_TRUE(reports_[0].result.complete);
   EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
@@ -595,9 +596,7 @@ TEST_F(FusionCenterCoreTest, AWriterOfNoSensorBlockSpeaksForNobody) {
   stranger.measurement.seq = 1000;
   core_->onMeasurement(stranger, now_);
   deliver(all);
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
-  runUntil(endOf(0) + 50 * kMs);
+  closeEpisode0(all);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
   ASSERT_EQ(faultKinds(), std::vector<std::string>{"wrong_identity"});
@@ -612,9 +611,7 @@ TEST_F(FusionCenterCoreTest, ACommandRefusedByRightIsAFaultOnce) {
   deliver(all);
   core_->onCommandRefused(42, "only the launcher may report sensors failed", now_);
   core_->onCommandRefused(42, "only the launcher may report sensors failed", now_);
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
-  runUntil(endOf(0) + 50 * kMs);
+  closeEpisode0(all);
   EXPECT_EQ(faultKinds(), std::vector<std::string>{"command_refused"});
   EXPECT_EQ(core_->faults()[0].at("process"), "coordinator");
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
@@ -632,9 +629,7 @@ TEST_F(FusionCenterCoreTest, ANewWriterTakesOverWhenTheFirstIsGone) {
   deliver({all.begin(), first_half});
   writers_.dead.insert(measurementWriter(0));  // its participant's lease expired
   deliver({first_half, all.end()});
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
-  runUntil(endOf(0) + 50 * kMs);
+  closeEpisode0(all);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_TRUE(reports_[0].result.complete);
   EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
