@@ -314,6 +314,32 @@ void makeLogDirectory(const LaunchPlan& plan) {
   makeFolders(plan.log_dir, "--log-dir");
 }
 
+// Starts the run's processes and says so: one line each, but past the first kListedAgents sensor
+// agents one line for the rest (a 200-process run printed 200 lines before its first progress).
+void startChildren(ProcessGroup& group, const LaunchPlan& plan) {
+  constexpr int kListedAgents = 8;
+  int agents = 0;
+  std::vector<std::pair<std::string, pid_t>> unlisted;
+  const auto sayUnlisted = [&] {
+    if (unlisted.empty()) return;
+    spdlog::info("started {} more sensor agents, {} (pid {}) to {} (pid {}), logs {}/<name>.log",
+                 unlisted.size(), unlisted.front().first, unlisted.front().second,
+                 unlisted.back().first, unlisted.back().second, plan.log_dir.string());
+    unlisted.clear();
+  };
+  for (const ChildSpec& child : plan.children) {
+    const pid_t pid = group.start(child);
+    const bool agent = child.name.starts_with("sensor_agent");
+    if (agent && ++agents > kListedAgents) {
+      unlisted.emplace_back(child.name, pid);
+      continue;
+    }
+    sayUnlisted();
+    spdlog::info("started {} (pid {}), log {}", child.name, pid, child.log_path.string());
+  }
+  sayUnlisted();
+}
+
 // Claims the run id before anything starts: a second launch of a live run is refused here,
 // before it creates, removes or truncates anything of that run's. Then makes the log folder,
 // checks what goes in it and removes an earlier run's results. Returns the lock that keeps the
@@ -581,10 +607,7 @@ int runLaunch(LaunchOptions options) {
                 {"started_at", utcNow()}});
   }
   ProcessGroup group;
-  for (const ChildSpec& child : plan.children) {
-    const pid_t pid = group.start(child);
-    spdlog::info("started {} (pid {}), log {}", child.name, pid, child.log_path.string());
-  }
+  startChildren(group, plan);
   FailureNotices notices(progress.participant(), plan.run_id);
   Supervisor core(supervisorConfig(plan, options, scenario, external),
                   std::chrono::steady_clock::now());

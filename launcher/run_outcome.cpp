@@ -416,7 +416,7 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
               static_cast<unsigned long long>(incompleteEpisodes(report, summary)),
               shown(field(report, "episodes_planned")).c_str());
   const json bracket = field(summary, "bracket");
-  std::string interval = "no 95% interval";
+  std::string interval = "(one complete episode: no 95% interval)";  // ci95 needs two
   if (const json ci95 = field(summary, "ci95"); ci95.is_number()) {
     interval = "\u00b1 " + shown(ci95) + " (95%: [" + shown(field(summary, "ci95_low")) + ", " +
                shown(field(summary, "ci95_high")) + "])";

@@ -361,6 +361,42 @@ TEST_F(Launcher, SensorsPerProcessPutsBlocksOfSensorsInOneAgent) {
   EXPECT_TRUE(processesMentioning(run_id_).empty());
 }
 
+// Past eight sensor agents the launcher lists the rest in one line: the paper's 30 sensors in
+// blocks of 3 are 10 agents, 8 listed by name and 2 summed up with the first's and last's names.
+TEST_F(Launcher, ManySensorAgentsAreListedUpToEightThenSummedUp) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(1, 10);
+  argv[2] = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/paper.yaml";
+  argv.insert(argv.end(), {"--sensors-per-process", "3"});
+  const ProcessResult r = runProcess(argv, 90s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> named;
+  std::string summary;
+  std::istringstream lines(r.err);
+  for (std::string line; std::getline(lines, line);) {
+    if (const auto at = line.find("started sensor_agent-"); at != std::string::npos) {
+      named.push_back(line.substr(at + 8, line.find(' ', at + 8) - (at + 8)));
+    } else if (line.find("more sensor agents") != std::string::npos) {
+      EXPECT_TRUE(summary.empty()) << "one summary line: " << r.err;
+      summary = line;
+    }
+  }
+  std::vector<std::string> expected;
+  for (int first = 0; first < 24; first += 3) {
+    expected.push_back("sensor_agent-" + std::to_string(first) + "-" + std::to_string(first + 2));
+  }
+  EXPECT_EQ(named, expected) << r.err;
+  EXPECT_NE(summary.find("started 2 more sensor agents, sensor_agent-24-26 (pid "),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find(") to sensor_agent-27-29 (pid "), std::string::npos) << summary;
+  EXPECT_TRUE(fs::exists(dir_ / "logs" / "sensor_agent-27-29.log"));
+  const json report = json::parse(readText(dir_ / "report.json"), nullptr, false);
+  ASSERT_TRUE(report.is_object());
+  EXPECT_EQ(report["sensors"].size(), 30u);
+  EXPECT_TRUE(processesMentioning(run_id_).empty());
+}
+
 TEST_F(Launcher, DomainIdReachesEveryChild) {
   const LeftoverGuard guard(run_id_);
   // A domain other than the one the run id hashes to.
