@@ -864,13 +864,14 @@ void printOverloadRun(double total_rate_hz, const OverloadRun& o) {
   std::fflush(stdout);
 }
 
+// ddsperf's domain: one of its own (ids up to 230 fit the loopback configuration's port mapping),
+// so that another bench's ddsperf on this host is not counted.
+int ddsperfDomain() { return 200 + static_cast<int>(::getpid() % 30); }
+
 // ddsperf pub/sub of 64-byte samples, printed; the median samples/s (0 if it failed).
 double ddsperfThroughputLine(const char* when) {
-  // A domain of its own (ids up to 230 fit the loopback configuration's port mapping), so that
-  // another bench's ddsperf on this host is not counted.
-  const int domain = 200 + static_cast<int>(::getpid() % 30);
   const auto t = sensornet::bench::ddsperfThroughput(
-      fs::temp_directory_path() / runId("ddsperf-throughput", 0), domain, 64, 6);
+      fs::temp_directory_path() / runId("ddsperf-throughput", 0), ddsperfDomain(), 64, 6);
   const double rate = median(t.samples_per_s);
   std::printf("  ddsperf pub/sub, 64-byte samples, reliable keep-all, %s: %.0f samples/s (median "
               "of %zu s), lost %ld%s\n",
@@ -945,8 +946,8 @@ void fleet(int rounds, int process_count, int sensors, double rate_hz) {
   // The yardstick of the same shape: the transport alone, without sampling or fusion.
   const double each_hz = sensors * rate_hz / process_count;
   const auto d = sensornet::bench::ddsperfFleet(
-      fs::temp_directory_path() / runId("ddsperf-fleet", 0), 200 + static_cast<int>(::getpid() % 30),
-      process_count, each_hz, 64, 9);
+      fs::temp_directory_path() / runId("ddsperf-fleet", 0), ddsperfDomain(), process_count,
+      each_hz, 64, 9);
   std::printf("fleet: ddsperf alone, %d publishers at %.0f samples/s each (64 bytes, reliable "
               "keep-all) and one subscriber: received %.0f/s, lost %ld; the machine %.0f%% busy "
               "(%d cores), %.1f us of CPU per sample\n",

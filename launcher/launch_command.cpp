@@ -9,7 +9,6 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -493,8 +492,7 @@ int runLaunch(LaunchOptions options) {
   // host are unique among the living.
   const bool made_up_id = options.run.run_id.empty();
   if (made_up_id) options.run.run_id = generateRunId();
-  const bool loopback_only = options.run.cyclone_config.empty() &&
-                             std::getenv(emulator::kCycloneConfigVariable) == nullptr;
+  const bool loopback_only = options.run.chosenCycloneConfig().empty();
   dds::DomainConfig domain = options.run.domainConfig();
   std::optional<emulator::HostsFile> hosts;
   std::optional<HostPlacement> placement;

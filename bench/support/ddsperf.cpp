@@ -42,6 +42,39 @@ std::optional<double> subscriberRate(const std::string& line) {
   return rate * (prefix == 'M' ? 1e6 : prefix == 'k' ? 1e3 : 1.0);
 }
 
+// What `ddsperf sub` printed: its rate for each second, the running count of samples lost, and
+// the participants it saw besides itself.
+struct SubscriberLog {
+  std::vector<double> samples_per_s;
+  long lost = 0;
+  int peers = 0;
+};
+
+SubscriberLog readSubscriberLog(const std::string& text) {
+  SubscriberLog log;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find(" participant ") != std::string::npos &&
+        line.find(": new") != std::string::npos && line.find("(self)") == std::string::npos) {
+      ++log.peers;
+    }
+    if (const auto rate = subscriberRate(line)) {
+      log.samples_per_s.push_back(*rate);
+      double lost = 0.0;
+      if (numberAfter(line, " lost ", lost)) log.lost = static_cast<long>(lost);  // running
+    }
+  }
+  return log;
+}
+
+// `seconds` without the first `head` and the last `tail` (empty if nothing is left).
+std::vector<double> middleSeconds(std::vector<double> seconds, std::size_t head, std::size_t tail) {
+  if (seconds.size() <= head + tail) return {};
+  seconds.erase(seconds.begin(), seconds.begin() + static_cast<std::ptrdiff_t>(head));
+  seconds.resize(seconds.size() - tail);
+  return seconds;
+}
+
 // Points ddsperf at sensornet's loopback configuration while it lives. ddsperf reads its
 // configuration from the environment (the bench's own domains are created explicitly, so the
 // variable does not touch them).
@@ -123,22 +156,11 @@ DdsperfThroughput ddsperfThroughput(const fs::path& dir, int domain_id, int samp
   (void)sub.waitForExit(std::chrono::seconds(10));
 
   DdsperfThroughput result;
-  std::istringstream log(sub.log());
-  for (std::string line; std::getline(log, line);) {
-    if (line.find(" participant ") != std::string::npos &&
-        line.find(": new") != std::string::npos && line.find("(self)") == std::string::npos) {
-      ++result.peers;
-    }
-    if (const auto rate = subscriberRate(line)) {
-      result.samples_per_s.push_back(*rate);
-      double lost = 0.0;
-      if (numberAfter(line, " lost ", lost)) result.lost = static_cast<long>(lost);  // running
-    }
-  }
+  const SubscriberLog log = readSubscriberLog(sub.log());
+  result.lost = log.lost;
+  result.peers = log.peers;
   // The first second holds discovery, the last one is cut short.
-  if (result.samples_per_s.size() <= 2) return {{}, result.lost, result.peers};
-  result.samples_per_s.erase(result.samples_per_s.begin());
-  result.samples_per_s.pop_back();
+  result.samples_per_s = middleSeconds(log.samples_per_s, 1, 1);
   return result;
 }
 
@@ -192,19 +214,10 @@ DdsperfFleet ddsperfFleet(const fs::path& dir, int domain_id, int publishers, do
   result.busy_share = total1 > total0 ? static_cast<double>(busy1 - busy0) /
                                             static_cast<double>(total1 - total0)
                                       : 0.0;
-  std::vector<double> rates;
-  std::istringstream log(sub.log());
-  for (std::string line; std::getline(log, line);) {
-    if (const auto rate = subscriberRate(line)) {
-      rates.push_back(*rate);
-      double lost = 0.0;
-      if (numberAfter(line, " lost ", lost)) result.lost = static_cast<long>(lost);
-    }
-  }
+  const SubscriberLog log = readSubscriberLog(sub.log());
+  result.lost = log.lost;
   // Whole seconds with every publisher running: the first holds discovery, the last ones stop.
-  if (rates.size() > 3) {
-    rates.erase(rates.begin());
-    rates.resize(rates.size() - 2);
+  if (const auto rates = middleSeconds(log.samples_per_s, 1, 2); !rates.empty()) {
     result.samples_per_s = median(rates);
   }
   return result;

@@ -37,19 +37,21 @@ void addSecurity(dds::DomainConfig& config, const std::string& dir,
 
 }  // namespace
 
+std::string RunOptions::chosenCycloneConfig() const {
+  if (!cyclone_config.empty()) return cyclone_config;
+  const char* from_environment = std::getenv(kCycloneConfigVariable);
+  return from_environment != nullptr ? from_environment : "";
+}
+
 dds::DomainConfig RunOptions::domainConfig(dds::DiscoveryRole role) const {
   dds::validateRunId(run_id, kSource);
   dds::DomainConfig config = dds::DomainConfig::forRun(run_id, role);
   if (domain_id) {
     config.domain_id = dds::parseDomainId(std::to_string(*domain_id), "--domain-id");
   }
-  std::string chosen = cyclone_config;
-  if (chosen.empty()) {
-    if (const char* from_environment = std::getenv(kCycloneConfigVariable)) {
-      chosen = from_environment;
-    }
+  if (const std::string chosen = chosenCycloneConfig(); !chosen.empty()) {
+    config.cyclone_config = asCycloneConfig(chosen);
   }
-  if (!chosen.empty()) config.cyclone_config = asCycloneConfig(chosen);
   if (!security_dir.empty()) addSecurity(config, security_dir, security_identity);
   return config;
 }

@@ -160,27 +160,28 @@ class Reader : public detail::ReaderCore {
   // tenth of the fusion center's receive thread (bench/README.md, "Issue 28, fourth step").
   template <class OnSample, class OnChange>
   std::size_t takeEach(std::size_t max_samples, OnSample&& on_sample, OnChange&& on_change) {
-    while (kept_.size() < max_samples) {
-      kept_.emplace_back();  // zeroed: Cyclone allocates its strings and sequences on first use
-      infos_.emplace_back();
-    }
-    std::vector<void*>& slots = slots_;
-    slots.resize(kept_.size());
-    for (std::size_t i = 0; i < kept_.size(); ++i) slots[i] = kept_[i].fill();
-    const std::int32_t count = fetch(Access::Take, slots.data(), infos_.data(), max_samples);
-    for (std::int32_t i = 0; i < count; ++i) {
-      const T& sample = *kept_[static_cast<std::size_t>(i)];
-      const SampleInfo info = toSampleInfo(infos_[static_cast<std::size_t>(i)]);
-      if (infos_[static_cast<std::size_t>(i)].valid_data) {
-        on_sample(sample, info);
+    if (kept_.size() < max_samples) keepAtLeast(max_samples);
+    const std::int32_t count = fetch(Access::Take, slots_.data(), infos_.data(), max_samples);
+    for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+      if (infos_[i].valid_data) {
+        on_sample(*kept_[i], toSampleInfo(infos_[i]));
       } else {
-        on_change(sample, info);
+        on_change(*kept_[i], toSampleInfo(infos_[i]));
       }
     }
     return static_cast<std::size_t>(count);
   }
 
  private:
+  // Grows takeEach's samples (zeroed: Cyclone allocates their strings and sequences on first
+  // use) and points the array Cyclone fills them through at them again: growing moves them.
+  void keepAtLeast(std::size_t count) {
+    kept_.resize(count);
+    infos_.resize(count);
+    slots_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) slots_[i] = kept_[i].fill();
+  }
+
   Batch<T> copyOut(Access access, std::size_t max_samples) {
     // Cyclone fills zeroed samples in place, allocating their strings and sequences; every
     // filled sample is adopted by an OwnedSample before anything else can throw.

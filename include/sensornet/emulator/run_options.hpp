@@ -55,6 +55,9 @@ struct RunOptions {
   // $SENSORNET_CYCLONE_CONFIG names another, which is used as given for every role.
   [[nodiscard]] dds::DomainConfig domainConfig(
       dds::DiscoveryRole role = dds::DiscoveryRole::Hub) const;
+  // The Cyclone configuration domainConfig() uses: --cyclone-config, else the environment
+  // variable; empty for the loopback configuration (only this host is heard).
+  [[nodiscard]] std::string chosenCycloneConfig() const;
 };
 
 // Adds --run-id (required unless `run_id_required` is false), --domain-id, --cyclone-config and
