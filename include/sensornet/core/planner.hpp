@@ -43,22 +43,10 @@
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
+#include "sensornet/core/surrogate_kind.hpp"
 #include "sensornet/core/words.hpp"
 
 namespace sensornet {
-
-// MonteCarlo ("mc") minimizes E[J(P)] of the exact CD-KF by Monte Carlo (mc_planner.hpp);
-// planSchedule dispatches to planForRealizedCost.
-enum class PlanSurrogate { Information, Covariance, Uniform, MonteCarlo };
-
-template <>
-struct Words<PlanSurrogate> {
-  static constexpr std::array<WordOf<PlanSurrogate>, 4> kTable{
-      {{PlanSurrogate::Information, "info"},
-       {PlanSurrogate::Covariance, "cov"},
-       {PlanSurrogate::Uniform, "uniform"},
-       {PlanSurrogate::MonteCarlo, "mc"}}};
-};
 
 // The surrogate form a plan of this kind rolls out (uniform and mc plans use the information
 // form: their bracket is still [info, cov] of the schedule).
