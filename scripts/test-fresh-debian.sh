@@ -13,7 +13,8 @@
 #     needed) and removes it afterwards;
 #   - copies the files git tracks (what a clean clone holds) into a container and runs
 #     scripts/demo.sh there as root; then, in the same container, the README's "Many hosts"
-#     recipe (three network-namespace hosts, so the container gets NET_ADMIN and SYS_ADMIN).
+#     recipe (docs/guide/many-hosts.md, "Tested on one machine": three network-namespace hosts,
+#     so the container gets NET_ADMIN and SYS_ADMIN).
 # Exit status: 0 when both runs completed, else the first failure's (1 when the check itself
 # could not run).
 # Needs root: it starts dockerd and installs packages.

@@ -210,7 +210,7 @@ void checkLogAgainstReport(const std::vector<json>& lines, const json& per_episo
   }
 }
 
-// The complete episodes the faults cannot change equal the clean run's (README: the same seed
+// The complete episodes the faults cannot change equal the clean run's (docs/guide/first-run.md: the same seed
 // gives the same realized costs; stalls and restarts change nothing; a death changes what
 // follows it).
 void checkCosts(const TrialRecord& r, const json& per_episode, std::vector<std::string>& v) {

@@ -1,8 +1,8 @@
 #pragma once
 // Causes and consequences in a report's `faults`: an entry that followed from another (the run's
 // one cause: a stop, a death under --on-sensor-failure stop) carries `caused_by: {kind,
-// process}` of that cause and is counted with it, never as a fault of its own (README, "One
-// cause, one fault"). The launcher marks them (sensornet/launcher/fault.hpp: faultList); every
+// process}` of that cause and is counted with it, never as a fault of its own (docs/guide/faults.md,
+// "One cause, one fault"). The launcher marks them (sensornet/launcher/fault.hpp: faultList); every
 // count of faults (`--require no-faults`, the report page, the launcher's summary) counts causes:
 //
 //   causeCount(report["faults"]);              // 1 for an interrupt and its 13 consequences

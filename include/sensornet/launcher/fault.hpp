@@ -4,7 +4,7 @@
 // other processes reported, where every reported entry that followed from the run-ending cause
 // the launcher knows (a stop it made, a sensor death under --on-sensor-failure stop, a child
 // that failed the run) is marked as that cause's consequence with `caused_by`, not counted as a
-// fault of its own (README, "Faults").
+// fault of its own (docs/guide/faults.md, "Faults in the report").
 //
 //   Fault killed{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, at, "killed by ..."};
 //   json faults = faultList({killed}, report["faults"]);  // stalls after it: caused_by killed

@@ -156,7 +156,7 @@ TEST_F(TimetableLaunch, EverySensorSendsItsTimetableCountInEveryEpisodeAtTheSame
   ASSERT_EQ(report["per_episode"].size(), static_cast<std::size_t>(kEpisodes));
   expectTimetableCounts(report, expected);
   // The same instants give the same covariance path, and the fusion's cost is the same number
-  // bit for bit whatever the arrival timing (README, "How an emulation runs"): equal, not near.
+  // bit for bit whatever the arrival timing (docs/guide/first-run.md, "How an emulation runs"): equal, not near.
   const double first_cost = report["per_episode"][0]["realized_cost"].get<double>();
   for (const json& e : report["per_episode"]) {
     EXPECT_EQ(e["realized_cost"].get<double>(), first_cost) << "episode " << e["episode"];

@@ -1,6 +1,6 @@
 // The launcher's supervisor core driven by scripted orders of events with a fake clock: what it
 // restarts, whom it tells that sensors failed, when it stops the run, which faults it records.
-// Expectations come from the README's fault response and docs/ARCHITECTURE.md's outcome table (restart a
+// Expectations come from docs/guide/faults.md's fault response and docs/ARCHITECTURE.md's outcome table (restart a
 // killed coordinator or fusion center at most 3 times; a sensor death is survived under replan
 // and continue and ends the run under stop; a child ended by the launcher's own stop is no
 // fault), never from the program's output.
