@@ -42,7 +42,7 @@ subcommands_of() {
   awk '
     /^(SUBCOMMANDS|Subcommands):[[:space:]]*$/ { inside = 1; next }
     inside && /^[^[:space:]]/ { inside = 0 }
-    inside && /^[[:space:]]+[a-z][a-z0-9_-]*([[:space:]]|$)/ { print $1 }
+    inside && /^  [a-z][a-z0-9_-]*([[:space:]]|$)/ { print $1 }
   '
 }
 
