@@ -28,12 +28,13 @@ programs=(
   "sensor_agent:sensor_agent/sensor_agent"
 )
 
-# One program's --help in a fixed environment; the build and source folders replaced by names.
+# One program's --help (standard output only: a sanitizer build's reports go to standard error)
+# in a fixed environment; the build and source folders replaced by names.
 help_text() {
   local binary=$1
   shift
-  env -i PATH=/usr/bin:/bin HOME=/nonexistent LC_ALL=C COLUMNS=100 \
-    "$binary" "$@" --help 2>&1 </dev/null |
+  env -i PATH=/usr/bin:/bin HOME=/nonexistent LC_ALL=C COLUMNS=100 ASAN_OPTIONS=detect_leaks=0 \
+    "$binary" "$@" --help 2>/dev/null </dev/null |
     sed -e "s|$build_dir|BUILD_DIR|g" -e "s|$source_dir|SOURCE_DIR|g"
 }
 
