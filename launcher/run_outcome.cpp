@@ -14,6 +14,7 @@
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "sensornet/launcher/supervisor.hpp"
+#include "sensornet/report/run_status.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -113,8 +114,16 @@ json externalReport(const RunEnd& end, bool logged) {
     report["latency_s"]["median"] = median;
     report["latency_s"]["p99"] = p99;
   }
-  const bool all_complete = field(summary, "episodes") == field(summary, "episodes_complete");
-  report["status"] = faults.empty() && all_complete ? "completed" : "degraded";
+  const auto count = [&summary](const char* key) {
+    const json value = field(summary, key);
+    return value.is_number_unsigned() ? value.get<std::uint64_t>() : std::uint64_t{0};
+  };
+  sensornet::report::StatusEvidence seen;
+  seen.faults = faults.size();
+  seen.lost = lost;
+  seen.episodes = count("episodes");
+  seen.episodes_complete = count("episodes_complete");
+  report["status"] = std::string(wordOf(sensornet::report::decideRunStatus(seen)));
   report["faults"] = std::move(faults);
   return report;
 }
@@ -345,6 +354,14 @@ RunOutcome settleRun(const RunEnd& end) {
   }
   seen.status = report->value("status", std::string());
   seen.finished_episodes = finishedEpisodes(*report);
+  if (const json summary = field(*report, "summary"); summary.is_object()) {
+    if (const json n = field(summary, "episodes_complete"); n.is_number_unsigned()) {
+      seen.complete_episodes = n.get<std::uint64_t>();
+    }
+    if (const json n = field(summary, "lost"); n.is_number_unsigned()) {
+      seen.lost = n.get<std::uint64_t>();
+    }
+  }
   const Verdict verdict = decideVerdict(end.faults, end.interrupted, seen, end.episodes_planned);
   outcome.status = verdict.status;
   outcome.exit_code = exitCodeOf(verdict.status);

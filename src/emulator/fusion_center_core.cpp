@@ -807,7 +807,8 @@ RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
   if (!report_) {
     log(spdlog::level::err, "no scenario ever arrived; no report");
     const RunStatus status = end ? RunStatus::Failed : RunStatus::Interrupted;
-    return end && end->aborted ? decideStatus(end, rejected_by_inputs) : status;
+    return end && end->aborted ? report::decideRunStatus(gatherStatusEvidence(end, rejected_by_inputs))
+                                : status;
   }
   // Finish what is open: an episode still owed measurements is closed incomplete, its cause
   // named once (cutShort), not as a fault of every sensor it waited for.
@@ -825,7 +826,7 @@ RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
     for (const std::uint32_t e : resumed_->heardEnd(end->episodes_run)) restarted_.emplace(e, 0);
   }
   while (!restarted_.empty()) finishRestarted(restarted_.begin()->first, now);
-  const RunStatus status = decideStatus(end, rejected_by_inputs);
+  const RunStatus status = report::decideRunStatus(gatherStatusEvidence(end, rejected_by_inputs));
   emit<WriteFinalReport>(status, finalReport(status, written_at));
   return status;
 }
@@ -868,7 +869,7 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
   // marks this entry as that cause's consequence (caused_by, fault_causes.hpp).
   if (cause) fault["ended_by"] = std::string(wordOf(*cause));
   // A cause the fusion center records itself is named here: the launcher's death, or the
-  // coordinator's abort (decideStatus's run_aborted entry).
+  // coordinator's abort (gatherStatusEvidence's run_aborted entry).
   if (launcher_gone_) {
     fault[kCausedByField] = launcherDeath();
   } else if (cause == FaultKind::RunAborted) {
@@ -881,19 +882,27 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
   open_.clear();
 }
 
-// docs/ARCHITECTURE.md's run outcome, as far as the fusion center saw it (the launcher adds what it saw
-// of the processes): failed when the coordinator gave up, interrupted on a signal, degraded
-// when an episode is missing or incomplete, something was lost or rejected, or it overloaded.
-RunStatus FusionCenterCore::decideStatus(
+// The run as far as the fusion center saw it (the launcher adds what it saw of the processes):
+// no end from the coordinator is a signal, its abort or no scenario a failure; missing
+// episodes, rejections and the faults, losses and incomplete episodes of the report the rest.
+report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
     const std::optional<RunEnd>& end, const std::map<std::string, std::uint64_t>& rejected_by_inputs) {
   if (resumed_ && report_) noteRestart();
-  if (!end) return RunStatus::Interrupted;
+  report::StatusEvidence seen;
+  if (!end) {
+    seen.interrupted = true;
+    return seen;
+  }
   if (end->aborted) {
     recordFault(faultEntry(FaultKind::RunAborted, "coordinator", std::nullopt, std::nullopt,
                            std::nullopt, end->detail));
-    return RunStatus::Failed;
+    seen.failed = true;
+    return seen;
   }
-  if (!report_) return RunStatus::Failed;
+  if (!report_) {
+    seen.failed = true;
+    return seen;
+  }
   for (const auto& [reason, count] : rejected_by_inputs) report_->countRejected(reason, count);
   for (const auto& [reason, count] : rejected_outside_) {
     report_->countRejected(std::string(wordOf(reason)), count);
@@ -917,8 +926,11 @@ RunStatus FusionCenterCore::decideStatus(
     recordFault(faultEntry(FaultKind::Rejected, kProcess, std::nullopt, std::nullopt, std::nullopt,
                            "samples refused on the wire: " + reasons));
   }
-  const bool clean = faults_.empty() && s.lost == 0 && s.episodes == s.episodes_complete;
-  return clean ? RunStatus::Completed : RunStatus::Degraded;
+  seen.faults = faults_.size();
+  seen.lost = s.lost;
+  seen.episodes = s.episodes;
+  seen.episodes_complete = s.episodes_complete;
+  return seen;
 }
 
 // The restart in the report's faults: the process, the episodes it could not fuse. Replaces

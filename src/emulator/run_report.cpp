@@ -470,21 +470,39 @@ json RunReport::toJson(const std::string& status, const json& faults,
 
 void forEachReportedEpisode(const std::filesystem::path& episode_log,
                             const std::function<void(const json&)>& each) {
-  std::vector<bool> seen;  // by episode number: the first of repeated entries counts
-  (void)forEachLoggedEpisode(episode_log, [&](json entry) {
-    const json& number = entry.at("episode");
-    if (!number.is_number_unsigned()) return;
-    const auto episode = number.get<std::size_t>();
-    if (episode >= seen.size()) seen.resize(std::max(episode + 1, 2 * seen.size()), false);
-    if (seen[episode]) return;
-    seen[episode] = true;
-    each(entry);
-  });
+  // Entries are appended as episodes close, which is not always in order (an episode that
+  // closed late follows the next one): first where each episode's first line starts, then
+  // those lines in episode order. Only the offsets are held, never the entries.
+  std::map<std::uint32_t, std::streamoff> first_line;
+  std::ifstream in(episode_log, std::ios::binary);
+  std::string line;
+  std::streamoff at = 0;
+  while (std::getline(in, line)) {
+    const std::streamoff start = at;
+    at += static_cast<std::streamoff>(line.size()) + 1;
+    const json entry = json::parse(line, nullptr, false);
+    if (!entry.is_object()) continue;
+    const auto number = entry.find("episode");
+    if (number == entry.end() || !number->is_number_unsigned()) continue;
+    const auto episode = number->get<std::uint32_t>();
+    if (first_line.count(episode) != 0) continue;
+    first_line.emplace(episode, start);
+  }
+  in.clear();
+  for (const auto& [episode, start] : first_line) {
+    in.seekg(start);
+    std::getline(in, line);
+    each(json::parse(line));
+  }
 }
 
 void RunReport::forEachEpisode(const std::function<void(const json&)>& each) const {
-  if (!episode_log_) {
-    for (const json& entry : episodes_) each(entry);
+  if (!episode_log_) {  // as from a log: in episode order, the first of repeated ones
+    std::map<std::uint32_t, const json*> by_episode;
+    for (const json& entry : episodes_) {
+      by_episode.emplace(entry.at("episode").get<std::uint32_t>(), &entry);
+    }
+    for (const auto& [episode, entry] : by_episode) each(*entry);
     return;
   }
   forEachReportedEpisode(*episode_log_, each);

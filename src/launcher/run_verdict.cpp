@@ -1,9 +1,9 @@
 #include "sensornet/launcher/run_verdict.hpp"
 
 #include <algorithm>
-#include <optional>
 
 #include "sensornet/launcher/supervisor.hpp"
+#include "sensornet/report/run_status.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -13,23 +13,6 @@ using emulator::RunStatus;
 
 bool anyNotSurvived(const std::vector<Fault>& faults) {
   return std::any_of(faults.begin(), faults.end(), [](const Fault& f) { return !f.survived; });
-}
-
-// The status before the count of finished episodes is checked: the launcher's word first.
-RunStatus statusFrom(std::vector<Fault>& faults, bool interrupted, const ReportSeen& report) {
-  const std::optional<RunStatus> reported = lookUpWord<RunStatus>(report.status);
-  if (interrupted) return RunStatus::Interrupted;
-  if (anyNotSurvived(faults)) return RunStatus::Failed;
-  if (!faults.empty() && reported == RunStatus::Completed) return RunStatus::Degraded;
-  if (!reported) {
-    faults.push_back({FaultKind::ReportInvalid,
-                      kFusionCenter,
-                      {},
-                      {},
-                      "the report's status is '" + report.status + "'"});
-    return RunStatus::Failed;
-  }
-  return *reported;
 }
 
 }  // namespace
@@ -55,8 +38,25 @@ Verdict decideVerdict(std::vector<Fault> faults, bool interrupted, const ReportS
                                    [](const Fault& f) { return f.process == kFusionCenter; });
     if (!named) faults.push_back({FaultKind::ReportMissing, kFusionCenter, {}, {}, report.problem});
   }
+  // The launcher's word first (a signal, a fault the run did not survive), then the report's.
+  sensornet::report::StatusEvidence seen;
+  seen.interrupted = interrupted;
+  seen.failed = anyNotSurvived(faults);
+  seen.earlier = lookUpWord<RunStatus>(report.status);
+  seen.lost = report.lost;
+  seen.episodes = report.finished_episodes;
+  seen.episodes_complete = report.complete_episodes.value_or(report.finished_episodes);
+  if (!seen.interrupted && !seen.failed && !seen.earlier) {
+    faults.push_back({FaultKind::ReportInvalid,
+                      kFusionCenter,
+                      {},
+                      {},
+                      "the report's status is '" + report.status + "'"});
+    seen.failed = true;
+  }
+  seen.faults = faults.size();
   Verdict verdict;
-  verdict.status = statusFrom(faults, interrupted, report);
+  verdict.status = sensornet::report::decideRunStatus(seen);
   if (verdict.status == RunStatus::Completed &&
       report.finished_episodes < static_cast<std::uint64_t>(episodes_planned)) {
     faults.push_back({FaultKind::MissingEpisodes,
@@ -65,7 +65,8 @@ Verdict decideVerdict(std::vector<Fault> faults, bool interrupted, const ReportS
                       {},
                       "reports " + std::to_string(report.finished_episodes) + " of " +
                           std::to_string(episodes_planned) + " episodes as finished"});
-    verdict.status = RunStatus::Failed;
+    seen.failed = true;
+    verdict.status = sensornet::report::decideRunStatus(seen);
   }
   verdict.faults = std::move(faults);
   return verdict;

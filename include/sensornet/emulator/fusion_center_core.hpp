@@ -42,6 +42,7 @@
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
+#include "sensornet/report/run_status.hpp"
 #include "sensornet/emulator/writer_claims.hpp"
 
 namespace sensornet::emulator {
@@ -250,8 +251,11 @@ class FusionCenterCore {
   void checkKeepingUp(std::uint32_t number, const OpenEpisode& open, EpisodeResult& result);
   void noteHeldBack(std::uint32_t number, const OpenEpisode& open);
   void publishReport(const EpisodeResult& e, std::vector<int> lacking_writers = {});
-  RunStatus decideStatus(const std::optional<RunEnd>& end,
-                         const std::map<std::string, std::uint64_t>& rejected_by_inputs);
+  // What the fusion center saw of how the run went, for the one status rule (run_status.hpp);
+  // records the faults it implies (the coordinator's abort, missing episodes, rejections).
+  report::StatusEvidence gatherStatusEvidence(
+      const std::optional<RunEnd>& end,
+      const std::map<std::string, std::uint64_t>& rejected_by_inputs);
   void noteRestart();
   [[nodiscard]] nlohmann::json restartFault() const;
   [[nodiscard]] nlohmann::json finalReport(RunStatus status, const std::string& written_at);

@@ -16,7 +16,7 @@
 // (means, Welford's sum of squares for the interval, per-sensor totals) and the latencies as a
 // fixed histogram of fine log-spaced bins (LatencyHistogram: median and p99 within a stated
 // relative error); with an episode log the entries are not held but read back from it when the
-// report is written (`per_episode` in log order, each episode once: the first of repeated ones,
+// report is written (`per_episode` in episode order, each episode once: the first of repeated ones,
 // a torn line skipped). Without a log (tests, a fusion center without --report) the entries
 // are held.
 //
@@ -255,7 +255,7 @@ class EpisodeLog {
 std::size_t forEachLoggedEpisode(const std::filesystem::path& path,
                                  const std::function<void(nlohmann::json)>& each);
 // The entries of a report's per_episode from its episode log: each episode once (the first of
-// repeated lines), in log order.
+// repeated lines), in episode order (the log holds them in the order they closed).
 void forEachReportedEpisode(const std::filesystem::path& episode_log,
                             const std::function<void(const nlohmann::json&)>& each);
 // Writes `doc` (a report without per_episode) with per_episode streamed in from `episode_log`,

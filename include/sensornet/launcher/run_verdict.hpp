@@ -9,9 +9,10 @@
 //   | 3    | degraded               |
 //   | 4    | a --require failed     |  (run_requirements.hpp: gatedExitCode)
 //
-// The fusion center decides completed or degraded from what it saw; the launcher has the final
-// word on process faults: a signal makes the run interrupted, a fault the run did not survive
-// makes it failed, a survived one makes a completed report degraded. No file is read here: the
+// The rule is run_status.hpp's, the one every decider uses: the fusion center gathers what it
+// saw into its report's status; the launcher has the final word on process faults: a signal
+// makes the run interrupted, a fault the run did not survive makes it failed, a survived one
+// makes a completed report degraded. No file is read here: the
 // caller reads the report (run_outcome.hpp) and passes what it found.
 //
 //   ReportSeen seen{true, "", "completed", 20};
@@ -19,6 +20,7 @@
 //   exitCodeOf(v.status);   // 0
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +41,8 @@ struct ReportSeen {
   std::string problem;    // then what is wrong: "wrote no report at ..."
   std::string status;     // the report's `status`, as written
   std::uint64_t finished_episodes = 0;
+  std::optional<std::uint64_t> complete_episodes;  // none: as many as finished
+  std::uint64_t lost = 0;  // the report's summary: measurements sent and never received
 };
 
 struct Verdict {
