@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "sensornet/core/student_t.hpp"
+#include "sensornet/report/run_record.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -414,6 +415,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
   };
   const bool measured_latency = latencies_.count() > 0;
   json report = {
+      {"schema_version", sensornet::report::kRecordSchemaVersion},
       {"run_id", run_id_},
       {"status", status},
       {"faults", faults.is_array() ? faults : json::array()},

@@ -28,6 +28,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "emulation_fixture.hpp"
+#include "sensornet/report/run_record.hpp"
 #include "support/background_process.hpp"
 #include "support/process.hpp"
 #include "support/sanitizer.hpp"
@@ -36,8 +37,35 @@ namespace sensornet::testing {
 
 inline const std::string kLauncher = SENSORNET_LAUNCHER;
 
+// A JSON file, parsed (discarded when it is not JSON). A run report among them also passes
+// through the record's one codec (run_record.hpp): it must decode, encode back to the same
+// document and hold to docs/report.schema.json, so that every real report of the suite (clean,
+// faulted, aborted, interrupted, external roles, rebuilt) checks the codec and the schema
+// against what the programs write.
 inline nlohmann::json readJson(const std::filesystem::path& path) {
-  return nlohmann::json::parse(readText(path), nullptr, false);
+  nlohmann::json doc = nlohmann::json::parse(readText(path), nullptr, false);
+  if (doc.is_object() && doc.contains("run_id") && doc.contains("summary") &&
+      doc.contains("status")) {
+    try {
+      const nlohmann::json again = report::encode(report::decodeRunRecord(doc));
+      if (again != doc) {
+        ADD_FAILURE() << path << ": the record's codec does not give back the report: "
+                      << nlohmann::json::diff(doc, again).dump();
+      }
+    } catch (const report::RecordError& e) {
+      ADD_FAILURE() << path << ": the record's codec refuses the report: " << e.what();
+    }
+    // ... and holds to the schema in docs/ (python3-jsonschema).
+    const ProcessResult valid = runProcess(
+        {"/usr/bin/python3", std::string(SENSORNET_SOURCE_DIR) + "/tests/support/validate_report.py",
+         path.string()},
+        std::chrono::seconds(60));
+    if (valid.exit_code != 0) {
+      ADD_FAILURE() << path << " does not hold to docs/report.schema.json:\n" << valid.out
+                    << valid.err;
+    }
+  }
+  return doc;
 }
 
 // The whole lines of a JSON Lines file, parsed (a torn last line is left out).

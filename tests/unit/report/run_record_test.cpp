@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -176,6 +177,34 @@ TEST(RunRecord, AWrongReportIsRefusedNamingTheKeyAndWhatWasExpected) {
             "summary.rejected_by_reason.cosmic_rays | a r");
   EXPECT_EQ(refusal([](json& d) { d["faults"][0]["caused_by"] = {{"kind", "crash"}}; }),
             "faults[0].caused_by.process | a string");
+}
+
+}  // namespace
+}  // namespace sensornet::report
+
+namespace sensornet::report {
+namespace {
+
+// The schema in docs/ names the same words as the vocabulary tables the codec reads and writes.
+template <class E>
+std::vector<std::string> tableWords() {
+  std::vector<std::string> words;
+  for (const auto& w : Words<E>::kTable) words.emplace_back(w.text);
+  return words;
+}
+
+TEST(RunRecordSchema, NamesEveryWordOfTheVocabulariesTheCodecUses) {
+  std::ifstream in(std::string(SENSORNET_SOURCE_DIR) + "/docs/report.schema.json");
+  ASSERT_TRUE(in) << "docs/report.schema.json";
+  const json schema = json::parse(in);
+  EXPECT_EQ(schema.at("$defs").at("fault_kind").at("enum").get<std::vector<std::string>>(),
+            tableWords<FaultKind>());
+  EXPECT_EQ(schema.at("$defs").at("rejection_reason").at("enum").get<std::vector<std::string>>(),
+            tableWords<RejectionReason>());
+  EXPECT_EQ(schema.at("properties").at("status").at("enum").get<std::vector<std::string>>(),
+            tableWords<RunStatus>());
+  EXPECT_EQ(schema.at("properties").at("schema_version").at("const").get<int>(),
+            kRecordSchemaVersion);
 }
 
 }  // namespace
