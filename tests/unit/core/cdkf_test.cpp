@@ -14,6 +14,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/random.hpp"
 #include "sensornet/core/scenario.hpp"
+#include "support/eigen_near.hpp"
 
 namespace sensornet {
 namespace {
@@ -21,12 +22,7 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-double relativeError(const MatrixXd& actual, const MatrixXd& expected) {
-  return (actual - expected).norm() / std::max(expected.norm(), 1e-300);
-}
-double relativeError(double actual, double expected) {
-  return std::abs(actual - expected) / std::max(std::abs(expected), 1e-300);
-}
+using testing::relativeError;
 
 MatrixXd gaussianMatrix(Eigen::Index rows, Eigen::Index cols, Rng& rng) {
   MatrixXd m(rows, cols);

@@ -13,6 +13,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/random.hpp"
+#include "support/eigen_near.hpp"
 #include "support/surrogate_references.hpp"
 
 // Every reference here is computed independently of the rollout's integrator: the exact
@@ -32,12 +33,7 @@ using reference::informationRate;
 
 constexpr double kRelTol = 1e-9;  // what the default rollout tolerance (1e-10) must deliver
 
-double relativeError(const MatrixXd& x, const MatrixXd& reference) {
-  return (x - reference).norm() / reference.norm();
-}
-double relativeError(double x, double reference) {
-  return std::abs(x - reference) / std::abs(reference);
-}
+using testing::relativeError;
 
 MatrixXd randomMatrix(Eigen::Index rows, Eigen::Index cols, Rng& rng) {
   MatrixXd m(rows, cols);
@@ -144,7 +140,7 @@ TEST(InformationForm, MatchesTheExactRiccatiSolutionAtEveryBoundary) {
                                schedule.intervalLength());
       const MatrixXd& p = r.covariances[static_cast<std::size_t>(k + 1)];
       EXPECT_LT(relativeError(p, exact), kRelTol) << "boundary " << k + 1;
-      EXPECT_EQ((p - p.transpose()).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_MATRIX_NEAR(p, p.transpose(), 0.0);  // exactly symmetric
     }
     EXPECT_EQ(r.running_cost, 0.0);  // W = 0 in the paper's protocol
     EXPECT_LT(relativeError(r.terminal_cost, exact.trace()), kRelTol);
@@ -257,7 +253,7 @@ TEST(CovarianceForm, MatchesABruteForceFineStepRk4) {
     for (std::size_t k = 1; k < reference.boundaries.size(); ++k) {
       EXPECT_LT(relativeError(r.covariances[k], reference.boundaries[k]), kRelTol)
           << "boundary " << k;
-      EXPECT_EQ((r.covariances[k] - r.covariances[k].transpose()).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_MATRIX_NEAR(r.covariances[k], r.covariances[k].transpose(), 0.0);
     }
     EXPECT_LT(relativeError(r.running_cost, reference.running_cost), kRelTol);
     EXPECT_LT(relativeError(r.terminal_cost, reference.boundaries.back().trace()), kRelTol);

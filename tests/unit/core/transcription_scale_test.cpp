@@ -13,6 +13,7 @@
 #include "sensornet/core/random.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate_transcription.hpp"
+#include "support/eigen_near.hpp"
 
 namespace sensornet {
 namespace {
@@ -70,8 +71,9 @@ TEST(InformationTranscriptionAtScale, GradientWithZeroRatesOnTwoThreadsMatchesCe
     }
     const double scale = fd.cwiseAbs().maxCoeff();
     ASSERT_GT(scale, 0.0);
-    EXPECT_LE((cg.gradient - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
-        << "adjoint\n" << cg.gradient << "\nfinite differences\n" << fd;
+    // In units of the largest finite difference: every entry within 1e-6 of it.
+    EXPECT_MATRIX_NEAR(cg.gradient / scale, fd / scale, 1e-6)
+        << "adjoint against finite differences";
   }
 }
 
@@ -109,7 +111,8 @@ TEST(InformationTranscriptionAtScale, GradientMatchesTheClosedFormOfADriftFreePl
     const CostGradient cg = t.costAndGradient(rates);
     EXPECT_NEAR(cg.cost, cost, 1e-10 * cost);
     const double scale = gradient.cwiseAbs().maxCoeff();
-    EXPECT_LE((cg.gradient - gradient).cwiseAbs().maxCoeff(), 1e-9 * scale) << threads;
+    // In units of the largest entry: every entry within 1e-9 of it.
+    EXPECT_MATRIX_NEAR(cg.gradient / scale, gradient / scale, 1e-9) << threads;
   }
 }
 

@@ -35,6 +35,14 @@ inline ScheduleVersion versionOf(std::uint32_t number, const RateSchedule& sched
   return v;
 }
 
+// Sensor 0 taken out of service: the other three share the budget.
+inline RateSchedule withoutSensorZero(const Scenario& s) {
+  Eigen::MatrixXd rates = uniformSchedule(s).rates();
+  rates.col(0).setZero();
+  rates *= 4.0 / 3.0;
+  return RateSchedule(s.horizon_s, rates);
+}
+
 // The CD-KF over the measurements in time order, by hand: what the fusion must equal bit for bit.
 inline double inOrderCost(const Scenario& scenario, std::vector<FusedMeasurement> all) {
   return sensornet::testing::inOrderCost(scenario, std::move(all));

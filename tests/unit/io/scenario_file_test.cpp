@@ -13,6 +13,8 @@
 #include <Eigen/Eigenvalues>
 
 #include "sensornet/core/input_error.hpp"
+#include "support/eigen_near.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
@@ -73,12 +75,11 @@ TEST(ScenarioFile, ParsesTheRandomFormReproducibly) {
   const Scenario b = parseScenarioYaml(text, "r.yaml");
   EXPECT_EQ(a.stateDim(), 4);
   EXPECT_EQ(a.sensorCount(), 7);
-  EXPECT_TRUE(a.plant.A.isApprox(b.plant.A, 0.0));
+  EXPECT_MATRIX_NEAR(a.plant.A, b.plant.A, 0.0);
   EXPECT_DOUBLE_EQ(a.constraints.b(0), 5.0);
   // The paper's protocol: orthonormal sensor rows, R eigenvalues in [1, 10], Q = I, P0 = 100 I.
   for (const auto& sensor : a.sensors) {
-    EXPECT_NEAR((sensor.H * sensor.H.transpose() - Eigen::MatrixXd::Identity(1, 1)).norm(), 0,
-                1e-12);
+    EXPECT_MATRIX_NEAR(sensor.H * sensor.H.transpose(), Eigen::MatrixXd::Identity(1, 1), 1e-12);
     EXPECT_GE(sensor.R(0, 0), 1.0);
     EXPECT_LE(sensor.R(0, 0), 10.0);
   }
@@ -106,7 +107,7 @@ struct BadScenarioCase {
 // Names the case in test output and in ctest's test list ("loss one", not its bytes).
 void PrintTo(const BadScenarioCase& c, std::ostream* os) { *os << c.what; }
 
-class BadScenario : public testing::TestWithParam<BadScenarioCase> {};
+class BadScenario : public ::testing::TestWithParam<BadScenarioCase> {};
 
 TEST_P(BadScenario, IsRejectedWithAMessageNamingFileFieldAndExpectation) {
   const BadScenarioCase& c = GetParam();
@@ -119,7 +120,7 @@ TEST_P(BadScenario, IsRejectedWithAMessageNamingFileFieldAndExpectation) {
 
 INSTANTIATE_TEST_SUITE_P(
     EveryKindOfBadInput, BadScenario,
-    testing::Values(
+    ::testing::Values(
         BadScenarioCase{"A not square", replaced("A: [[0, 1], [0, -1]]", "A: [[0, 1]]"),
                         "plant.A", "square"},
         BadScenarioCase{"Q wrong size", replaced("Q: [[0, 0], [0, 1]]", "Q: [[1]]"), "plant.Q",
@@ -279,7 +280,7 @@ TEST(ScenarioFileNetwork, ShippedLossyScenarioParsesWithANetwork) {
 
 INSTANTIATE_TEST_SUITE_P(
     NetworkAndFaults, BadScenario,
-    testing::Values(
+    ::testing::Values(
         BadScenarioCase{"loss one", withNetwork("network: {default: {loss: 1}}\n"),
                         "network.default.loss", "[0, 1), got 1"},
         BadScenarioCase{"loss negative", withNetwork("network: {sensors: {0: {loss: -0.1}}}\n"),
@@ -434,13 +435,11 @@ TEST(ScenarioFile, MissingFileIsAnInputError) {
 TEST(ScheduleFile, RoundTripsAndRejectsMalformedSchedules) {
   const Scenario s = parseScenarioYaml(kValid, "ok.yaml");
   const RateSchedule uniform = uniformSchedule(s);
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("sched-" + std::to_string(::getpid()) + ".json"))
-          .string();
+  const sensornet::testing::ScratchDir dir;
+  const std::string path = dir.file("sched.json");
   writeScheduleFile(path, uniform, {{"surrogate", "uniform"}});
   const RateSchedule back = loadScheduleFile(path, s);
-  EXPECT_TRUE(back.rates().isApprox(uniform.rates(), 0.0));
-  std::remove(path.c_str());
+  EXPECT_MATRIX_NEAR(back.rates(), uniform.rates(), 0.0);
 
   auto bad = [](const std::string& text, const char* field) {
     try {
@@ -459,18 +458,14 @@ TEST(ScheduleFile, RoundTripsAndRejectsMalformedSchedules) {
   bad("{\"horizon\": 2, \"intervals\": 1, \"rates\": [[1]]", "valid JSON");
 
   // Shape and feasibility against the scenario.
-  const std::string infeasible = path + ".bad";
-  {
-    std::ofstream out(infeasible);
-    out << R"({"horizon": 2, "intervals": 4, "rates": [[1,1],[1,1],[3,1],[1,1]]})";
-  }
+  const std::string infeasible =
+      dir.write("sched.json.bad", R"({"horizon": 2, "intervals": 4, "rates": [[1,1],[1,1],[3,1],[1,1]]})");
   try {
     (void)loadScheduleFile(infeasible, s);
     ADD_FAILURE() << "accepted an infeasible schedule";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("interval 2"), std::string::npos) << e.what();
   }
-  std::remove(infeasible.c_str());
 }
 
 }  // namespace
