@@ -30,6 +30,7 @@
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_speakers.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
+#include "sensornet/io/forwarded_options.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
@@ -506,49 +507,23 @@ Subcommand addServeCommand(CLI::App& app) {
   emulator::addRunOptions(*cmd, options->run);
   options->run.security_identity = dds::SecurityRole::Coordinator;
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
-  wordOption<PlanSurrogate>(
-      cmd->add_option("--surrogate", options->surrogate,
-                      "how to plan the initial schedule: info, cov, uniform or mc (the expected "
-                      "realized cost by Monte Carlo; up to a minute)"));
-  cmd->add_option("--schedule", options->schedule_path,
-                  "use this schedule file (JSON) instead of planning");
-  cmd->add_option("--episodes", options->core.episodes, "episodes to run")
-      ->capture_default_str()
-      ->check(integerRange(emulator::kMinEpisodes, emulator::kMaxEpisodes));
-  cmd->add_option("--time-scale", options->core.time_scale,
-                  "emulated seconds per wall second (1 = real time, 10 = ten times faster)")
-      ->capture_default_str()
-      ->check(numberRange(emulator::kMinTimeScale, emulator::kMaxTimeScale));
-  cmd->add_option("--seed", options->seed,
-                  "run seed: keys the plant truth, the arrivals and the sensor noise")
-      ->capture_default_str();
-  cmd->add_option("--ready-timeout", options->core.ready_timeout_s,
-                  "seconds to wait for every sensor and the fusion center")
-      ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--switch-margin", options->core.switch_margin_s,
-                  "wall seconds between a live re-plan and the time it takes effect")
-      ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--replan-every", options->replan_every,
-                  "closed loop: at each multiple of DT emulated seconds of every episode, "
-                  "re-plan the rest of it from the fused covariance with the run's --surrogate "
-                  "(info or cov), taking effect --switch-margin later; every episode starts "
-                  "with the open-loop plan again (a receding horizon). Default: open loop")
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  // The options the launcher forwards: declared once (io/forwarded_options.hpp).
+  addSurrogateOption(*cmd, options->surrogate);
+  addScheduleOption(*cmd, options->schedule_path);
+  addEpisodesOption(*cmd, options->core.episodes);
+  addTimeScaleOption(*cmd, options->core.time_scale);
+  addSeedOption(*cmd, options->seed);
+  addReadyTimeoutOption(*cmd, options->core.ready_timeout_s);
+  addSwitchMarginOption(*cmd, options->core.switch_margin_s);
+  addReplanEveryOption(*cmd, options->replan_every);
   cmd->add_option("--episode-gap", options->core.episode_gap_s,
                   "wall seconds between one episode's end and the next one's start (the next "
                   "episode is announced while the current one runs)")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
-  wordOption<emulator::FailurePolicy>(
-      cmd->add_option("--on-sensor-failure", options->core.on_sensor_failure,
-                      "when sensors die (--sensor-deaths says who tells): replan = re-plan the rest of "
-                      "the horizon among the survivors (rate zero for the dead from a switch tick "
-                      "on, a full-horizon version from the next episode), continue = keep the "
-                      "schedule, stop = end the run as failed (the report says so; the coordinator "
-                      "itself exits 0). Either way the dead sensors are announced and nobody waits "
-                      "for them"));
+  addOnSensorFailureOption(*cmd, options->core.on_sensor_failure,
+                           ". --sensor-deaths says who tells; with stop the report says the run "
+                           "failed and the coordinator itself exits 0");
   wordOption<emulator::DeathWitness>(
       cmd->add_option("--sensor-deaths", options->core.sensor_deaths,
                       "who tells the coordinator that sensors died: launcher = the launcher's "
@@ -562,15 +537,11 @@ Subcommand addServeCommand(CLI::App& app) {
                   "liveliness (a stall, a cut link) before it counts as dead")
       ->capture_default_str()
       ->check(positiveNumber(emulator::kMaxWallSeconds));
-  cmd->add_flag("--network-aware", options->core.network_aware,
+  cmd->add_flag(std::string(kNetworkAwareFlag), options->core.network_aware,
                 "plan the initial schedule and every re-plan for the rates the scenario's "
                 "network: section delivers (loss thins them, outages of every episode zero "
                 "them), with C lambda <= b on the planned rates; needs a network: section");
-  wordOption(cmd->add_option("--arrivals", options->arrivals,
-                             "how every sensor's instants follow from its rates (timetable: "
-                             "deterministic, where the integrated rate is k - 1/2); overrides "
-                             "the scenario's arrivals: and is announced with the scenario"),
-             wordTexts<ArrivalMode>());
+  addArrivalsOption(*cmd, options->arrivals, "; announced with the scenario");
   CLI::Option* state =
       cmd->add_option("--state", options->state_path,
                       "keep a journal of the run in FILE (JSON, missing folders made; replaced "

@@ -21,6 +21,8 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/io/forwarded_options.hpp"
+#include "sensornet/io/utc_time.hpp"
 #include "sensornet/dds/listener.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
@@ -77,16 +79,6 @@ constexpr auto kMetricsPeriod = 250ms;
 
 // The Report instances (one per episode) kept registered for late joiners: the latest ones.
 constexpr std::size_t kReportsKept = 64;
-
-// Now, as an ISO 8601 UTC time ("2026-11-30T18:20:00Z"): when the report was written.
-std::string utcNow() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
-}
 
 using Arrival = emulator::MeasurementArrival;
 
@@ -525,11 +517,7 @@ Subcommand addServeCommand(CLI::App& app) {
                 "--reference-fusion): fuse the same measurements, write the report file, and "
                 "publish Report and FusionState in partition <partition>/reference, where the "
                 "coordinator does not pace on them");
-  cmd->add_option("--metrics", options->metrics_address,
-                  "serve the run's live metrics in the Prometheus text format at "
-                  "http://HOST:PORT/metrics (HOST a numeric IPv4 address: 127.0.0.1 keeps it on "
-                  "this host); kept up 2 s after the final report so a scraper gets the last "
-                  "values");
+  addMetricsOption(*cmd, options->metrics_address);
   cmd->add_flag("--json", options->json, "also print the final report as one JSON line");
   cmd->add_flag("--resume", options->resume,
                 "restarted after a death (the launcher adds it): start the report from the "

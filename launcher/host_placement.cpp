@@ -15,17 +15,12 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "sensornet/dds/unicast_config.hpp"
+#include "sensornet/launcher/host_placement.hpp"
 
 namespace sensornet::launcher {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct LocalAddress {
-  std::uint32_t address = 0;  // host byte order
-  std::uint32_t netmask = 0;
-  std::string text;
-};
 
 // The IPv4 addresses of this machine's interfaces that are up.
 std::vector<LocalAddress> localAddresses() {
@@ -47,35 +42,11 @@ std::vector<LocalAddress> localAddresses() {
   return found;
 }
 
-std::uint32_t parsedAddress(const std::string& text) {
-  in_addr address{};
-  (void)::inet_pton(AF_INET, text.c_str(), &address);
-  return ntohl(address.s_addr);
-}
-
 // launcher.address if given (it must be this machine's), else the address of the local
 // interface on the coordinator host's network.
 std::string findLauncherAddress(const emulator::HostsFile& hosts) {
-  const std::vector<LocalAddress> local = localAddresses();
-  if (hosts.launcher_address) {
-    const bool ours = std::any_of(local.begin(), local.end(), [&](const LocalAddress& a) {
-      return a.text == *hosts.launcher_address;
-    });
-    if (!ours) {
-      throw InputError(hosts.source, "launcher.address",
-                       "an address of an interface of this machine that is up, got " +
-                           *hosts.launcher_address);
-    }
-    return *hosts.launcher_address;
-  }
-  const std::uint32_t target = parsedAddress(hosts.coordinatorHost().address);
-  for (const LocalAddress& a : local) {
-    if (a.netmask != 0 && (a.address & a.netmask) == (target & a.netmask)) return a.text;
-  }
-  throw InputError(hosts.source, "launcher.address",
-                   "an address of this machine on the hosts' network: no interface of this "
-                   "machine is on the network of " + hosts.coordinatorHost().address +
-                       " (the coordinator's host); give launcher: address:");
+  return chooseLauncherAddress(localAddresses(), hosts.launcher_address,
+                               hosts.coordinatorHost().address, hosts.source);
 }
 
 // The prefix with its program as an absolute path (ProcessGroup does not search PATH).
@@ -104,10 +75,6 @@ std::vector<std::string> resolvedPrefix(const emulator::Host& host) {
   return prefix;
 }
 
-bool isSsh(const std::vector<std::string>& prefix) {
-  return !prefix.empty() && fs::path(prefix.front()).filename() == "ssh";
-}
-
 }  // namespace
 
 HostPlacement::HostPlacement(const emulator::HostsFile& hosts)
@@ -123,38 +90,11 @@ void HostPlacement::place(ChildSpec& child, const emulator::Host& host,
   child.argv.insert(child.argv.end(),
                     {"--cyclone-config", dds::unicastConfigXml(host.address, peers_, role)});
   const auto index = static_cast<std::size_t>(&host - hosts_.hosts.data());
-  const std::vector<std::string>& prefix = prefixes_.at(index);
-  if (prefix.empty()) return;
-  std::vector<std::string> argv = prefix;
-  for (const std::string& word : child.argv) {
-    argv.push_back(isSsh(prefix) ? shellQuoted(word) : word);
-  }
-  child.argv = std::move(argv);
+  child.argv = prefixedArgv(prefixes_.at(index), child.argv);
 }
 
 std::string HostPlacement::launcherConfigXml() const {
   return dds::unicastConfigXml(launcher_address_, peers_, dds::DiscoveryRole::Hub);
-}
-
-std::vector<std::vector<int>> sensorBlocks(const emulator::HostsFile* hosts, int sensor_count,
-                                           int per_process) {
-  std::vector<std::vector<int>> groups;
-  if (hosts == nullptr) {
-    groups.emplace_back();
-    for (int j = 0; j < sensor_count; ++j) groups.back().push_back(j);
-  } else {
-    for (const emulator::Host& host : hosts->hosts) groups.push_back(host.sensors);
-  }
-  std::vector<std::vector<int>> blocks;
-  const auto size = static_cast<std::size_t>(std::max(1, per_process));
-  for (const std::vector<int>& group : groups) {
-    for (std::size_t first = 0; first < group.size(); first += size) {
-      const auto last = std::min(first + size, group.size());
-      blocks.emplace_back(group.begin() + static_cast<std::ptrdiff_t>(first),
-                          group.begin() + static_cast<std::ptrdiff_t>(last));
-    }
-  }
-  return blocks;
 }
 
 CLI::Validator sensorsPerProcessValue() {
@@ -163,17 +103,6 @@ CLI::Validator sensorsPerProcessValue() {
         return input == "auto" ? std::string() : count(input);
       },
       "auto|N");
-}
-
-int sensorsPerProcess(const std::string& given, int sensor_count) {
-  if (given != "auto") return std::stoi(given);  // checked by the option's validator
-  return std::max(1, (sensor_count + kAutoSensorProcesses - 1) / kAutoSensorProcesses);
-}
-
-std::string shellQuoted(const std::string& word) {
-  std::string quoted = "'";
-  for (const char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
 }
 
 }  // namespace sensornet::launcher

@@ -46,23 +46,7 @@ class HostPlacement {
   std::vector<std::vector<std::string>> prefixes_;  // per host: its exec prefix, resolved
 };
 
-// --sensors-per-process auto: one sensor per process up to this many sensor processes, else
-// the fewest equal blocks that stay within it. Start-up and the idle load grow with the number
-// of processes, not of sensors; measured on the 2-core machine (bench/README.md, "Start-up at
-// scale"), 60 one-sensor processes are all ready in about 3 s, 100 in about 10 s.
-inline constexpr int kAutoSensorProcesses = 50;
-inline constexpr int kMaxSensorsPerProcess = 1'000'000;
-// --sensors-per-process: "auto" or a whole number in [1, kMaxSensorsPerProcess].
+// --sensors-per-process: "auto" or a whole number in [1, kMaxSensorsPerProcess] (launch_plan.hpp).
 [[nodiscard]] CLI::Validator sensorsPerProcessValue();
-// The sensors of one sensor_agent process for --sensors-per-process `given` (checked already):
-// the count given, or for "auto" one each up to kAutoSensorProcesses processes, else
-// ceil(M / kAutoSensorProcesses).
-[[nodiscard]] int sensorsPerProcess(const std::string& given, int sensor_count);
-// The sensors of each sensor_agent process, `per_process` at most each: consecutive blocks of
-// 0..sensor_count-1 on one host; on several hosts, blocks of each host's sensors in file order.
-[[nodiscard]] std::vector<std::vector<int>> sensorBlocks(const emulator::HostsFile* hosts,
-                                                         int sensor_count, int per_process);
-// `word` quoted for a POSIX shell ('...', with ' as '\'').
-[[nodiscard]] std::string shellQuoted(const std::string& word);
 
 }  // namespace sensornet::launcher

@@ -46,7 +46,10 @@
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/forwarded_options.hpp"
+#include "sensornet/io/utc_time.hpp"
 #include "sensornet/io/word_option.hpp"
+#include "sensornet/launcher/launch_plan.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -61,48 +64,9 @@ constexpr seconds kStopGrace{3};
 constexpr milliseconds kLiveRunProbe{500};
 constexpr std::size_t kLogLinesShown = 15;
 
-struct LaunchOptions {
-  std::string scenario_path;
-  int episodes = 20;
-  double time_scale = 1.0;
-  std::string seed = "1";  // checked by seedNumber(); passed on as written
-  std::string report_path;
-  std::string sensors_per_process = "auto";  // or a count: see sensorsPerProcess()
-  std::string surrogate = "cov";
-  std::string schedule_path;
+// The launch's options (launch_plan.hpp) and how its processes reach the run's DDS domain.
+struct CommandOptions : LaunchOptions {
   emulator::RunOptions run;
-  std::string log_dir;
-  double timeout_s = 0.0;  // 0: no limit
-  bool json = false;
-  bool no_html = false;  // no report page (report.html) beside the report
-  std::string on_sensor_failure = "replan";
-  std::string network_aware = "auto";  // auto: when the scenario has a network: section
-  std::string arrivals;  // poisson or timetable; empty: the scenario's `arrivals:`
-  std::string require;  // --require criteria (run_requirements.hpp), checked after the run
-  std::string junit_path;  // --junit: the run and each criterion as JUnit test cases
-  std::string record_path;  // --record: every sample of the run, as received, in an MCAP file
-  std::string metrics_address;  // --metrics: our fusion center serves /metrics (Prometheus) here
-  std::string external_sensors;  // --external-sensors: sensors a participant of the user's speaks for
-  bool external_fusion_center = false;  // --external-fusion-center: a participant of the user's fuses
-  bool reference_fusion = false;  // --reference-fusion: ours beside it, on the same measurements
-  double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator
-  double replan_every_s = 0.0;    // --replan-every, passed to the coordinator (0: open loop)
-  std::optional<double> switch_margin_s;  // --switch-margin, passed to the coordinator
-  std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
-};
-
-// What one launch starts, decided before anything starts.
-struct LaunchPlan {
-  std::string run_id;
-  fs::path log_dir;
-  bool default_log_dir = false;  // in the scratch folder, which must be private
-  fs::path report_path;
-  bool default_report = false;      // in the log folder
-  std::vector<ChildSpec> children;  // in start order: fusion center, sensor agents, coordinator
-  std::vector<std::string> sensor_agents;
-  std::map<std::string, std::vector<int>> sensors_of;  // sensor agent -> the sensors it hosts
-  fs::path coordinator_state;  // the coordinator's journal, what a restarted one resumes from
-  fs::path reference_report;   // --reference-fusion: the reference fusion center's report
 };
 
 // --require as parseRequirements() takes it, so that an unknown criterion is refused before
@@ -120,40 +84,8 @@ CLI::Validator requirementList() {
       "CRITERIA");
 }
 
-// A run seed as the coordinator takes it: a decimal integer that fits 64 bits unsigned.
-// (CLI11 would read "-1" as 2^64 - 1 and "010" as octal.)
-CLI::Validator seedNumber() {
-  const std::string range = "an integer from 0 to 18446744073709551615";
-  return CLI::Validator(
-      [range](std::string& input) -> std::string {
-        std::uint64_t value = 0;
-        const char* end = input.data() + input.size();
-        const auto [stop, error] = std::from_chars(input.data(), end, value);
-        const bool digits_only =
-            !input.empty() && input.find_first_not_of("0123456789") == std::string::npos;
-        if (!digits_only || error != std::errc() || stop != end) {
-          return "expected " + range + ", got '" + input.substr(0, 40) +
-                 (input.size() > 40 ? "...'" : "'");
-        }
-        return {};
-      },
-      range);
-}
-
-// --external-sensors as sensor ids of the scenario (sorted); InputError for anything else.
-std::vector<int> externalSensors(const LaunchOptions& options, int sensor_count) {
-  if (options.external_sensors.empty()) return {};
-  std::vector<int> ids = emulator::parseSensorIds(options.external_sensors, "--external-sensors");
-  if (ids.back() >= sensor_count) {
-    throw InputError("--external-sensors", "sensors",
-                     "sensor ids of the scenario (0 to " + std::to_string(sensor_count - 1) +
-                         "), got " + std::to_string(ids.back()));
-  }
-  return ids;
-}
-
 // The flags every child needs to join the run: the launcher's own, resolved.
-std::vector<std::string> runFlags(const LaunchOptions& options, const dds::DomainConfig& domain) {
+std::vector<std::string> runFlags(const CommandOptions& options, const dds::DomainConfig& domain) {
   std::vector<std::string> flags = {"--run-id", options.run.run_id};
   if (options.run.domain_id) {
     flags.insert(flags.end(), {"--domain-id", std::to_string(domain.domain_id)});
@@ -165,109 +97,20 @@ std::vector<std::string> runFlags(const LaunchOptions& options, const dds::Domai
   return flags;
 }
 
-// `flags` and, in a secured run, `--security` with the folder of `role` alone: a process receives
-// its own identity, key and permissions (and the CA's certificate and the governance), nothing of
-// another role and never the CA's key (docs/ARCHITECTURE.md, README "DDS Security").
-std::vector<std::string> roleFlags(std::vector<std::string> flags, const LaunchOptions& options,
-                                   const dds::SecurityIdentity& identity) {
+// What planLaunch needs of this host and the run's domain.
+PlanContext planContext(const CommandOptions& options, const Scenario& scenario,
+                        const EmulatorPrograms& programs, const dds::DomainConfig& domain,
+                        const emulator::HostsFile* hosts) {
+  PlanContext context{options.run.run_id,       programs,
+                      runFlags(options, domain), defaultLogDirectory(options.run.run_id),
+                      scenario.sensorCount(),   scenario.network.has_value(),
+                      hosts,                    {}};
   if (!options.run.security_dir.empty()) {
-    flags.insert(flags.end(),
-                 {"--security", dds::roleFolderOf(options.run.security_dir, identity).string()});
+    context.security_folder = [dir = options.run.security_dir](const dds::SecurityIdentity& id) {
+      return dds::roleFolderOf(dir, id).string();
+    };
   }
-  return flags;
-}
-
-ChildSpec childSpec(const std::string& name, std::vector<std::string> argv,
-                    const std::vector<std::string>& run_flags, const fs::path& log_dir) {
-  argv.insert(argv.end(), run_flags.begin(), run_flags.end());
-  return {name, std::move(argv), log_dir / (name + ".log")};
-}
-
-LaunchPlan planLaunch(const LaunchOptions& options, const Scenario& scenario,
-                      const EmulatorPrograms& programs, const dds::DomainConfig& domain,
-                      const emulator::HostsFile* hosts) {
-  const int sensor_count = scenario.sensorCount();
-  LaunchPlan plan;
-  plan.run_id = options.run.run_id;
-  plan.default_log_dir = options.log_dir.empty();
-  plan.log_dir =
-      plan.default_log_dir ? defaultLogDirectory(plan.run_id) : fs::absolute(options.log_dir);
-  plan.default_report = options.report_path.empty();
-  plan.report_path =
-      plan.default_report ? plan.log_dir / "report.json" : fs::absolute(options.report_path);
-  const std::vector<std::string> flags = runFlags(options, domain);
-
-  if (!options.external_fusion_center) {
-    std::vector<std::string> serve = {programs.fusion_center, "serve", "--report",
-                                      plan.report_path.string()};
-    if (!options.metrics_address.empty()) {
-      serve.insert(serve.end(), {"--metrics", options.metrics_address});
-    }
-    plan.children.push_back(childSpec(kFusionCenter, serve,
-                                      roleFlags(flags, options, dds::SecurityRole::FusionCenter),
-                                      plan.log_dir));
-    plan.children.back().parent_death_signal = emulator::kLauncherDeathSignal;  // it writes the report
-  } else if (options.reference_fusion) {
-    plan.reference_report = plan.log_dir / "reference-report.json";
-    plan.children.push_back(childSpec(
-        kReferenceFusionCenter,
-        {programs.fusion_center, "serve", "--reference", "--report", plan.reference_report},
-        roleFlags(flags, options, dds::SecurityRole::FusionCenter), plan.log_dir));
-    plan.children.back().parent_death_signal = emulator::kLauncherDeathSignal;
-  }
-  const int per_process = sensorsPerProcess(options.sensors_per_process, sensor_count);
-  // External sensors get no agent: a participant of the user's speaks for them.
-  const std::vector<int> external = externalSensors(options, sensor_count);
-  std::vector<std::vector<int>> blocks;
-  for (std::vector<int> block : sensorBlocks(hosts, sensor_count, per_process)) {
-    std::erase_if(block, [&](int j) { return std::binary_search(external.begin(), external.end(), j); });
-    if (!block.empty()) blocks.push_back(std::move(block));
-  }
-  for (const std::vector<int>& sensors : blocks) {
-    const std::string block = emulator::formatSensorIds(sensors);
-    const std::string name = "sensor_agent-" + block;
-    plan.children.push_back(
-        childSpec(name, {programs.sensor_agent, "--sensors", block},
-                  roleFlags(flags, options, {dds::SecurityRole::Sensor, block}), plan.log_dir));
-    plan.sensor_agents.push_back(name);
-    plan.sensors_of[name] = sensors;
-  }
-  std::vector<std::string> coordinator = {programs.coordinator,
-                                          "serve",
-                                          "--scenario",
-                                          fs::absolute(options.scenario_path),
-                                          "--surrogate",
-                                          options.surrogate,
-                                          "--episodes",
-                                          std::to_string(options.episodes),
-                                          "--time-scale",
-                                          formatNumber(options.time_scale),
-                                          "--seed",
-                                          options.seed};
-  if (!options.schedule_path.empty()) {
-    coordinator.insert(coordinator.end(), {"--schedule", fs::absolute(options.schedule_path)});
-  }
-  plan.coordinator_state = plan.log_dir / "coordinator-state.json";
-  coordinator.insert(coordinator.end(), {"--on-sensor-failure", options.on_sensor_failure,
-                                         "--state", plan.coordinator_state});
-  if (options.network_aware == "yes" ||
-      (options.network_aware == "auto" && scenario.network.has_value())) {
-    coordinator.emplace_back("--network-aware");
-  }
-  if (!options.arrivals.empty()) {
-    coordinator.insert(coordinator.end(), {"--arrivals", options.arrivals});
-  }
-  coordinator.insert(coordinator.end(), {"--ready-timeout", formatNumber(options.ready_timeout_s)});
-  if (options.replan_every_s > 0.0) {
-    coordinator.insert(coordinator.end(), {"--replan-every", formatNumber(options.replan_every_s)});
-  }
-  if (options.switch_margin_s) {
-    coordinator.insert(coordinator.end(), {"--switch-margin", formatNumber(*options.switch_margin_s)});
-  }
-  plan.children.push_back(childSpec(kCoordinator, std::move(coordinator),
-                                    roleFlags(flags, options, dds::SecurityRole::Coordinator),
-                                    plan.log_dir));
-  return plan;
+  return context;
 }
 
 // --hosts: every child runs through its host's prefix with its host's Cyclone configuration.
@@ -393,13 +236,13 @@ class CurrentRunRecord {
 
 // What the supervisor core needs to know of this launch: the sensor agents and their sensors,
 // the external sensors, the failure policy, the scenario's scripted crashes, the time limit.
-SupervisorConfig supervisorConfig(const LaunchPlan& plan, const LaunchOptions& options,
+SupervisorConfig supervisorConfig(const LaunchPlan& plan, const CommandOptions& options,
                                   const Scenario& scenario, const std::vector<int>& external) {
   SupervisorConfig config;
   for (const std::string& name : plan.sensor_agents) {
     config.sensor_agents.emplace_back(name, plan.sensors_of.at(name));
   }
-  config.on_sensor_failure = *lookUpWord<emulator::FailurePolicy>(options.on_sensor_failure);
+  config.on_sensor_failure = options.on_sensor_failure;
   if (options.external_fusion_center) {
     config.report_writer = options.reference_fusion ? kReferenceFusionCenter : "";
   }
@@ -464,7 +307,7 @@ void nameSilentExternals(const std::vector<int>& external, bool external_fusion_
 }
 
 // Every role's identity and one per sensor process of `plan`, each checked (security.hpp).
-void checkSecurityFiles(const LaunchOptions& options, const LaunchPlan& plan) {
+void checkSecurityFiles(const CommandOptions& options, const LaunchPlan& plan) {
   std::vector<std::string> blocks;
   for (const std::string& name : plan.sensor_agents) {
     blocks.push_back(emulator::formatSensorIds(plan.sensors_of.at(name)));
@@ -478,7 +321,7 @@ void checkSecurityFiles(const LaunchOptions& options, const LaunchPlan& plan) {
   dds::checkSecurityFolder(options.run.security_dir, blocks, make);
 }
 
-int runLaunch(LaunchOptions options) {
+int runLaunch(CommandOptions options) {
   // First of all: a Ctrl-C in the first instants (or SIGINT inherited as ignored, as a shell's
   // background job has it) is the run's interruption, seen by the supervisor at its first look,
   // never a launcher killed with 130 and no report (issue 31, chaos seed 45).
@@ -516,13 +359,16 @@ int runLaunch(LaunchOptions options) {
     throw InputError(options.scenario_path, "network",
                      "a network: section for --network-aware yes (the scenario has none)");
   }
-  if (options.replan_every_s > 0.0 && options.surrogate != "info" && options.surrogate != "cov") {
+  if (options.replan_every_s > 0.0 && options.surrogate != PlanSurrogate::Information &&
+      options.surrogate != PlanSurrogate::Covariance) {
     throw InputError("--replan-every", "--surrogate",
                      "info or cov (the closed loop re-plans with the run's surrogate), got " +
-                         options.surrogate);
+                         std::string(wordOf(options.surrogate)));
   }
-  const std::vector<int> external = externalSensors(options, scenario.sensorCount());
-  LaunchPlan plan = planLaunch(options, scenario, programs, domain, hosts ? &*hosts : nullptr);
+  const std::vector<int> external =
+      externalSensors(options.external_sensors, scenario.sensorCount());
+  LaunchPlan plan =
+      planLaunch(options, planContext(options, scenario, programs, domain, hosts ? &*hosts : nullptr));
   // Every identity's files, so that a bad one is refused here, not when its process starts.
   if (!options.run.security_dir.empty()) checkSecurityFiles(options, plan);
   if (placement) placeOnHosts(plan, *hosts, *placement);
@@ -679,7 +525,7 @@ int runLaunch(LaunchOptions options) {
   if (!options.junit_path.empty()) {  // like the page: a warning, never an exit code
     const emulator::JunitRun junit{
         plan.run_id, std::string(wordOf(outcome.status)), outcome.exit_code,
-        outcome.report.value("faults", nlohmann::json::array()), outcome.checks,
+        report::encode(outcome.report.faults), outcome.checks,
         std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count()};
     try {
       replaceFileAtomically(options.junit_path, emulator::junitXml(junit));
@@ -723,7 +569,7 @@ constexpr const char* kLaunchFooter =
 }  // namespace
 
 Subcommand addLaunchCommand(CLI::App& app) {
-  auto options = std::make_shared<LaunchOptions>();
+  auto options = std::make_shared<CommandOptions>();
   CLI::App* cmd = app.add_subcommand(
       "launch",
       "Run one emulation of SCENARIO on this host: the coordinator, the fusion center and the "
@@ -735,19 +581,11 @@ Subcommand addLaunchCommand(CLI::App& app) {
       "--time-scale 10 --report report.json");
   cmd->footer(kLaunchFooter);
   cmd->add_option("scenario", options->scenario_path, "scenario file (YAML)")->required();
-  cmd->add_option("--episodes", options->episodes, "episodes to run")
-      ->check(integerRange(emulator::kMinEpisodes, emulator::kMaxEpisodes))
-      ->capture_default_str();
-  cmd->add_option("--time-scale", options->time_scale,
-                  "emulated seconds per wall second (10: ten times faster than real time)")
-      ->check(numberRange(emulator::kMinTimeScale, emulator::kMaxTimeScale))
-      ->capture_default_str();
-  cmd->add_option("--seed", options->seed,
-                  "run seed: keys the plant truth, the arrivals and the sensor noise (the "
-                  "coordinator's --seed); the same seed, scenario and schedule give the same "
-                  "realized costs")
-      ->check(seedNumber())
-      ->capture_default_str();
+  addEpisodesOption(*cmd, options->episodes);
+  addTimeScaleOption(*cmd, options->time_scale);
+  addSeedOption(*cmd, options->seed,
+                " (the coordinator's --seed); the same seed, scenario and schedule give the same "
+                "realized costs");
   cmd->add_option("--report", options->report_path,
                   "where the fusion center writes the final report (JSON): a regular file or a "
                   "new one (missing folders are made); default <log-dir>/report.json");
@@ -757,14 +595,10 @@ Subcommand addLaunchCommand(CLI::App& app) {
                       " processes, else the fewest equal blocks that stay within that many")
       ->check(sensorsPerProcessValue())
       ->capture_default_str();
-  wordOption(cmd->add_option(
-                 "--surrogate", options->surrogate,
-                 "how the coordinator plans the schedule: uniform, info (eq. 11), cov (eq. 15) "
-                 "or mc (E[J] itself by Monte Carlo, up to a minute). Default cov: its realized "
-                 "cost beat uniform and info on the paper's sweeps (bench/README.md)"),
-             wordTexts<PlanSurrogate>());
-  cmd->add_option("--schedule", options->schedule_path,
-                  "use this schedule file (JSON) instead of planning one");
+  addSurrogateOption(*cmd, options->surrogate,
+                     ". Default cov: its realized cost beat uniform and info on the paper's "
+                     "sweeps (bench/README.md)");
+  addScheduleOption(*cmd, options->schedule_path);
   emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   options->run.security_identity = dds::SecurityRole::Launcher;
   cmd->add_option("--hosts", options->hosts_path,
@@ -782,52 +616,29 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->add_option("--log-dir", options->log_dir,
                   "where each process's log goes, made if missing (default "
                   "/tmp/sensornet-<uid>/<run id>/)");
-  cmd->add_option("--ready-timeout", options->ready_timeout_s,
-                  "seconds the coordinator waits for every sensor (yours with --external-sensors "
-                  "too) and the fusion center before it gives up and the run fails")
-      ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--replan-every", options->replan_every_s,
-                  "closed loop: the coordinator re-plans the rest of every episode from the "
-                  "fused covariance at each multiple of DT emulated seconds (with --surrogate, "
-                  "info or cov; taking effect a switch margin later), and every episode starts "
-                  "with the open-loop plan again. Offline: fusion_center evaluate --replan-every. "
-                  "Default: open loop")
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
-  cmd->add_option("--switch-margin", options->switch_margin_s,
-                  "wall seconds between a re-plan (--replan-every's, a failure's, `sensornet "
-                  "replan`'s) and the moment it takes effect: the time every sensor has to hear "
-                  "of it. Raise it on a slow or loaded machine, where a re-plan published late "
-                  "moves to the next episode. Default: the coordinator's, " +
-                      formatNumber(emulator::CoordinatorConfig{}.switch_margin_s))
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
+  addReadyTimeoutOption(*cmd, options->ready_timeout_s,
+                        "; it waits for your sensors of --external-sensors too");
+  addReplanEveryOption(*cmd, options->replan_every_s,
+                       ". Offline: fusion_center evaluate --replan-every");
+  addSwitchMarginOption(*cmd, options->switch_margin_s,
+                        ". Default: the coordinator's, " +
+                            formatNumber(emulator::CoordinatorConfig{}.switch_margin_s));
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")
       ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
+  addOnSensorFailureOption(*cmd, options->on_sensor_failure,
+                           ". A sensor agent dies when it is killed, crashes, or by a scripted "
+                           "crash of the scenario's faults:");
   wordOption(cmd->add_option(
-                 "--on-sensor-failure", options->on_sensor_failure,
-                 "what the run does when a sensor agent dies (killed, crashed, or a scripted "
-                 "crash of the scenario's faults:): replan = the coordinator re-plans the rest "
-                 "of the horizon among the survivors (the dead sensors get rate zero from the "
-                 "switch on) and the run ends degraded; continue = keep the schedule, so the "
-                 "bracket shows the damage (degraded); stop = end the run as failed"),
-             wordTexts<emulator::FailurePolicy>());
-  wordOption(cmd->add_option(
-                 "--network-aware", options->network_aware,
+                 std::string(kNetworkAwareFlag), options->network_aware,
                  "plan for the rates the scenario's emulated network delivers (loss thins them, "
                  "outages zero them): yes, no, or auto = yes when the scenario has a network: "
                  "section"),
              {"auto", "yes", "no"});
-  wordOption(
-      cmd->add_option("--arrivals", options->arrivals,
-                      "how every sensor's instants follow from its rates: poisson (drawn afresh "
-                      "each episode) or timetable (deterministic, where the sensor's integrated "
-                      "rate reaches k - 1/2, the same every episode; across a re-plan the count "
-                      "continues on the rates in force); default: the scenario's arrivals:, else "
-                      "poisson. Under timetable the bracket [info, cov] bounds the Poisson mean of "
-                      "the schedule, not the run's cost"),
-      wordTexts<ArrivalMode>());
+  addArrivalsOption(*cmd, options->arrivals,
+                    ". Under timetable the bracket [info, cov] bounds the Poisson mean of the "
+                    "schedule, not the run's cost");
   cmd->add_option("--external-sensors", options->external_sensors,
                   "sensors (ids as sensor_agent --sensors takes them: 2,5 or 0-2) that a "
                   "participant of your own speaks for: no agent is started for them, and the run "
@@ -851,12 +662,10 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "in an MCAP file (message encoding cdr, schemas omgidl from idl/sensornet.idl; "
                   "readable by standard MCAP tools; see it with `sensornet replay FILE --info`); "
                   "the file is complete however the run ends, Ctrl-C included");
-  cmd->add_option("--metrics", options->metrics_address,
-                  "serve the run's live metrics for Prometheus at http://HOST:PORT/metrics "
-                  "(text format 0.0.4; HOST numeric IPv4, e.g. 127.0.0.1:9464 to stay on this "
-                  "host): per sensor sent/received/lost/dropped/late, rejections, episodes, the "
-                  "running mean cost and its interval, the latest schedule's version, bracket and "
-                  "rates, latency as a histogram, faults by kind; up until 2 s after the run");
+  addMetricsOption(*cmd, options->metrics_address,
+                   ". Served: per sensor sent/received/lost/dropped/late, rejections, episodes, the "
+                   "running mean cost and its interval, the latest schedule's version, bracket "
+                   "and rates, latency as a histogram, faults by kind");
   cmd->add_option("--junit", options->junit_path,
                   "also write the run as JUnit XML for CI: a test case \"run\" that passes only "
                   "when the run completed (its message: status, exit code, faults by kind) and "

@@ -21,6 +21,8 @@
 #include <vector>
 
 #include "host_placement.hpp"
+#include "sensornet/launcher/launch_plan.hpp"
+#include "sensornet/launcher/security_policy.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/xml_text.hpp"
 #include "sensornet/dds/security.hpp"
@@ -28,6 +30,7 @@
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/io/utc_time.hpp"
 #include "sensornet/io/word_option.hpp"
 
 extern char** environ;
@@ -57,116 +60,9 @@ struct PkiOptions {
 
 using dds::SecurityIdentity;
 
-// Who writes and who reads which topic (each program's writers and readers), and in which
-// partitions it may publish: a sensor process only in its own block's partition, the launcher
-// and an operator each in their own Command partition (emulator/run_partitions.hpp). The run's
-// id is not known here: "*" stands for it.
-struct TopicRights {
-  std::vector<const char*> publish;
-  std::vector<const char*> subscribe;
-  std::string publish_partition = "sensornet/*";
-};
-
-TopicRights rightsOf(const SecurityIdentity& identity) {
-  switch (identity.role) {
-    case SecurityRole::Coordinator:
-      return {{"Scenario", "Schedule", "EpisodeControl", "CommandReply"},
-              {"Scenario", "Schedule", "EpisodeControl", "Command", "SensorStatus", "Report",
-               "FusionState"}};
-    case SecurityRole::Sensor:
-      return {{"Measurement", "EpisodeTally", "SensorStatus"},
-              {"Scenario", "Schedule", "EpisodeControl"},
-              "sensornet/*/sensors/" + identity.sensors};
-    case SecurityRole::FusionCenter:  // CommandReply: a command refused by right is a fault
-      return {{"Report", "FusionState"},
-              {"Scenario", "Schedule", "EpisodeControl", "Measurement", "EpisodeTally",
-               "SensorStatus", "CommandReply"}};
-    case SecurityRole::Operator:
-    case SecurityRole::Launcher:  // it sends the sensors' failure notices as Commands
-      return {{"Command"},
-              {"Scenario", "Schedule", "EpisodeControl", "SensorStatus", "Report", "FusionState",
-               "CommandReply"},
-              "sensornet/*/" + std::string(dds::securityRoleName(identity.role))};
-  }
-  return {};
-}
-
-// Domain ids of every run: hashed into 1..230, or 0..230 with --domain-id.
-const char* const kDomains =
-    "<domains><id_range><min>0</min><max>230</max></id_range></domains>";
-
-std::string governanceXml() {
-  return std::string(R"(<?xml version="1.0" encoding="UTF-8"?>
-<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
-     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
-  <domain_access_rules>
-    <domain_rule>
-      )") + kDomains + R"(
-      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>
-      <enable_join_access_control>true</enable_join_access_control>
-      <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
-      <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
-      <rtps_protection_kind>NONE</rtps_protection_kind>
-      <topic_access_rules>
-        <topic_rule>
-          <topic_expression>*</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>true</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>SIGN</metadata_protection_kind>
-          <data_protection_kind>ENCRYPT</data_protection_kind>
-        </topic_rule>
-      </topic_access_rules>
-    </domain_rule>
-  </domain_access_rules>
-</dds>
-)";
-}
-
-std::string subjectOf(const SecurityIdentity& identity) {
-  return "CN=" + identity.name() + ",O=sensornet";
-}
-
 // 2026-11-30T21:00:00 in UTC, `days` from now.
 std::string utcIn(int days) {
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now() +
-                                                             std::chrono::hours(24 * days));
-  std::tm utc{};
-  gmtime_r(&t, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &utc);
-  return text;
-}
-
-std::string topicList(const std::vector<const char*>& topics, const std::string& partition) {
-  std::string xml = "<topics>";
-  for (const char* t : topics) xml += std::string("<topic>sensornet/") + t + "</topic>";
-  return xml + "</topics><partitions><partition>" + escapeXml(partition) +
-         "</partition></partitions>";
-}
-
-std::string permissionsXml(const SecurityIdentity& identity, int days) {
-  const TopicRights rights = rightsOf(identity);
-  return std::string(R"(<?xml version="1.0" encoding="UTF-8"?>
-<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
-     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
-  <permissions>
-    <grant name="sensornet_)") +
-         escapeXml(identity.name()) + R"(">
-      <subject_name>)" + escapeXml(subjectOf(identity)) + R"(</subject_name>
-      <validity><not_before>)" + utcIn(-1) + "</not_before><not_after>" + utcIn(days) +
-         R"(</not_after></validity>
-      <allow_rule>
-        )" + kDomains + R"(
-        <publish>)" + topicList(rights.publish, rights.publish_partition) + R"(</publish>
-        <subscribe>)" + topicList(rights.subscribe, "sensornet/*") + R"(</subscribe>
-      </allow_rule>
-      <default>DENY</default>
-    </grant>
-  </permissions>
-</dds>
-)";
+  return utcText(std::chrono::system_clock::now() + std::chrono::hours(24 * days), UtcForm::NoZone);
 }
 
 // Runs openssl with `args`; its output goes to `log`. InputError when openssl is not there,
@@ -223,21 +119,6 @@ void writeText(const fs::path& path, const std::string& text) {
   ::close(fd);
 }
 
-// What `pki init` makes, by folder: only these names are replaced by --force. In DIR: the CA's
-// certificate, the governance, the CA's folder, a folder per role and one per sensor process
-// ("sensor-<ids>").
-bool madeInRoot(const std::string& name) {
-  static const std::set<std::string> names = [] {
-    std::set<std::string> n = {"ca.pem", "governance.p7s", "ca"};
-    for (const SecurityRole role : dds::kSecurityRoles) n.emplace(dds::securityRoleName(role));
-    return n;
-  }();
-  return names.count(name) > 0 || name.rfind("sensor-", 0) == 0;
-}
-const std::set<std::string> kMadeInRole = {"identity.pem", "key.pem", "permissions.p7s",
-                                           "ca.pem", "governance.p7s"};
-const std::set<std::string> kMadeInCa = {"ca.key", "ca.pem"};
-
 // A folder the caller may keep private keys in: a real folder (not a symbolic link), owned by
 // the caller, writable by nobody else. Made (0700) when missing.
 void checkOwnedFolder(const fs::path& dir) {
@@ -267,8 +148,10 @@ void checkOwnedFolder(const fs::path& dir) {
 // folders. Refuses a symbolic link or a folder of another owner where it writes. In DIR
 // (`folders`) other files are left alone; in a role's or the CA's folder, which a process
 // receives whole, anything else is refused. Nothing is removed before everything is checked.
-void collectEarlierFiles(const fs::path& dir, const std::function<bool(const std::string&)>& made,
-                         bool folders, std::vector<fs::path>& files, std::vector<fs::path>& dirs) {
+void collectEarlierFiles(const fs::path& dir, PkiFolder kind, std::vector<fs::path>& files,
+                         std::vector<fs::path>& dirs) {
+  const bool folders = kind == PkiFolder::Root;
+  const auto made = [kind](const std::string& name) { return madeByPkiInit(kind, name); };
   std::error_code error;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, error)) {
     const fs::path& path = entry.path();
@@ -289,9 +172,7 @@ void collectEarlierFiles(const fs::path& dir, const std::function<bool(const std
     if (S_ISDIR(st.st_mode)) {
       if (!folders) throw InputError(path.string(), "", "a file `pki init` made, not a folder");
       checkOwnedFolder(path);
-      const std::set<std::string>& inside = name == "ca" ? kMadeInCa : kMadeInRole;
-      collectEarlierFiles(path, [&inside](const std::string& n) { return inside.count(n) > 0; },
-                          false, files, dirs);
+      collectEarlierFiles(path, name == "ca" ? PkiFolder::Ca : PkiFolder::Identity, files, dirs);
       dirs.push_back(path);
     } else if (S_ISREG(st.st_mode)) {
       files.push_back(path);
@@ -303,7 +184,7 @@ void collectEarlierFiles(const fs::path& dir, const std::function<bool(const std
 
 void removeEarlierFiles(const fs::path& dir) {
   std::vector<fs::path> files, dirs;
-  collectEarlierFiles(dir, madeInRoot, true, files, dirs);
+  collectEarlierFiles(dir, PkiFolder::Root, files, dirs);
   for (const fs::path& f : files) ::unlink(f.c_str());
   std::error_code error;
   for (const fs::path& d : dirs) fs::remove_all(d, error);  // emptied above, or our staging
@@ -449,7 +330,7 @@ class PkiMaker {
              stage("ca.srl").string(), "-days", days(), "-out", (own / "identity.pem").string()},
             log_);
     fs::remove(own / "identity.csr");
-    writeText(own / "permissions.xml", permissionsXml(identity, options_.days));
+    writeText(own / "permissions.xml", permissionsXml(identity, {utcIn(-1), utcIn(options_.days)}));
     sign(own / "permissions.xml", own / "permissions.p7s");
     fs::remove(own / "permissions.xml");
     fs::copy_file(ca_pem_, own / "ca.pem");
@@ -486,10 +367,6 @@ class PkiMaker {
   // The roles, then a sensor process's identity per block: those of `sensornet launch
   // SCENARIO` with the same --sensors-per-process and --hosts, or one per sensor.
   static std::vector<SecurityIdentity> identitiesOf(const PkiOptions& options) {
-    std::vector<SecurityIdentity> identities;
-    for (const SecurityRole role : dds::kSecurityRoles) {
-      if (role != SecurityRole::Sensor) identities.emplace_back(role);
-    }
     std::vector<std::vector<int>> blocks;
     if (options.scenario.empty()) {
       for (int j = 0; j < options.sensors; ++j) blocks.push_back({j});
@@ -503,12 +380,7 @@ class PkiMaker {
     for (const std::string& spec : options.sensor_blocks) {
       blocks.push_back(emulator::parseSensorIds(spec, "--sensor-block"));
     }
-    std::set<std::string> made;
-    for (const std::vector<int>& block : blocks) {
-      const std::string ids = emulator::formatSensorIds(block);
-      if (made.insert(ids).second) identities.emplace_back(SecurityRole::Sensor, ids);
-    }
-    return identities;
+    return securityIdentities(blocks);
   }
 
   [[nodiscard]] std::string identityNames() const {

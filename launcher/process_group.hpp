@@ -23,19 +23,10 @@
 #include <string>
 #include <vector>
 
+#include "sensornet/launcher/launch_plan.hpp"  // ChildSpec
 #include "sensornet/launcher/supervisor.hpp"  // ChildExit
 
 namespace sensornet::launcher {
-
-struct ChildSpec {
-  std::string name;                // e.g. "coordinator", "sensor_agent-0-2"
-  std::vector<std::string> argv;   // argv[0] is the program's path
-  std::filesystem::path log_path;  // standard output and error, truncated at start
-  // What the child gets when the launcher dies (PR_SET_PDEATHSIG): SIGKILL, so that nothing of
-  // the run outlives the launcher; the fusion center gets emulator::kLauncherDeathSignal, on
-  // which it writes the report with the launcher's death as its cause.
-  int parent_death_signal = SIGKILL;
-};
 
 class ProcessGroup {
  public:

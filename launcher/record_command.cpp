@@ -7,6 +7,7 @@
 #include <string>
 
 #include "interrupts.hpp"
+#include "sensornet/io/utc_time.hpp"
 #include "live_runs.hpp"
 #include "output_file.hpp"
 #include "run_follower.hpp"

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -16,6 +17,7 @@
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/mcap.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/io/utc_time.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -52,15 +54,10 @@ int runLive(const ReplayOptions& options) {
 }
 
 std::string utcOf(std::uint64_t ns) {
-  const auto seconds = static_cast<std::time_t>(ns / 1'000'000'000ULL);
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[40];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &utc);
-  char with_ms[48];
-  std::snprintf(with_ms, sizeof with_ms, "%s.%03lluZ", text,
-                static_cast<unsigned long long>((ns / 1'000'000ULL) % 1000ULL));
-  return with_ms;
+  const std::chrono::nanoseconds since_epoch(static_cast<std::int64_t>(ns));
+  return utcText(std::chrono::system_clock::time_point(
+                     std::chrono::duration_cast<std::chrono::system_clock::duration>(since_epoch)),
+                 UtcForm::Milliseconds);
 }
 
 int runInfo(const ReplayOptions& options) {

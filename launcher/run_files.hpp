@@ -22,6 +22,7 @@
 #include <string>
 
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/launcher/launch_plan.hpp"  // EmulatorPrograms
 
 namespace sensornet::launcher {
 
@@ -60,12 +61,6 @@ void forgetCurrentRun(const std::string& run_id);
 
 // "run-<pid>-<4 random hex digits>".
 [[nodiscard]] std::string generateRunId();
-
-struct EmulatorPrograms {
-  std::filesystem::path coordinator;
-  std::filesystem::path fusion_center;
-  std::filesystem::path sensor_agent;
-};
 
 // The programs next to this one: in $SENSORNET_BIN_DIR if set; else in the directory of the
 // running executable (installed layout, everything in bin/); else in the build tree

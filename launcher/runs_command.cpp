@@ -20,24 +20,8 @@
 #include "output_file.hpp"
 #include "run_files.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/words.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
-
-namespace sensornet::launcher {
-
-enum class RunState { Live, Finished, Unknown };
-
-}  // namespace sensornet::launcher
-
-namespace sensornet {
-template <>
-struct Words<launcher::RunState> {
-  using S = launcher::RunState;
-  static constexpr std::array<WordOf<S>, 3> kTable{
-      {{S::Live, "live"}, {S::Finished, "finished"}, {S::Unknown, "unknown"}}};
-};
-}  // namespace sensornet
 
 namespace sensornet::launcher {
 namespace {
@@ -79,14 +63,6 @@ class FolderLock {
   std::time_t modified_ = 0;
 };
 
-std::string utcText(std::time_t t) {
-  std::tm parts{};
-  ::gmtime_r(&t, &parts);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &parts);
-  return text;
-}
-
 // A JSON object read from a regular file (never through a link), or nullopt.
 std::optional<json> readObject(const fs::path& path) {
   struct stat info {};
@@ -95,17 +71,6 @@ std::optional<json> readObject(const fs::path& path) {
   json doc = json::parse(in, nullptr, false);
   if (!doc.is_object()) return std::nullopt;
   return doc;
-}
-
-std::string stringIn(const json& doc, const char* key) {
-  const auto it = doc.find(key);
-  return it != doc.end() && it->is_string() ? it->get<std::string>() : std::string();
-}
-
-std::optional<long long> countIn(const json& doc, const char* key) {
-  const auto it = doc.find(key);
-  if (it == doc.end() || !it->is_number_integer()) return std::nullopt;
-  return it->get<long long>();
 }
 
 std::optional<long long> linesIn(const fs::path& path) {
@@ -119,60 +84,23 @@ std::optional<long long> linesIn(const fs::path& path) {
 
 bool processAlive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
-// One run folder as `sensornet runs` shows it.
-struct RunEntry {
-  std::string run_id;
-  fs::path folder;
-  RunState state = RunState::Unknown;
-  std::string status;      // the report's status word (finished runs), "live" or "unknown"
-  std::string started_at;  // "" when unknown
-  std::string scenario;    // "" when unknown
-  std::optional<long long> episodes;
-  std::optional<long long> episodes_planned;
-  fs::path report;
-  pid_t launcher_pid = 0;
-};
-
+// What is in `folder`, read as classifyRun needs it: the report only when the run is not live
+// (its per_episode entries skipped: a report of millions of episodes is never held).
 RunEntry examine(const fs::path& folder) {
-  RunEntry e;
-  e.run_id = folder.filename().string();
-  e.folder = folder;
-  e.report = folder / "report.json";
-  const std::optional<json> record = readObject(folder / kRunRecordName);
-  if (record) {
-    e.scenario = stringIn(*record, "scenario");
-    e.started_at = stringIn(*record, "started_at");
-    e.episodes_planned = countIn(*record, "episodes");
-    if (const std::string report = stringIn(*record, "report"); !report.empty()) e.report = report;
-    if (const auto pid = countIn(*record, "launcher_pid"))
-      e.launcher_pid = static_cast<pid_t>(*pid);
-  }
+  RunFolderFacts facts;
+  facts.folder = folder;
+  facts.record = readObject(folder / kRunRecordName);
   const FolderLock lock(folder);
-  if (e.started_at.empty() && lock.modified()) e.started_at = utcText(*lock.modified());
-  const bool live = lock.heldElsewhere() || (!lock.exists() && processAlive(e.launcher_pid));
-  if (live) {
-    e.state = RunState::Live;
-    e.status = "live";
-    e.episodes = linesIn(emulator::episodeLogPath(e.report));
-    return e;
+  facts.lock = {lock.exists(), lock.heldElsewhere(), lock.modified()};
+  facts.launcher_alive = processAlive(launcherPidOf(facts));
+  if (isLive(facts)) {
+    facts.episodes_logged = linesIn(emulator::episodeLogPath(reportOf(facts)));
+  } else if (const emulator::ReportFile file =
+                 emulator::readReport(reportOf(facts), emulator::EpisodeEntries::Skipped);
+             file.ok()) {
+    facts.report = file.report;
   }
-  // Its per_episode entries are not needed here (a report of millions of episodes is never held).
-  const emulator::ReportFile file =
-      emulator::readReport(e.report, emulator::EpisodeEntries::Skipped);
-  if (file.ok()) {
-    const std::string status = stringIn(file.report, "status");
-    if (lookUpWord<emulator::RunStatus>(status)) {
-      e.state = RunState::Finished;
-      e.status = status;
-      e.episodes = countIn(file.report, "episodes");
-      if (const auto planned = countIn(file.report, "episodes_planned")) {
-        e.episodes_planned = planned;
-      }
-      return e;
-    }
-  }
-  e.status = "unknown";
-  return e;
+  return classifyRun(facts);
 }
 
 // The scratch folder, checked as the launcher checks it (a folder others can change could name
@@ -199,57 +127,8 @@ std::vector<RunEntry> listRuns(const fs::path& scratch) {
     runs.push_back(examine(entry.path()));
   }
   if (error) throw std::runtime_error("cannot read " + scratch.string() + ": " + error.message());
-  std::sort(runs.begin(), runs.end(), [](const RunEntry& a, const RunEntry& b) {
-    if (a.started_at.empty() != b.started_at.empty()) return b.started_at.empty();
-    if (a.started_at != b.started_at) return a.started_at < b.started_at;
-    return a.run_id < b.run_id;
-  });
+  sortRuns(runs);
   return runs;
-}
-
-std::string episodesText(const RunEntry& e) {
-  if (!e.episodes && !e.episodes_planned) return "-";
-  return (e.episodes ? std::to_string(*e.episodes) : std::string("?")) + "/" +
-         (e.episodes_planned ? std::to_string(*e.episodes_planned) : std::string("?"));
-}
-
-json toJson(const RunEntry& e) {
-  const auto orNull = [](const std::string& text) {
-    return text.empty() ? json(nullptr) : json(text);
-  };
-  const auto countOrNull = [](const std::optional<long long>& n) {
-    return n ? json(*n) : json(nullptr);
-  };
-  return {{"run_id", e.run_id},
-          {"folder", e.folder.string()},
-          {"state", std::string(wordOf(e.state))},
-          {"status", e.state == RunState::Finished ? json(e.status) : json(nullptr)},
-          {"started_at", orNull(e.started_at)},
-          {"scenario", orNull(e.scenario)},
-          {"episodes", countOrNull(e.episodes)},
-          {"episodes_planned", countOrNull(e.episodes_planned)},
-          {"report", e.report.string()}};
-}
-
-void printTable(const std::vector<RunEntry>& runs) {
-  std::vector<std::vector<std::string>> rows = {
-      {"RUN", "STATUS", "STARTED", "EPISODES", "SCENARIO"}};
-  for (const RunEntry& e : runs) {
-    rows.push_back({e.run_id, e.status, e.started_at.empty() ? "-" : e.started_at, episodesText(e),
-                    e.scenario.empty() ? "-" : e.scenario});
-  }
-  std::vector<std::size_t> width(rows[0].size(), 0);
-  for (const auto& row : rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
-  }
-  for (const auto& row : rows) {
-    std::string line;
-    for (std::size_t c = 0; c < row.size(); ++c) {
-      line += row[c];
-      if (c + 1 < row.size()) line += std::string(width[c] - row[c].size() + 2, ' ');
-    }
-    std::printf("%s\n", line.c_str());
-  }
 }
 
 // Removes a run's folder while holding its launch lock; why not, or nullopt when removed.
@@ -275,7 +154,7 @@ int printRemoved(const std::vector<RunEntry>& removed, const std::vector<std::st
                  const fs::path& scratch, bool as_json) {
   if (as_json) {
     json doc = {{"scratch", scratch.string()}, {"removed", json::array()}};
-    for (const RunEntry& e : removed) doc["removed"].push_back(toJson(e));
+    for (const RunEntry& e : removed) doc["removed"].push_back(runEntryJson(e));
     doc["failures"] = failures;
     printJson(doc);
   } else {
@@ -355,28 +234,20 @@ int runRuns(const RunsOptions& options, bool remove_named) {
   const std::vector<RunEntry> runs = listRuns(*scratch);
   if (options.json) {
     json doc = {{"scratch", scratch->string()}, {"runs", json::array()}};
-    for (const RunEntry& e : runs) doc["runs"].push_back(toJson(e));
+    for (const RunEntry& e : runs) doc["runs"].push_back(runEntryJson(e));
     printJson(doc);
   } else if (runs.empty()) {
     std::printf("no runs in %s\n", scratch->c_str());
   } else {
-    printTable(runs);
+    std::printf("%s", runsTable(runs).c_str());
   }
   return kExitOk;
 }
 
 }  // namespace
 
-std::string utcNow() { return utcText(std::time(nullptr)); }
-
 void writeRunRecord(const fs::path& log_dir, const RunRecord& record) {
-  const json doc = {{"run_id", record.run_id},
-                    {"scenario", record.scenario.string()},
-                    {"episodes", record.episodes},
-                    {"report", record.report.string()},
-                    {"launcher_pid", record.launcher_pid},
-                    {"started_at", record.started_at}};
-  replaceFileAtomically(log_dir / kRunRecordName, doc.dump(2) + "\n");
+  replaceFileAtomically(log_dir / kRunRecordName, runRecordJson(record).dump(2) + "\n");
 }
 
 Subcommand addRunsCommand(CLI::App& app) {

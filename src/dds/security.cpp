@@ -202,22 +202,6 @@ std::string subjectOf(const fs::path& certificate) {
 
 }  // namespace
 
-std::string_view securityRoleName(SecurityRole role) noexcept {
-  switch (role) {
-    case SecurityRole::Coordinator: return "coordinator";
-    case SecurityRole::FusionCenter: return "fusion_center";
-    case SecurityRole::Sensor: return "sensor";
-    case SecurityRole::Operator: return "operator";
-    case SecurityRole::Launcher: return "launcher";
-  }
-  return "?";
-}
-
-std::string SecurityIdentity::name() const {
-  const std::string role_name(securityRoleName(role));
-  return role == SecurityRole::Sensor && !sensors.empty() ? role_name + "-" + sensors : role_name;
-}
-
 fs::path roleFolderOf(const fs::path& dir, const SecurityIdentity& identity) {
   std::error_code error;
   const fs::path base = fs::absolute(dir, error).lexically_normal();

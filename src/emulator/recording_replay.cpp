@@ -18,6 +18,7 @@
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/utc_time.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -50,15 +51,6 @@ class RecordedWriters final : public WriterFacts {
   std::map<WriterId, std::vector<int>> sensors_;
   std::uint32_t measurement_writers_ = 0;
 };
-
-std::string utcNow() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
-}
 
 }  // namespace
 

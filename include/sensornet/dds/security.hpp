@@ -43,7 +43,17 @@ inline constexpr std::array<SecurityRole, 5> kSecurityRoles = {
     SecurityRole::Operator, SecurityRole::Launcher};
 
 // "coordinator", "fusion_center", "sensor", "operator", "launcher": the role's folder in DIR.
-[[nodiscard]] std::string_view securityRoleName(SecurityRole role) noexcept;
+// (Inline, as SecurityIdentity::name: the launcher's policy documents use them without DDS.)
+[[nodiscard]] constexpr std::string_view securityRoleName(SecurityRole role) noexcept {
+  switch (role) {
+    case SecurityRole::Coordinator: return "coordinator";
+    case SecurityRole::FusionCenter: return "fusion_center";
+    case SecurityRole::Sensor: return "sensor";
+    case SecurityRole::Operator: return "operator";
+    case SecurityRole::Launcher: return "launcher";
+  }
+  return "?";
+}
 
 // Who a process is in a secured run: its role and, for a sensor process, the sensors it speaks
 // for, as formatSensorIds writes them ("0-4").
@@ -53,7 +63,11 @@ struct SecurityIdentity {
   SecurityRole role;
   std::string sensors;
   // The folder name in DIR and the certificate's common name: "coordinator", "sensor-0-4".
-  [[nodiscard]] std::string name() const;
+  [[nodiscard]] std::string name() const {
+    const std::string role_name(securityRoleName(role));
+    return role == SecurityRole::Sensor && !sensors.empty() ? role_name + "-" + sensors
+                                                            : role_name;
+  }
 };
 
 struct SecurityFiles {

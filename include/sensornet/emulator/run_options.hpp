@@ -21,20 +21,17 @@
 
 #include "sensornet/dds/domain.hpp"
 #include "sensornet/dds/security.hpp"
+#include "sensornet/io/forwarded_options.hpp"
 
 namespace sensornet::emulator {
 
-// Limits of the numeric options of the emulator processes (coordinator serve, fusion_center
-// serve, sensor_agent). The launcher checks its own options against the same constants, so
-// that a value one of them would refuse is refused before any process starts.
-inline constexpr double kMinTimeScale = 1e-3;  // --time-scale: emulated seconds per wall second
-inline constexpr double kMaxTimeScale = 1e4;
-inline constexpr int kMinEpisodes = 1;  // --episodes
-inline constexpr int kMaxEpisodes = 10'000'000;
-// Wall-clock durations in seconds (--ready-timeout, --switch-margin, --lag, --grace,
-// --status-period): at most about 11.6 days, so that they stay exact in int64 nanoseconds
-// added to the wall clock.
-inline constexpr double kMaxWallSeconds = 1e6;
+// Limits of the numeric options (--time-scale, --episodes, wall-clock durations): declared with
+// the options the launcher forwards (io/forwarded_options.hpp).
+using sensornet::kMaxEpisodes;
+using sensornet::kMaxTimeScale;
+using sensornet::kMaxWallSeconds;
+using sensornet::kMinEpisodes;
+using sensornet::kMinTimeScale;
 
 // The environment variable read when --cyclone-config is not given.
 inline constexpr const char* kCycloneConfigVariable = "SENSORNET_CYCLONE_CONFIG";
