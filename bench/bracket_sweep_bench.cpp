@@ -147,7 +147,7 @@ SeedSweep sweepSeed(const YAML::Node& file, const Options& options, std::uint64_
   request.surrogate = sensornet::PlanSurrogate::Information;
   request.max_iterations = 3000;
   const sensornet::PlanResult plan = sensornet::planSchedule(reference, request);
-  sweep.plan_status = plan.status;
+  sweep.plan_status = sensornet::statusText(plan.status, plan.failure);
   sweep.plan_kkt = plan.kkt_residual;
   const double normalizer = reference.plant.P0.trace();
 

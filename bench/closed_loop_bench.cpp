@@ -126,7 +126,7 @@ void runScenario(const Options& o, const std::string& name) {
     const sensornet::PlanResult plan = sensornet::planSchedule(s, request);
     Open entry{std::string(sensornet::wordOf(surrogate)), surrogate, plan.schedule, {}};
     entry.costs = sensornet::emulator::openLoopCosts(s, plan.schedule, o.runs, o.seed, 0);
-    row(o, name, "open " + entry.name + " (" + plan.status + ")", statOf(entry.costs), normalizer,
+    row(o, name, "open " + entry.name + " (" + sensornet::statusText(plan.status, plan.failure) + ")", statOf(entry.costs), normalizer,
         "", nullptr, secondsSince(start));
     open.push_back(std::move(entry));
   }

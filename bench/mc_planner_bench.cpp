@@ -145,7 +145,7 @@ void runInstance(Point& point, int i, int planner_seed, const Options& options) 
   const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
   point.mc_seconds.push_back(secondsSince(start));
   point.episodes.push_back(static_cast<double>(plan.episodes));
-  if (plan.status == "improved") ++point.improved;
+  if (plan.status == sensornet::PlanStatus::Improved) ++point.improved;
   schedules.push_back(plan.schedule);
 
   // The independent evaluation: another generator (thinning, evaluateSchedule) and seed.
@@ -167,7 +167,7 @@ void runInstance(Point& point, int i, int planner_seed, const Options& options) 
   const Paired paired{md, std::sqrt(sq / (runs - 1.0) / runs), runs - 1.0, means[3] / means[best]};
   point.paired.push_back(paired);
   const int v = verdict(paired, 0.05);
-  if (plan.status == "improved") {
+  if (plan.status == sensornet::PlanStatus::Improved) {
     point.improved_but_worse += md > 0.0 ? 1 : 0;
     point.improved_but_significantly_worse += v > 0 ? 1 : 0;
   }

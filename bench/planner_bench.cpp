@@ -127,7 +127,10 @@ void solveInto(Column& column, PlanSurrogate surrogate, const sensornet::Scenari
   request.tolerance = options.tolerance;
   request.substeps = options.substeps;
   const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
-  if (plan.status != "optimal" && plan.status != "acceptable") ++column.not_optimal;
+  if (plan.status != sensornet::PlanStatus::Optimal &&
+      plan.status != sensornet::PlanStatus::Acceptable) {
+    ++column.not_optimal;
+  }
   column.seconds.push_back(plan.solve_seconds);
   column.iterations.push_back(plan.iterations);
   const auto form = surrogate == PlanSurrogate::Covariance ? sensornet::SurrogateForm::Covariance
@@ -218,7 +221,8 @@ ScaleColumn& scaleSolve(ScaleColumn& column, const sensornet::Scenario& scenario
   const sensornet::PlanResult plan = sensornet::planSchedule(scenario, request);
   // "acceptable" is IPOPT's looser tolerance: counted as converged only when the residual of
   // the returned schedule meets the tolerance.
-  if ((plan.status == "optimal" || plan.status == "acceptable") &&
+  if ((plan.status == sensornet::PlanStatus::Optimal ||
+       plan.status == sensornet::PlanStatus::Acceptable) &&
       plan.kkt_residual <= options.tolerance) {
     ++column.optimal;
   }
@@ -442,7 +446,7 @@ void runConvergence(const Options& options) {
         const bool converged = plan.kkt_residual <= options.tolerance;
         const bool no_worse = plan.objective <= start_cost * (1.0 + 1e-12);
         ++row.plans;
-        ++row.statuses[plan.status];
+        ++row.statuses[sensornet::statusText(plan.status, plan.failure)];
         row.converged += converged ? 1 : 0;
         row.stated_no_worse += !converged && no_worse ? 1 : 0;
         row.failed += !converged && !no_worse ? 1 : 0;
@@ -454,7 +458,7 @@ void runConvergence(const Options& options) {
           std::printf("  %s %s %s from %s: %s, kkt %.2e, %d iterations, %d substeps, J %.10g "
                       "(start %.10g)%s\n",
                       c.group.c_str(), c.name.c_str(), std::string(sensornet::describe(surrogate)).c_str(),
-                      start_name.c_str(), plan.status.c_str(), plan.kkt_residual, plan.iterations,
+                      start_name.c_str(), sensornet::statusText(plan.status, plan.failure).c_str(), plan.kkt_residual, plan.iterations,
                       plan.substeps, plan.objective, start_cost,
                       converged ? "" : (no_worse ? "  [not converged, no worse]" : "  [WORSE]"));
           std::fflush(stdout);

@@ -16,6 +16,7 @@
 #include "sensornet/core/network.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/io/plan_summary.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -36,18 +37,6 @@ struct PlanOptions {
   bool network_aware = false;
   bool json = false;
 };
-
-// The bracket of what the scenario's network delivers of `schedule` in episode 0 (outages of
-// other episodes left out); the schedule's own bracket without a network.
-CostBracket deliveredBracket(const Scenario& scenario, const RateSchedule& schedule,
-                             const CostBracket& planned) {
-  if (!scenario.network) return planned;
-  return computeBracket(scenario, deliveredSchedule(schedule, *scenario.network, 0));
-}
-
-nlohmann::json toJson(const CostBracket& bracket) {
-  return {{"info", bracket.info}, {"cov", bracket.cov}};
-}
 
 // --out -: the schedule file's text goes to standard output, and nothing else does.
 constexpr const char* kStandardOutput = "-";
@@ -105,19 +94,10 @@ int runPlan(const PlanOptions& options) {
   };
 
   const PlanResult plan = planSchedule(scenario, request);
-  const CostBracket delivered = deliveredBracket(scenario, plan.schedule, plan.bracket);
-  const std::string surrogate{describe(options.surrogate)};
-  const bool mc = options.surrogate == PlanSurrogate::MonteCarlo;
-  nlohmann::json record = {{"surrogate", surrogate},
-                           {"objective", plan.objective},
-                           {"bracket", toJson(plan.bracket)},
-                           {"delivered_bracket", toJson(delivered)},
-                           {"network_aware", options.network_aware},
-                           {"status", plan.status}};
-  if (mc) {
-    record["objective_half_width"] = plan.objective_half_width;
-    record["episodes"] = plan.episodes;
-  }
+  const PlanSummary summary{plan, options.surrogate,
+                            deliveredBracket(scenario, plan.schedule, plan.bracket),
+                            options.network_aware};
+  const nlohmann::json record = planRecord(summary);
   if (to_stdout) {
     nlohmann::json doc = scheduleToJson(plan.schedule);
     for (const auto& [key, value] : record.items()) doc[key] = value;
@@ -126,59 +106,19 @@ int runPlan(const PlanOptions& options) {
   } else {
     writeScheduleFile(options.out_path, plan.schedule, record);
   }
-  const bool solved = plan.status == "optimal" || plan.status == "acceptable" ||
-                      plan.status == "not_optimized" || plan.status == "improved" ||
-                      plan.status == "kept_start";
-  if (!solved) spdlog::warn("plan: solver status '{}'; the best schedule found was written", plan.status);
-
+  if (!solved(plan.status)) {
+    spdlog::warn("plan: solver status '{}'; the best schedule found was written",
+                 statusText(plan.status, plan.failure));
+  }
   if (options.json) {
-    nlohmann::json doc = {{"surrogate", surrogate},
-                          {"objective", plan.objective},
-                          {"bracket", toJson(plan.bracket)},
-                          {"delivered_bracket", toJson(delivered)},
-                          {"network_aware", options.network_aware},
-                          {"iterations", plan.iterations},
-                          {"substeps", plan.substeps},
-                          {"solve_seconds", plan.solve_seconds},
-                          {"status", plan.status},
-                          {"out", options.out_path}};
-    doc["kkt_residual"] = std::isfinite(plan.kkt_residual) ? nlohmann::json(plan.kkt_residual)
-                                                            : nlohmann::json(nullptr);
-    if (mc) {
-      doc["objective_half_width"] = plan.objective_half_width;
-      doc["episodes"] = plan.episodes;
-    }
-    printJson(doc);
+    printJson(planJsonLine(summary, options.out_path));
     return kExitOk;
   }
   // With --out - the summary goes to standard error: standard output holds the schedule only.
-  FILE* const summary = to_stdout ? stderr : stdout;
-  std::fprintf(summary, "scenario   %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
-               options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
-               scenario.horizon_s, scenario.intervals);
-  if (mc) {
-    std::fprintf(summary,
-                 "surrogate  mc: E[J] = %.9g +- %.3g (95%%, fresh episodes), status %s, %d "
-                 "iterations, %lld episodes in %.3f s\n",
-                 plan.objective, plan.objective_half_width, plan.status.c_str(), plan.iterations,
-                 plan.episodes, plan.solve_seconds);
-  } else {
-    std::fprintf(summary,
-                 "surrogate  %s: objective %.9g, status %s, %d iterations in %.3f s, %d RK4 "
-                 "steps per interval\n",
-                 surrogate.c_str(), plan.objective, plan.status.c_str(), plan.iterations,
-                 plan.solve_seconds, plan.substeps);
-  }
-  std::fprintf(summary, "bracket    J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g\n",
-               plan.bracket.info, plan.bracket.cov);
-  if (scenario.network) {
-    std::fprintf(
-        summary, "delivered  J(P_info) = %.9g <= E[J] <= J(P_cov) = %.9g (%s)\n", delivered.info,
-        delivered.cov,
-        options.network_aware ? "planned for the network" : "the network was not planned for");
-  }
-  std::fprintf(summary, "written    %s\n",
-               to_stdout ? "to standard output" : options.out_path.c_str());
+  std::fputs(planSummaryText(summary, scenario, options.scenario_path,
+                             to_stdout ? "to standard output" : options.out_path)
+                 .c_str(),
+             to_stdout ? stderr : stdout);
   return kExitOk;
 }
 

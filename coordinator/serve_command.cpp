@@ -24,6 +24,8 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/coordinator_core.hpp"
 #include "sensornet/emulator/coordinator_journal.hpp"
+#include "sensornet/emulator/coordinator_start.hpp"
+#include "sensornet/emulator/coordinator_wire.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/run_inputs.hpp"
 #include "sensornet/emulator/run_options.hpp"
@@ -57,60 +59,6 @@ struct ServeOptions {
   bool json = false;
   double replan_every = 0.0;  // --replan-every (0: open loop)
 };
-
-// ---- codecs: wire samples to the core's events, its controls to wire samples ---------------
-
-emulator::CommandKind kindOf(sensornet_CommandKind kind) {
-  using K = emulator::CommandKind;
-  switch (kind) {
-    case sensornet_COMMAND_REPLAN: return K::Replan;
-    case sensornet_COMMAND_EXCLUDE_SENSORS: return K::ExcludeSensors;
-    case sensornet_COMMAND_SET_BUDGET: return K::SetBudget;
-    case sensornet_COMMAND_SCHEDULE_FILE: return K::ScheduleFile;
-    case sensornet_COMMAND_STATUS: return K::Status;
-    case sensornet_COMMAND_SHUTDOWN: return K::Shutdown;
-    case sensornet_COMMAND_SENSORS_FAILED: return K::SensorsFailed;
-    case sensornet_COMMAND_INCLUDE_SENSORS: return K::IncludeSensors;
-  }
-  return K::Unknown;
-}
-
-emulator::CommandEvent commandOf(const sensornet_Command& c, emulator::CommandSender sender) {
-  emulator::CommandEvent e;
-  e.sender = sender;
-  e.run_id = std::string(dds::viewString(c.run_id));
-  e.command_id = c.command_id;
-  e.kind = kindOf(c.kind);
-  e.issuer = std::string(dds::viewString(c.issuer));
-  e.surrogate = std::string(dds::viewString(c.surrogate));
-  const auto ids = dds::viewSequence(c.sensor_ids);
-  e.sensor_ids.assign(ids.begin(), ids.end());
-  const auto budget = dds::viewSequence(c.budget);
-  e.budget.assign(budget.begin(), budget.end());
-  e.schedule_json = std::string(dds::viewString(c.schedule_json));
-  e.detail = std::string(dds::viewString(c.detail));
-  return e;
-}
-
-emulator::ReportEvent reportOf(const sensornet_Report& r) {
-  return {r.episode,           r.realized_cost,           r.bracket_lower,
-          r.bracket_upper,     r.summary.episodes,        r.summary.realized_mean,
-          r.summary.realized_ci95_low, r.summary.realized_ci95_high};
-}
-
-emulator::FusionStateEvent fusionStateOf(const sensornet_FusionState& s) {
-  const auto values = dds::viewSequence(s.covariance);
-  return {s.episode, s.emulated_time_s, s.state_dim, {values.begin(), values.end()}};
-}
-
-sensornet_EpisodeCommand commandOf(emulator::ControlKind kind) {
-  switch (kind) {
-    case emulator::ControlKind::EpisodeStart: return sensornet_EPISODE_START;
-    case emulator::ControlKind::SensorsFailed: return sensornet_EPISODE_SENSORS_FAILED;
-    case emulator::ControlKind::RunShutdown: return sensornet_RUN_SHUTDOWN;
-  }
-  return sensornet_RUN_SHUTDOWN;
-}
 
 // ---- the wiring: DDS endpoints, a loop that feeds the core and carries out its actions -----
 
@@ -184,12 +132,12 @@ class CoordinatorNode {
   // tick judges anyone silent (a report that came during the plan is not a missing report).
   void readSamples() {
     for (auto& received : launcher_commands_.take(8).samples) {
-      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Launcher),
-                               wallNowNs()));
+      carryOut(core_.onCommand(
+          emulator::commandOf(*received.sample, emulator::CommandSender::Launcher), wallNowNs()));
     }
     for (auto& received : operator_commands_.take(8).samples) {
-      carryOut(core_.onCommand(commandOf(*received.sample, emulator::CommandSender::Operator),
-                               wallNowNs()));
+      carryOut(core_.onCommand(
+          emulator::commandOf(*received.sample, emulator::CommandSender::Operator), wallNowNs()));
     }
     auto statuses = status_reader_.take(64);
     for (const auto& change : statuses.changes) {
@@ -214,10 +162,10 @@ class CoordinatorNode {
     }
     for (auto& received : report_reader_.take(16).samples) {
       heard_report_ = true;
-      carryOut(core_.onReport(reportOf(*received.sample), wallNowNs()));
+      carryOut(core_.onReport(emulator::reportOf(*received.sample), wallNowNs()));
     }
     for (auto& received : state_reader_.take(8).samples) {
-      carryOut(core_.onFusionState(fusionStateOf(*received.sample), wallNowNs()));
+      carryOut(core_.onFusionState(emulator::fusionStateOf(*received.sample), wallNowNs()));
     }
     core_.onFusionCenterMatched(fusionCenterPresent());
   }
@@ -273,7 +221,8 @@ class CoordinatorNode {
               "schedule");
   }
   void operator()(const emulator::PublishControl& a) {
-    mustWrite(control_writer_.write(wireControl(a.control)), "episode control");
+    mustWrite(control_writer_.write(wireControl(a.control, options_.run.run_id)),
+              "episode control");
   }
   void operator()(const emulator::SendReply& a) {
     sensornet_CommandReply reply{};
@@ -295,7 +244,8 @@ class CoordinatorNode {
     }
   }
   void operator()(const emulator::ShutDownRun& a) {
-    if (control_writer_.write(wireControl(a.control)) == dds::WriteResult::TimedOut) {
+    if (control_writer_.write(wireControl(a.control, options_.run.run_id)) ==
+        dds::WriteResult::TimedOut) {
       spdlog::warn("the shutdown announcement timed out");
     }
     // A run aborted before any Report came (a journal that failed at once): the readers of the
@@ -319,25 +269,6 @@ class CoordinatorNode {
   }
 
  private:
-  // An EpisodeControl sample borrowing from `control` (which must outlive it).
-  [[nodiscard]] sensornet_EpisodeControl wireControl(
-      const emulator::EpisodeControl& control) const {
-    sensornet_EpisodeControl c{};
-    c.run_id = dds::borrowString(options_.run.run_id);
-    c.episode = control.episode;
-    c.command = commandOf(control.kind);
-    c.start_wall_time_ns = control.start_wall_ns;
-    c.time_scale = control.time_scale;
-    c.seed = control.seed;
-    c.schedule_version = control.schedule_version;
-    c.episodes_planned = control.episodes_planned;
-    c.failed_at_s = control.failed_at_s;
-    c.aborted = control.aborted;
-    c.detail = dds::borrowString(control.detail);
-    dds::borrowSequence(c.failed_sensors, control.failed_sensors);
-    return c;
-  }
-
   ServeOptions options_;
   emulator::RunScenario run_;
   CoordinatorCore core_;
@@ -376,29 +307,16 @@ class CoordinatorNode {
 // Plans version 1 (or adopts --schedule), as a fresh journal.
 emulator::CoordinatorJournal freshJournal(const ServeOptions& options,
                                           const emulator::RunScenario& run) {
-  emulator::ScheduleVersion initial;
-  initial.version = 1;
+  std::optional<RateSchedule> schedule_file;
   if (!options.schedule_path.empty()) {
-    initial.schedule = loadScheduleFile(options.schedule_path, run.scenario);
-    initial.surrogate = "file";
-  } else {
-    PlanRequest request;
-    request.surrogate = options.surrogate;
-    if (options.core.network_aware) request.delivery = deliveryFactors(run.scenario);
-    const PlanResult plan = planSchedule(run.scenario, request);
-    spdlog::info("initial {}{} schedule: {} after {} iterations in {:.3f} s",
-                 describe(options.surrogate), options.core.network_aware ? " network-aware" : "",
-                 plan.status, plan.iterations, plan.solve_seconds);
-    initial.schedule = plan.schedule;
-    initial.surrogate = std::string(describe(options.surrogate));
+    schedule_file = loadScheduleFile(options.schedule_path, run.scenario);
   }
-  initial.bracket = computeBracket(run.scenario, initial.schedule);
-  spdlog::info("bracket of schedule v1: [{:.6g}, {:.6g}]", initial.bracket.info,
-               initial.bracket.cov);
+  emulator::ScheduleVersion first = emulator::firstVersion(
+      run.scenario, options.surrogate, options.core.network_aware, schedule_file);
   emulator::CoordinatorJournal journal =
       emulator::journalHeader(options.core, run.digest, run.seed);
   journal.settings = emulator::initialSettings(run.scenario, options.surrogate);
-  journal.versions.push_back(std::move(initial));
+  journal.versions.push_back(std::move(first));
   return journal;
 }
 
@@ -406,19 +324,8 @@ emulator::CoordinatorJournal freshJournal(const ServeOptions& options,
 emulator::CoordinatorJournal resumedJournal(ServeOptions& options,
                                             const emulator::RunScenario& run) {
   emulator::CoordinatorJournal journal = emulator::loadJournal(options.state_path, run.scenario);
-  const auto mismatch = [&](const char* field, const std::string& journal_value,
-                            const std::string& ours) {
-    throw InputError(options.state_path, field,
-                     "the journal's " + journal_value + ", got " + ours +
-                         " (resume with the run's own --scenario and --seed)");
-  };
-  if (journal.scenario_digest != run.digest) {
-    mismatch("scenario_digest", journal.scenario_digest,
-             run.digest + " from --scenario " + options.scenario_path);
-  }
-  if (journal.seed != run.seed) {
-    mismatch("seed", std::to_string(journal.seed), "--seed " + std::to_string(run.seed));
-  }
+  emulator::checkJournalOfRun(journal, options.state_path, run.digest, options.scenario_path,
+                              run.seed);
   if (journal.run_id != options.run.run_id) {
     spdlog::warn("resuming run {} from the journal of run {}", options.run.run_id,
                  journal.run_id);
@@ -439,7 +346,7 @@ int runServe(ServeOptions options) {
   run.digest = emulator::digestOf(run.yaml);
   run.seed = options.seed;
   if (!options.arrivals.empty()) {
-    run.scenario.arrivals = parseArrivalMode(options.arrivals, "--arrivals", "arrivals");
+    run.scenario.arrivals = parseWord<ArrivalMode>(options.arrivals, "--arrivals", "arrivals");
   }
   (void)options.run.domainConfig();  // bad run or domain id: exit 2 before any planning
   if (!options.state_path.empty()) makeParentFolders(options.state_path, "--state");

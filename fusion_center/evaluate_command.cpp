@@ -16,6 +16,7 @@
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/closed_loop.hpp"
+#include "sensornet/emulator/evaluation_summary.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -38,26 +39,18 @@ struct EvaluateOptions {
   std::string costs_path;  // closed loop: every episode's cost, one per line
 };
 
-// The closed loop's surrogate: --surrogate, else the schedule file's "surrogate" when it is
-// one the closed loop plans with, else cov (the run's default).
-PlanSurrogate closedLoopSurrogate(const EvaluateOptions& options) {
-  if (!options.surrogate.empty()) return *lookUpWord<PlanSurrogate>(options.surrogate);
-  if (!options.schedule_path.empty()) {
-    const nlohmann::json file =
-        nlohmann::json::parse(readTextFile(options.schedule_path, "schedule"), nullptr, false);
-    if (file.is_object() && file.contains("surrogate") && file["surrogate"].is_string()) {
-      const auto named = lookUpWord<PlanSurrogate>(file["surrogate"].get<std::string>());
-      if (named == PlanSurrogate::Information || named == PlanSurrogate::Covariance) return *named;
-    }
-  }
-  return PlanSurrogate::Covariance;
+// The schedule evaluated, as the summaries name it.
+std::string scheduleName(const EvaluateOptions& options) {
+  return options.schedule_path.empty() ? "uniform" : options.schedule_path;
 }
 
 int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
                   const RateSchedule& schedule, const CostBracket& bracket) {
   emulator::ClosedLoopOptions loop;
   loop.replan_every_s = options.replan_every;
-  loop.surrogate = closedLoopSurrogate(options);
+  loop.surrogate = emulator::closedLoopSurrogate(
+      options.surrogate,
+      options.schedule_path.empty() ? "" : readTextFile(options.schedule_path, "schedule"));
   if (loop.surrogate != PlanSurrogate::Information && loop.surrogate != PlanSurrogate::Covariance) {
     throw InputError("--surrogate", "", "info or cov for --replan-every");
   }
@@ -89,69 +82,24 @@ int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
   }
   double open_mean = 0.0;
   for (const double c : open) open_mean += c / static_cast<double>(open.size());
-  const SampleMean gain = pairedDifference(closed.episode_costs, open);
-  const std::string surrogate(wordOf(loop.surrogate));
-  const double margin = options.switch_margin * options.time_scale;
+  const emulator::ClosedLoopEvaluation e{scenario,
+                                         options.scenario_path,
+                                         scheduleName(options),
+                                         bracket,
+                                         closed,
+                                         open_mean,
+                                         pairedDifference(closed.episode_costs, open),
+                                         loop.surrogate,
+                                         options.replan_every,
+                                         options.switch_margin * options.time_scale,
+                                         options.seed,
+                                         seconds};
   if (options.json) {
-    printJson({{"closed_loop",
-                {{"replan_every", options.replan_every},
-                 {"surrogate", surrogate},
-                 {"switch_margin_emulated", margin},
-                 {"mean", closed.mean},
-                 {"std", closed.std_dev},
-                 {"ci95", closed.ci95},
-                 {"runs", closed.runs},
-                 {"tails_per_episode", closed.tails_mean},
-                 {"refused", closed.refused},
-                 {"arrivals", closed.arrivals_mean}}},
-               {"open_loop", {{"mean", open_mean}}},
-               {"closed_minus_open", {{"mean", gain.mean}, {"ci95", gain.ci95}}},
-               {"bracket", {{"info", bracket.info}, {"cov", bracket.cov}}},
-               {"schedule", options.schedule_path.empty() ? "uniform" : options.schedule_path},
-               {"seed", options.seed},
-               {"seconds", seconds}});
-    return kExitOk;
+    printJson(emulator::closedLoopJson(e));
+  } else {
+    std::fputs(emulator::closedLoopText(e).c_str(), stdout);
   }
-  std::printf("scenario  %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
-              options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
-              scenario.horizon_s, scenario.intervals);
-  std::printf("open-loop plan  %s (bracket [%.6g, %.6g] of the plan alone)\n",
-              options.schedule_path.empty() ? "uniform" : options.schedule_path.c_str(),
-              bracket.info, bracket.cov);
-  std::printf("closed loop  re-plan with %s every %g s, each tail from %g s later; %.2f tails "
-              "per episode, %lld refused\n",
-              surrogate.c_str(), options.replan_every, margin, closed.tails_mean, closed.refused);
-  std::printf("closed loop  mean %.6g ± %.3g (95%%), std %.4g, %d episodes in %.2f s\n",
-              closed.mean, closed.ci95, closed.std_dev, closed.runs, seconds);
-  std::printf("open loop    mean %.6g on the same arrivals (time-changed unit-rate points)\n",
-              open_mean);
-  std::printf("closed - open  %+.6g ± %.3g (95%%, paired): %s\n", gain.mean, gain.ci95,
-              gain.mean + gain.ci95 < 0.0   ? "feedback pays"
-              : gain.mean - gain.ci95 > 0.0 ? "feedback costs"
-                                            : "no difference at this sample size");
   return kExitOk;
-}
-
-// With timetable arrivals: the deterministic cost of the timetable beside the Poisson mean of
-// the same schedule (which the bracket is about).
-nlohmann::json timetableJson(const MonteCarloResult& timetable, const MonteCarloResult& poisson,
-                             bool simulate_plant) {
-  nlohmann::json doc = {{"cost", timetable.mean},
-                        {"std", timetable.std_dev},
-                        {"arrivals", timetable.arrivals_mean},
-                        {"minus_poisson_mean", timetable.mean - poisson.mean},
-                        {"poisson_ci95", poisson.ci95}};
-  doc["nees"] = simulate_plant ? nlohmann::json(timetable.nees_mean) : nlohmann::json(nullptr);
-  return doc;
-}
-
-void printTimetable(const MonteCarloResult& timetable, const MonteCarloResult& poisson,
-                    bool simulate_plant) {
-  std::printf("timetable  J = %.6g (std over episodes %.3g), %.0f arrivals per episode\n",
-              timetable.mean, timetable.std_dev, timetable.arrivals_mean);
-  std::printf("           minus the Poisson mean: %.6g (Poisson 95%% half-width %.3g)\n",
-              timetable.mean - poisson.mean, poisson.ci95);
-  if (simulate_plant) std::printf("           mean NEES at T %.4g\n", timetable.nees_mean);
 }
 
 int runEvaluate(const EvaluateOptions& options) {
@@ -180,52 +128,28 @@ int runEvaluate(const EvaluateOptions& options) {
   std::optional<MonteCarloResult> timetable;
   const ArrivalMode mode =
       options.arrivals.empty() ? scenario.arrivals
-                               : parseArrivalMode(options.arrivals, "--arrivals", "arrivals");
+                               : parseWord<ArrivalMode>(options.arrivals, "--arrivals", "arrivals");
   if (mode == ArrivalMode::Timetable) {
     mc_options.arrivals = ArrivalMode::Timetable;
     timetable = evaluateSchedule(scenario, schedule, mc_options);
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const bool meets_bracket = mc.mean - mc.ci95 <= bracket.cov && mc.mean + mc.ci95 >= bracket.info;
-
+  const emulator::OpenLoopEvaluation e{scenario,
+                                       options.scenario_path,
+                                       scheduleName(options),
+                                       bracket,
+                                       mc,
+                                       timetable ? &*timetable : nullptr,
+                                       mode,
+                                       mc_options.simulate_plant,
+                                       options.seed,
+                                       seconds};
   if (options.json) {
-    nlohmann::json doc = {
-        {"bracket", {{"info", bracket.info}, {"cov", bracket.cov}}},
-        {"mc", {{"mean", mc.mean}, {"std", mc.std_dev}, {"ci95", mc.ci95}, {"runs", mc.runs}}},
-        {"meets_bracket", meets_bracket},
-        {"schedule", options.schedule_path.empty() ? "uniform" : options.schedule_path},
-        {"arrivals", arrivalModeName(mode)},
-        {"seed", options.seed},
-        {"seconds", seconds}};
-    if (mc_options.simulate_plant) {
-      doc["nees"] = mc.nees_mean;
-      doc["squared_error"] = mc.squared_error_mean;
-    } else {
-      doc["nees"] = nullptr;
-    }
-    doc["timetable"] = timetable ? timetableJson(*timetable, mc, mc_options.simulate_plant)
-                                 : nlohmann::json(nullptr);
-    printJson(doc);
-    return kExitOk;
+    printJson(emulator::evaluationJson(e));
+  } else {
+    std::fputs(emulator::evaluationText(e).c_str(), stdout);
   }
-  std::printf("scenario  %s (n = %d states, M = %d sensors, T = %g s, N = %d)\n",
-              options.scenario_path.c_str(), scenario.stateDim(), scenario.sensorCount(),
-              scenario.horizon_s, scenario.intervals);
-  std::printf("schedule  %s\n",
-              options.schedule_path.empty() ? "uniform" : options.schedule_path.c_str());
-  std::printf("bracket   J(P_info) = %.6g <= E[J] <= J(P_cov) = %.6g\n", bracket.info,
-              bracket.cov);
-  std::printf("arrivals  %s\n", std::string(arrivalModeName(mode)).c_str());
-  std::printf("monte carlo  mean %.6g ± %.3g (95%%), std %.4g, %d episodes in %.2f s\n", mc.mean,
-              mc.ci95, mc.std_dev, mc.runs, seconds);
-  std::printf("             the 95%% interval %s the bracket\n",
-              meets_bracket ? "meets" : "DOES NOT meet");
-  if (mc_options.simulate_plant) {
-    std::printf("simulated plant  mean NEES at T %.4g (ideal %d), mean e'W_T e at T %.6g\n",
-                mc.nees_mean, scenario.stateDim(), mc.squared_error_mean);
-  }
-  if (timetable) printTimetable(*timetable, mc, mc_options.simulate_plant);
   return kExitOk;
 }
 

@@ -129,11 +129,11 @@ class RateProgram : public Ipopt::TNLP {
     iterations_ = iter;
     const double elapsed = secondsSince(start_);
     if (elapsed > request_.max_seconds) {
-      stop_reason_ = "time_limit";
+      stop_reason_ = PlanStatus::TimeLimit;
       return false;
     }
     if (request_.progress && !request_.progress({iter, obj_value, elapsed})) {
-      stop_reason_ = "stopped";
+      stop_reason_ = PlanStatus::Stopped;
       return false;
     }
     return true;
@@ -152,21 +152,25 @@ class RateProgram : public Ipopt::TNLP {
 
   [[nodiscard]] int iterations() const { return iterations_; }
   [[nodiscard]] int evaluations() const { return evaluations_; }
-  [[nodiscard]] std::string status() const {
+  [[nodiscard]] PlanStatus status() const {
     switch (status_) {
       case Ipopt::SUCCESS:
-        return "optimal";
+        return PlanStatus::Optimal;
       case Ipopt::STOP_AT_ACCEPTABLE_POINT:
-        return "acceptable";
+        return PlanStatus::Acceptable;
       case Ipopt::MAXITER_EXCEEDED:
-        return "max_iterations";
+        return PlanStatus::MaxIterations;
       case Ipopt::CPUTIME_EXCEEDED:
-        return "time_limit";
+        return PlanStatus::TimeLimit;
       case Ipopt::USER_REQUESTED_STOP:
-        return stop_reason_.empty() ? "stopped" : stop_reason_;
+        return stop_reason_;
       default:
-        return "failed: " + describeFailure(status_);
+        return PlanStatus::Failed;
     }
+  }
+  // Why a Failed solve failed (empty otherwise).
+  [[nodiscard]] std::string failure() const {
+    return status() == PlanStatus::Failed ? describeFailure(status_) : std::string();
   }
 
  private:
@@ -226,7 +230,7 @@ class RateProgram : public Ipopt::TNLP {
   int iterations_ = 0;
   int evaluations_ = 0;
   Ipopt::SolverReturn status_ = Ipopt::UNASSIGNED;
-  std::string stop_reason_;
+  PlanStatus stop_reason_ = PlanStatus::Stopped;  // of a USER_REQUESTED_STOP
 };
 
 // IPOPT with MUMPS (Debian's sequential build) is not known to be reentrant: one solve at a time
@@ -258,7 +262,7 @@ PlanningOutcome solveWithIpopt(PlanningProblem& problem, const PlanRequest& requ
     throw std::runtime_error("planner: IPOPT failed to initialize");
   }
   app->OptimizeTNLP(program);
-  return {program->iterations(), program->status(), program->evaluations()};
+  return {program->iterations(), program->status(), program->evaluations(), program->failure()};
 }
 
 }  // namespace sensornet::planning

@@ -650,7 +650,7 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
     r = std::move(leader.costs);
   }
   Eigen::MatrixXd chosen = reference.rates;
-  result.status = "kept_start";
+  result.status = PlanStatus::KeptStart;
   std::vector<double> a;
   if (best.rates != reference.rates) a = search.sample(best.rates, seed, static_cast<int>(r.size()));
   if (!a.empty() && significantlyBetter(a, r)) {
@@ -670,7 +670,7 @@ PlanResult planForRealizedCost(const Scenario& scenario, const PlanRequest& requ
     both_r.insert(both_r.end(), more_r.begin(), more_r.end());
     if (significantlyBetter(a, both_r)) {
       chosen = best.rates;
-      result.status = "improved";
+      result.status = PlanStatus::Improved;
     }
   }
 

@@ -133,7 +133,7 @@ PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request) {
 
   PlanResult result;
   if (request.surrogate == PlanSurrogate::Uniform || problem->variables() == 0) {
-    result.status = "not_optimized";
+    result.status = PlanStatus::NotOptimized;
     result.kkt_residual = std::numeric_limits<double>::quiet_NaN();
   } else {
     for (;;) {
@@ -144,10 +144,12 @@ PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request) {
       result.iterations += outcome.iterations;
       result.evaluations += outcome.evaluations;
       result.status = outcome.status;
+      result.failure = outcome.failure;
       // Exactly admissible (IPOPT's interior iterates may sit a rounding error outside).
       problem->setRates(problem->projected(problem->rates()));
-      const bool resolvable = outcome.status == "optimal" || outcome.status == "acceptable" ||
-                              outcome.status == "stalled" || outcome.status.starts_with("failed");
+      const bool resolvable =
+          outcome.status == PlanStatus::Optimal || outcome.status == PlanStatus::Acceptable ||
+          outcome.status == PlanStatus::Stalled || outcome.status == PlanStatus::Failed;
       if (!resolvable || !canRefine(sized) ||
           transcriptionAgrees(problem->transcription().cost(problem->rates()),
                               accurateCost(scenario, request, form, problem->rates()))) {
@@ -169,7 +171,7 @@ PlanResult planSchedule(const Scenario& scenario, const PlanRequest& request) {
 
   const CostGradient final_cost = problem->transcription().costAndGradient(problem->rates());
   result.discretized_objective = final_cost.cost;
-  if (result.status != "not_optimized") {
+  if (result.status != PlanStatus::NotOptimized) {
     result.kkt_residual =
         planning::projectedGradientResidual(*problem, problem->rates(), final_cost);
   }

@@ -81,8 +81,9 @@ class PlanningProblem {
 
 struct PlanningOutcome {
   int iterations = 0;
-  std::string status;    // as PlanResult::status
+  PlanStatus status = PlanStatus::Failed;  // as PlanResult::status
   int evaluations = 0;   // cost-and-gradient evaluations of the transcription
+  std::string failure{};  // as PlanResult::failure
 };
 
 // The default optimizer (projected_quasi_newton.cpp). Leaves its answer in problem.rates().

@@ -388,7 +388,9 @@ class ProjectedQuasiNewton {
 
   PlanningOutcome run() {
     current_ = evaluate(problem_.rates());
-    if (!std::isfinite(current_.cost)) return {0, "failed: no finite cost at the start point"};
+    if (!std::isfinite(current_.cost)) {
+      return {0, PlanStatus::Failed, 0, "no finite cost at the start point"};
+    }
     const double unit = problem_.rateUnit();
     sigma_ = unit * unit / costUnit(current_.cost);
     const double first = problem_.largestChange(
@@ -398,16 +400,16 @@ class ProjectedQuasiNewton {
       problem_.setRates(current_.x);
       const double residual =
           projectedGradientResidual(problem_, current_.x, {current_.cost, current_.gradient});
-      if (residual <= request_.tolerance) return {iteration, "optimal"};
-      if (iteration >= request_.max_iterations) return {iteration, "max_iterations"};
+      if (residual <= request_.tolerance) return {iteration, PlanStatus::Optimal};
+      if (iteration >= request_.max_iterations) return {iteration, PlanStatus::MaxIterations};
       const double elapsed = secondsSince(start_);
-      if (elapsed > request_.max_seconds) return {iteration, "time_limit"};
+      if (elapsed > request_.max_seconds) return {iteration, PlanStatus::TimeLimit};
       if (request_.progress && !request_.progress({iteration, current_.cost, elapsed})) {
-        return {iteration, "stopped"};
+        return {iteration, PlanStatus::Stopped};
       }
       std::optional<Iterate> next = quasiNewtonStep(std::min(kMaxActiveWidth, residual) * unit);
       if (!next) next = projectedGradientStep();
-      if (!next) return {iteration, "stalled"};
+      if (!next) return {iteration, PlanStatus::Stalled};
       const MatrixXd s = next->x - current_.x;
       const MatrixXd y = next->gradient - current_.gradient;
       const double sy = problem_.inner(s, y);

@@ -107,7 +107,7 @@ ScheduleVersion openLoopVersion(const Scenario& scenario, const RateSchedule& sc
   ScheduleVersion v;
   v.version = 1;
   v.schedule = schedule;
-  v.surrogate = std::string(wordOf(surrogate));
+  v.surrogate = surrogateKindOf(surrogate);
   v.bracket = computeBracket(scenario, schedule);
   return v;
 }

@@ -128,15 +128,17 @@ std::set<int> sensorSet(const Fields& f, const json& object, const std::string& 
   return sensors;
 }
 
-PlanSurrogate surrogateOf(const Fields& f, const std::string& name, const std::string& field) {
-  if (const auto surrogate = lookUpWord<PlanSurrogate>(name)) return *surrogate;
-  f.fail(field, wordChoices<PlanSurrogate>() + ", got '" + name + "'");
+template <class E>
+E wordFrom(const Fields& f, const std::string& name, const std::string& field) {
+  if (const auto value = lookUpWord<E>(name)) return *value;
+  f.fail(field, wordChoices<E>() + ", got '" + name + "'");
 }
 
 ReplanSettings settingsFrom(const Fields& f, const json& s, const Scenario& scenario) {
   const std::string path = "settings.";
   ReplanSettings settings;
-  settings.surrogate = surrogateOf(f, f.stringOf(s, path, "surrogate"), path + "surrogate");
+  settings.surrogate =
+      wordFrom<PlanSurrogate>(f, f.stringOf(s, path, "surrogate"), path + "surrogate");
   settings.excluded = sensorSet(f, s, path, "excluded", scenario.sensorCount());
   settings.failed = sensorSet(f, s, path, "failed", scenario.sensorCount());
   const json& budget = f.array(s, path, "budget");
@@ -187,7 +189,8 @@ ScheduleVersion versionFrom(const Fields& f, const json& v, const std::string& p
   if (version.effective_time_s < 0.0 || version.effective_time_s > scenario.horizon_s) {
     f.fail(path + "effective_time_s", "a time in [0, T]");
   }
-  version.surrogate = f.stringOf(v, path, "surrogate");
+  version.surrogate =
+      wordFrom<SurrogateKind>(f, f.stringOf(v, path, "surrogate"), path + "surrogate");
   const json& bracket = f.member(v, path, "bracket");
   version.bracket.info = f.numberOf(bracket, path + "bracket.", "info");
   version.bracket.cov = f.numberOf(bracket, path + "bracket.", "cov");

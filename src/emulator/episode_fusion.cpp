@@ -13,6 +13,9 @@
 namespace sensornet::emulator {
 namespace {
 
+// A rejection reason as RejectionCounts keys it.
+std::string reasonText(RejectionReason reason) { return std::string(wordOf(reason)); }
+
 using Key = std::tuple<double, int, std::uint64_t>;  // (time, sensor, seq): timestamp order
 
 Key keyOf(const FusedMeasurement& m) { return {m.time_s, m.sensor, m.seq}; }
@@ -248,17 +251,20 @@ std::optional<Rejection> malformedMeasurement(const Scenario& scenario,
                                               const FusedMeasurement& m) {
   const std::string who = "sensor " + std::to_string(m.sensor);
   if (m.sensor < 0 || m.sensor >= scenario.sensorCount()) {
-    return Rejection{"unknown_sensor", who + " is not a sensor of the scenario"};
+    return Rejection{reasonText(RejectionReason::UnknownSensor),
+                     who + " is not a sensor of the scenario"};
   }
   const auto rows = scenario.sensors[static_cast<std::size_t>(m.sensor)].H.rows();
   if (m.z.size() != rows || !m.z.allFinite()) {
-    return Rejection{"malformed", who + ": z must hold " + std::to_string(rows) + " finite values"};
+    return Rejection{reasonText(RejectionReason::Malformed),
+                     who + ": z must hold " + std::to_string(rows) + " finite values"};
   }
   if (!(m.time_s >= 0.0 && m.time_s <= scenario.horizon_s)) {
-    return Rejection{"malformed", who + ": time outside [0, T]"};
+    return Rejection{reasonText(RejectionReason::Malformed), who + ": time outside [0, T]"};
   }
   if (!(m.network_delay_s >= 0.0 && std::isfinite(m.network_delay_s))) {
-    return Rejection{"malformed", who + ": network delay not a finite number >= 0"};
+    return Rejection{reasonText(RejectionReason::Malformed),
+                     who + ": network delay not a finite number >= 0"};
   }
   return std::nullopt;
 }
@@ -286,7 +292,8 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
     // Counted by finish(): the network's copies and the rest apart, once the tally says how many
     // copies the network made.
     ++tally.duplicates;
-    return Rejection{"duplicate", who + ": duplicate seq " + std::to_string(m.seq)};
+    return Rejection{reasonText(RejectionReason::Duplicate),
+                     who + ": duplicate seq " + std::to_string(m.seq)};
   }
   ++tally.received;
   sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
@@ -573,7 +580,9 @@ EpisodeResult EpisodeFusion::finish() {
     tally.lost = tally.sent > accounted ? tally.sent - accounted : 0;
     const std::uint64_t by_network = std::min(tally.duplicates, tally.duplicated_by_network);
     if (by_network > 0) result.rejected[kNetworkDuplicate] += by_network;
-    if (tally.duplicates > by_network) result.rejected["duplicate"] += tally.duplicates - by_network;
+    if (tally.duplicates > by_network) {
+      result.rejected[reasonText(RejectionReason::Duplicate)] += tally.duplicates - by_network;
+    }
     result.sensors.push_back(tally);
   }
   double delay_sum_s = 0.0;

@@ -51,7 +51,7 @@ void withScenarioSample(const std::string& run_id, const RunScenario& scenario,
   sample.sensor_count = static_cast<std::uint32_t>(scenario.scenario.sensorCount());
   sample.state_dim = static_cast<std::uint32_t>(scenario.scenario.stateDim());
   sample.seed = scenario.seed;
-  const std::string arrivals(arrivalModeName(scenario.scenario.arrivals));
+  const std::string arrivals(wordOf(scenario.scenario.arrivals));
   sample.arrivals = borrowString(arrivals);
   use(sample);
 }
@@ -84,8 +84,9 @@ RunScenario scenarioFromWire(const sensornet_Scenario& sample) {
   // The mode in force is the one announced, not the YAML's (--arrivals overrides it). The field
   // was appended to the IDL; a writer that leaves it empty runs Poisson arrivals, as before it.
   const std::string_view arrivals = viewString(sample.arrivals);
-  result.scenario.arrivals = arrivals.empty() ? ArrivalMode::Poisson
-                                              : parseArrivalMode(arrivals, source, "arrivals");
+  result.scenario.arrivals = arrivals.empty()
+                                 ? ArrivalMode::Poisson
+                                 : parseWord<ArrivalMode>(arrivals, source, "arrivals");
   return result;
 }
 
@@ -110,7 +111,8 @@ void withScheduleSample(const std::string& run_id, const std::string& scenario_d
   sample.intervals = static_cast<std::uint32_t>(schedule.intervals());
   sample.sensor_count = static_cast<std::uint32_t>(schedule.sensorCount());
   borrowSequence(sample.rates_hz, rates);
-  sample.surrogate = borrowString(version.surrogate);
+  const std::string surrogate(wordOf(version.surrogate));
+  sample.surrogate = borrowString(surrogate);
   sample.bracket_lower = version.bracket.info;
   sample.bracket_upper = version.bracket.cov;
   sample.command_id = version.command_id;
@@ -166,7 +168,8 @@ ScheduleVersion scheduleFromWire(const sensornet_Schedule& sample, const Scenari
   version.effective_episode = sample.effective_episode;
   version.effective_time_s = sample.effective_time_s;
   version.schedule = RateSchedule(scenario.horizon_s, std::move(matrix));
-  version.surrogate = std::string(viewString(sample.surrogate));
+  version.surrogate =
+      parseWord<SurrogateKind>(viewString(sample.surrogate), source, "surrogate");
   version.bracket = {sample.bracket_lower, sample.bracket_upper};
   version.command_id = sample.command_id;
   return version;

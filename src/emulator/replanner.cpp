@@ -18,20 +18,19 @@ namespace {
 std::string sourceOf(std::uint64_t command_id) { return "command " + std::to_string(command_id); }
 
 bool stalledAtAStationaryPoint(const PlanResult& plan) {
-  return plan.status == "stalled" && plan.kkt_residual <= Replanner::kStationaryResidual;
+  return plan.status == PlanStatus::Stalled &&
+         plan.kkt_residual <= Replanner::kStationaryResidual;
 }
 
 // The planner reports the plan as one to publish as it is (see the header).
 bool certified(const PlanResult& plan) {
-  return plan.status == "optimal" || plan.status == "acceptable" ||
-         plan.status == "not_optimized" || plan.status == "improved" ||
-         plan.status == "kept_start" ||  // mc: both are published
-         stalledAtAStationaryPoint(plan);
+  return solved(plan.status) || stalledAtAStationaryPoint(plan);
 }
 
 std::string endedText(const PlanResult& plan) {
-  return "ended '" + plan.status + "' (kkt residual " + formatNumber(plan.kkt_residual) +
-         " after " + std::to_string(plan.iterations) + " iterations)";
+  return "ended '" + statusText(plan.status, plan.failure) + "' (kkt residual " +
+         formatNumber(plan.kkt_residual) + " after " + std::to_string(plan.iterations) +
+         " iterations)";
 }
 
 // `schedule` with the sensors in `out` at rate zero in every interval.
@@ -68,12 +67,12 @@ double surrogateCost(const Scenario& scenario, const RateSchedule& schedule,
 }
 
 std::string describePlan(const PlanResult& plan) {
-  if (plan.status == "acceptable") return "acceptable: IPOPT's looser tolerance";
+  if (plan.status == PlanStatus::Acceptable) return "acceptable: IPOPT's looser tolerance";
   if (stalledAtAStationaryPoint(plan)) {
     return "stalled, accepted: kkt residual " + formatNumber(plan.kkt_residual) +
            " <= " + formatNumber(Replanner::kStationaryResidual);
   }
-  return plan.status;
+  return statusText(plan.status, plan.failure);
 }
 
 std::set<int> checkedSensorIds(std::span<const std::uint32_t> ids, int sensor_count,
@@ -209,7 +208,8 @@ Replan Replanner::adoptScheduleFile(const std::string& schedule_json, const Sche
   if (!feasibility.feasible) throw InputError(source, "rates", feasibility.reason);
   Replan r;
   r.versions.push_back(
-      makeVersion(planned_for, std::move(schedule), "file", command_id, now.nextEpisode(), 0.0));
+      makeVersion(planned_for, std::move(schedule), SurrogateKind::File, command_id,
+                  now.nextEpisode(), 0.0));
   r.versions.back().version = book.latest().version + 1;
   r.summary = "schedule file";
   r.settings = settings_;
@@ -243,7 +243,8 @@ Replan Replanner::replanTail(const ScheduleBook& book, const RunMoment& now,
 Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const RunMoment& now,
                        std::uint64_t command_id, const RateSchedule* next_episodes) const {
   const Scenario planned_for = plannedFor(settings);
-  const std::string surrogate(describe(settings.surrogate));
+  const SurrogateKind kind = surrogateKindOf(settings.surrogate);
+  const std::string surrogate(wordOf(kind));
   const auto notInThisEpisode = [&now](const char* why) {
     return "not in episode " + std::to_string(now.episode) + ": " + why + "; ";
   };
@@ -280,7 +281,7 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
         plant_.timeOf(plant_.tickAt(emulatedNow(now) + 0.5 * marginEmulated()) + 1);
     const double effective = std::max(at, earliest);
     if (effective < scenario_.horizon_s) {
-      r.versions.push_back(makeVersion(planned_for, tail_plan->schedule, surrogate, command_id,
+      r.versions.push_back(makeVersion(planned_for, tail_plan->schedule, kind, command_id,
                                        now.episode, effective));
       r.versions.back().version = ++number;
       summary = "version " + std::to_string(number) + " from " + std::to_string(effective) +
@@ -292,7 +293,7 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
     }
   }
   r.versions.push_back(
-      makeVersion(planned_for, full_plan.schedule, surrogate, command_id, now.nextEpisode(), 0.0));
+      makeVersion(planned_for, full_plan.schedule, kind, command_id, now.nextEpisode(), 0.0));
   r.versions.back().version = ++number;
   r.summary = summary + "version " + std::to_string(number) + " from episode " +
               std::to_string(now.nextEpisode()) + " (" + surrogate + ", " +
@@ -394,14 +395,14 @@ Scenario Replanner::plannedFor(const ReplanSettings& settings) const {
 }
 
 ScheduleVersion Replanner::makeVersion(const Scenario& planned_for, RateSchedule schedule,
-                                       std::string surrogate, std::uint64_t command_id,
+                                       SurrogateKind surrogate, std::uint64_t command_id,
                                        std::uint32_t episode, double at) const {
   ScheduleVersion v;
   v.effective_episode = episode;
   v.effective_time_s = at;
   v.bracket = computeBracket(planned_for, schedule);
   v.schedule = std::move(schedule);
-  v.surrogate = std::move(surrogate);
+  v.surrogate = surrogate;
   v.command_id = command_id;
   return v;
 }

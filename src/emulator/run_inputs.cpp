@@ -47,7 +47,7 @@ void RunInputState::onScenario(const sensornet_Scenario& sample, Update& update)
                  run_->scenario.stateDim(), run_->scenario.sensorCount(),
                  run_->scenario.horizon_s);
   } catch (const InputError& error) {
-    reject("malformed_scenario");
+    reject(RejectionReason::MalformedScenario);
     run_.reset();
     spdlog::warn("rejected a scenario sample: {}", error.what());
   }
@@ -61,17 +61,17 @@ void RunInputState::onSchedule(const sensornet_Schedule& sample, Update& update)
     const ScheduleBook::Outcome outcome = book_.add(std::move(v));
     if (outcome == ScheduleBook::Outcome::Duplicate) return;  // a restarted coordinator's
     if (outcome == ScheduleBook::Outcome::Stale) {
-      reject("stale_schedule");
+      reject(RejectionReason::StaleSchedule);
       spdlog::warn("refused stale schedule version {} (have {})", number,
                    book_.latest().version);
       return;
     }
     ++update.new_versions;
     spdlog::info("schedule version {} ({}) from episode {} at {} s", number,
-                 book_.latest().surrogate, book_.latest().effective_episode,
+                 wordOf(book_.latest().surrogate), book_.latest().effective_episode,
                  book_.latest().effective_time_s);
   } catch (const InputError& error) {
-    reject("malformed_schedule");
+    reject(RejectionReason::MalformedSchedule);
     spdlog::warn("rejected a schedule sample: {}", error.what());
   }
 }
@@ -118,7 +118,7 @@ void RunInputState::releaseStarts(Update& update) {
       return false;
     }
     if (!(s.clock.time_scale > 0.0) || held.seed != run_->seed) {
-      reject("malformed_episode_control");
+      reject(RejectionReason::MalformedEpisodeControl);
       spdlog::warn("rejected episode control {}: bad time scale or seed", s.episode);
       return true;
     }

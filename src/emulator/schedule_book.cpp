@@ -1,6 +1,14 @@
 #include "sensornet/emulator/schedule_book.hpp"
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace sensornet {
+
+void to_json(nlohmann::json& j, SurrogateKind kind) { j = std::string(wordOf(kind)); }
+
+}  // namespace sensornet
 
 namespace sensornet::emulator {
 namespace {

@@ -143,9 +143,9 @@ YAML::Node locate(const YAML::Node& root, const std::string& field) {
 // `arrivals: poisson|timetable` (optional, Poisson when absent).
 void readArrivalMode(const YamlReader& in, const YAML::Node& node, Scenario& s) {
   if (!node) return;
-  if (!node.IsScalar()) in.fail(node, "arrivals", "poisson or timetable");
+  if (!node.IsScalar()) in.fail(node, "arrivals", wordChoices<ArrivalMode>());
   try {
-    s.arrivals = parseArrivalMode(node.Scalar(), "", "arrivals");
+    s.arrivals = parseWord<ArrivalMode>(node.Scalar(), "", "arrivals");
   } catch (const InputError& e) {
     in.fail(node, "arrivals", e.expected());
   }

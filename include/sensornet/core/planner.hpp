@@ -40,6 +40,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sensornet/core/plan_status.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
@@ -106,7 +107,7 @@ struct PlanRequest {
   int substeps = 2;
   PlanMethod method = PlanMethod::ProjectedGradient;
   // Optional; called after every solver iteration from the calling thread. Returning false
-  // stops the solve (status "stopped"). An exception it throws propagates.
+  // stops the solve (PlanStatus::Stopped). An exception it throws propagates.
   std::function<bool(const PlanProgress&)> progress;
   RealizedCostOptions realized;  // used by PlanSurrogate::MonteCarlo only
 };
@@ -131,14 +132,14 @@ struct PlanResult {
   int iterations = 0;
   int evaluations = 0;  // cost-and-gradient evaluations of the transcription
   double solve_seconds = 0.0;
-  // "optimal", "acceptable" (IPOPT's looser tolerance met), "max_iterations", "time_limit",
-  // "stalled" (no step decreases the cost any more),
-  // "stopped" (progress returned false), "not_optimized" (Uniform, or nothing to plan), or
-  // "failed: <IPOPT status>" (the best point found is still returned, projected and scored).
-  // MonteCarlo: "improved" (the refined schedule passed the paired test against its warm start,
-  // and again on fresh episodes) or "kept_start" (it did not, or no refinement was found: the
-  // warm start is returned).
-  std::string status;
+  // How the solve ended (plan_status.hpp; solved() says whether the plan is what its method
+  // promises). Failed (IPOPT, or no finite cost at the start point) still returns the best point
+  // found, projected and scored, and `failure` says why; statusText(status, failure) is the text.
+  // MonteCarlo: Improved (the refined schedule passed the paired test against its warm start,
+  // and again on fresh episodes) or KeptStart (it did not, or no refinement was found: the warm
+  // start is returned).
+  PlanStatus status = PlanStatus::NotOptimized;
+  std::string failure{};  // Failed only: the solver's reason
   // First-order optimality at the returned point, scale-free: with rates measured in units of
   // the largest λ̄_j and the cost in units of the cost itself, the largest change of a planned
   // rate under a unit projected-gradient step, max |x - Π(x - ∇f(x))| (0 exactly at a KKT point

@@ -81,6 +81,7 @@
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::emulator {
 
@@ -123,7 +124,7 @@ struct SensorTally {
 using RejectionCounts = std::map<std::string, std::uint64_t>;
 
 // The rejection reason of a copy the emulated network made on purpose: counted, never a fault.
-inline constexpr const char* kNetworkDuplicate = "network_duplicate";
+inline constexpr const char* kNetworkDuplicate = wordOf(RejectionReason::NetworkDuplicate).data();
 // The rejected samples that are faults: every reason but kNetworkDuplicate.
 [[nodiscard]] std::uint64_t faultyRejections(const RejectionCounts& rejected);
 

@@ -172,7 +172,7 @@ class Replanner {
                                                      double at) const;
   [[nodiscard]] Scenario plannedFor(const ReplanSettings& settings) const;
   [[nodiscard]] ScheduleVersion makeVersion(const Scenario& planned_for, RateSchedule schedule,
-                                            std::string surrogate, std::uint64_t command_id,
+                                            SurrogateKind surrogate, std::uint64_t command_id,
                                             std::uint32_t episode, double at) const;
   [[nodiscard]] double emulatedNow(const RunMoment& now) const;
   [[nodiscard]] double marginEmulated() const {

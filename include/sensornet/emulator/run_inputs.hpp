@@ -29,6 +29,7 @@
 #include "sensornet/emulator/episode_controls.hpp"
 #include "sensornet/emulator/messages.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::emulator {
 
@@ -62,7 +63,7 @@ class RunInputState {
   [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const { return rejected_; }
 
  private:
-  void reject(const char* reason) { ++rejected_[reason]; }
+  void reject(RejectionReason reason) { ++rejected_[std::string(wordOf(reason))]; }
   std::optional<RunScenario> run_;
   std::optional<EmulatedPlant> plant_;
   ScheduleBook book_;

@@ -12,11 +12,19 @@
 //   for (const ScheduleSegment& s : book.segments(3, T)) ... // [0, 1.2) v1, [1.2, T] v2
 
 #include <cstdint>
-#include <string>
+#include <nlohmann/json_fwd.hpp>
 #include <vector>
 
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/surrogate.hpp"
+#include "sensornet/core/surrogate_kind.hpp"
+
+namespace sensornet {
+
+// A version's surrogate in JSON (the report, the coordinator's journal) is its word: "cov".
+void to_json(nlohmann::json& j, SurrogateKind kind);
+
+}  // namespace sensornet
 
 namespace sensornet::emulator {
 
@@ -25,7 +33,7 @@ struct ScheduleVersion {
   std::uint32_t effective_episode = 0;
   double effective_time_s = 0.0;
   RateSchedule schedule;
-  std::string surrogate;    // "uniform", "info", "cov", "mc", "file"
+  SurrogateKind surrogate = SurrogateKind::File;  // "info", "cov", "uniform", "mc", "file"
   CostBracket bracket;      // of the whole schedule over [0, T] from P0
   std::uint64_t command_id = 0;
 };

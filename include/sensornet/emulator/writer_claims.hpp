@@ -22,12 +22,14 @@
 #include <map>
 #include <set>
 
+#include "sensornet/emulator/vocabulary.hpp"
+
 namespace sensornet::emulator {
 
 using WriterId = std::uint64_t;  // a DDS publication (instance) handle; 0 = unknown
 
 // The report's rejection reason for a sample of a second writer.
-inline constexpr const char* kForeignWriter = "foreign_writer";
+inline constexpr const char* kForeignWriter = wordOf(RejectionReason::ForeignWriter).data();
 
 class WriterClaims {
  public:

@@ -149,7 +149,7 @@ dds::WriteResult writeHijackingSchedule(dds::Writer<sensornet_Schedule>& writer,
   Eigen::MatrixXd rates = Eigen::MatrixXd::Zero(30, scenario.sensorCount());
   rates.col(0).setConstant(12.0);
   v.schedule = RateSchedule(scenario.horizon_s, rates);
-  v.surrogate = "file";
+  v.surrogate = SurrogateKind::File;
   return emulator::publishSchedule(writer, run_id, emulator::digestOf(yaml), v);
 }
 

@@ -47,7 +47,7 @@ TEST(Corollary1Sweep, TheInfoPlanStaysInsideItsBracketFromRScale1eMinus2To1e2) {
   PlanRequest request;
   request.surrogate = PlanSurrogate::Information;
   const PlanResult plan = planSchedule(reference_instance, request);
-  ASSERT_EQ(plan.status, "optimal") << "kkt " << plan.kkt_residual;
+  ASSERT_EQ(plan.status, PlanStatus::Optimal) << "kkt " << plan.kkt_residual;
   // A plan that varies in time and across sensors, where ordering bugs would show.
   const Eigen::MatrixXd& rates = plan.schedule.rates();
   ASSERT_GT((rates.rowwise() - rates.colwise().mean()).cwiseAbs().maxCoeff(), 1e-3);

@@ -198,7 +198,8 @@ PlanRequest mcRequest() {
 TEST(McPlanner, NeverWorseThanTheBestSurrogatePlanOnAPairedTest) {
   const Scenario s = smallPlanningScenario();
   const PlanResult mc = planSchedule(s, mcRequest());
-  EXPECT_TRUE(mc.status == "improved" || mc.status == "kept_start") << mc.status;
+  EXPECT_TRUE(mc.status == PlanStatus::Improved || mc.status == PlanStatus::KeptStart)
+      << wordOf(mc.status);
   EXPECT_TRUE(checkFeasibility(mc.schedule, s, 1e-9).feasible);
   EXPECT_GT(mc.objective_half_width, 0.0);
   EXPECT_GT(mc.episodes, 0);

@@ -220,8 +220,9 @@ TEST(RatePolytope, ExcludedSensorsGetNoRate) {
 void expectFeasibleAndStationary(const Scenario& s, const PlanResult& plan, double kkt_tol) {
   const Feasibility f = checkFeasibility(plan.schedule, s, 1e-9);
   EXPECT_TRUE(f.feasible) << f.reason;
-  EXPECT_TRUE(plan.status == "optimal" || plan.status == "acceptable") << plan.status;
-  EXPECT_LT(plan.kkt_residual, kkt_tol) << plan.status;
+  EXPECT_TRUE(plan.status == PlanStatus::Optimal || plan.status == PlanStatus::Acceptable)
+      << wordOf(plan.status);
+  EXPECT_LT(plan.kkt_residual, kkt_tol) << wordOf(plan.status);
 }
 
 // KKT residual below 1e-6 (scale-free: rates in units of λ̄, cost in units of itself).
@@ -281,7 +282,7 @@ TEST(Planner, ConvergesOnCoarseIntervalsWithHighRates) {
     PlanRequest request;
     request.surrogate = surrogate;
     const PlanResult plan = planSchedule(s, request);
-    EXPECT_EQ(plan.status, "optimal") << describe(surrogate);
+    EXPECT_EQ(plan.status, PlanStatus::Optimal) << describe(surrogate);
     expectFeasibleAndStationary(s, plan, 1e-6);
     ASSERT_TRUE(std::isfinite(plan.discretized_objective)) << describe(surrogate);
     EXPECT_NEAR(plan.discretized_objective, plan.objective, 1e-2 * plan.objective)
@@ -509,7 +510,7 @@ TEST(Planner, MatchesTheConvexSolveWithSensorNoiseFourDecadesApart) {
     }
     const double optimum = convexOptimum(s);
     const PlanResult plan = planSchedule(s, {});
-    EXPECT_EQ(plan.status, "optimal");
+    EXPECT_EQ(plan.status, PlanStatus::Optimal);
     expectFeasibleAndStationary(s, plan, 1e-6);
     EXPECT_NEAR(plan.discretized_objective, optimum, 1e-8 * optimum);
   }
@@ -547,7 +548,7 @@ TEST(Planner, UniformRequestReturnsTheBaselineWithItsBracket) {
   PlanRequest request;
   request.surrogate = PlanSurrogate::Uniform;
   const PlanResult plan = planSchedule(s, request);
-  EXPECT_EQ(plan.status, "not_optimized");
+  EXPECT_EQ(plan.status, PlanStatus::NotOptimized);
   EXPECT_EQ(plan.iterations, 0);
   EXPECT_TRUE(plan.schedule.rates().isApprox(uniformSchedule(s).rates()));
   const CostBracket bracket = computeBracket(s, uniformSchedule(s));
@@ -561,11 +562,11 @@ TEST(Planner, StopsAtTheIterationLimitWithAFeasibleSchedule) {
   PlanRequest request;
   request.max_iterations = 2;
   const PlanResult plan = planSchedule(s, request);
-  EXPECT_EQ(plan.status, "max_iterations");
+  EXPECT_EQ(plan.status, PlanStatus::MaxIterations);
   EXPECT_TRUE(checkFeasibility(plan.schedule, s, 1e-9).feasible);
   request.max_iterations = 500;
   request.progress = [](const PlanProgress& p) { return p.iteration < 3; };
-  EXPECT_EQ(planSchedule(s, request).status, "stopped");
+  EXPECT_EQ(planSchedule(s, request).status, PlanStatus::Stopped);
 }
 
 TEST(Planner, RejectsRequestsThatDoNotFitTheScenario) {

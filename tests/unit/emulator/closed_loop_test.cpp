@@ -126,7 +126,7 @@ TEST(ClosedLoop, AnEpisodeEqualsTheFilterUnderThePlannersTailFromTheSwitchTick) 
     request.warm_start = open_loop;  // the latest version before the tail: the open-loop plan
     request.max_seconds = options.replanner.max_plan_seconds;
     const PlanResult tail = planSchedule(s, request);
-    ASSERT_EQ(tail.status, "optimal") << "at " << instant;
+    ASSERT_EQ(tail.status, PlanStatus::Optimal) << "at " << instant;
     fuse(in_force, at);
     in_force = tail.schedule;
   }

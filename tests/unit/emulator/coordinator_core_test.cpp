@@ -69,7 +69,7 @@ class CoordinatorCoreTest : public ::testing::Test {
     ScheduleVersion v1;
     v1.version = 1;
     v1.schedule = planSchedule(run_.scenario, request).schedule;
-    v1.surrogate = "info";
+    v1.surrogate = SurrogateKind::Information;
     v1.bracket = computeBracket(run_.scenario, v1.schedule);
     journal.versions.push_back(v1);
     return journal;
@@ -835,7 +835,7 @@ TEST_F(CoordinatorClosedLoop, EachInstantReplansTheTailAndTheOpenLoopPlanComesBa
   EXPECT_EQ(v[0].version.version, 2u);
   EXPECT_EQ(v[0].version.effective_episode, 0u);
   EXPECT_NEAR(v[0].version.effective_time_s, 1.005 + config_.switch_margin_s, tick);
-  EXPECT_EQ(v[0].version.surrogate, "info");
+  EXPECT_EQ(v[0].version.surrogate, SurrogateKind::Information);
   EXPECT_EQ(v[1].version.version, 3u);
   EXPECT_EQ(v[1].version.effective_episode, 1u);
   EXPECT_EQ(v[1].version.effective_time_s, 0.0);

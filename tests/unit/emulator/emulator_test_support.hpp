@@ -31,7 +31,7 @@ inline ScheduleVersion versionOf(std::uint32_t number, const RateSchedule& sched
   v.effective_episode = episode;
   v.effective_time_s = at;
   v.schedule = schedule;
-  v.surrogate = "test";
+  v.surrogate = SurrogateKind::File;
   return v;
 }
 

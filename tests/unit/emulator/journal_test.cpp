@@ -39,7 +39,7 @@ ScheduleVersion versionOf(const Scenario& s, std::uint32_t number, std::uint32_t
   v.effective_episode = episode;
   v.effective_time_s = at;
   v.schedule = awkwardSchedule(s, scale);
-  v.surrogate = number == 1 ? "info" : "cov";
+  v.surrogate = number == 1 ? SurrogateKind::Information : SurrogateKind::Covariance;
   v.bracket = computeBracket(s, v.schedule);
   v.command_id = number == 1 ? 0 : 1764512345678901234ULL + number;
   return v;

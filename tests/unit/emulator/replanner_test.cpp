@@ -31,7 +31,7 @@ ScheduleVersion firstVersion(const Scenario& scenario, PlanSurrogate surrogate) 
   ScheduleVersion v1;
   v1.version = 1;
   v1.schedule = planSchedule(scenario, request).schedule;
-  v1.surrogate = std::string(describe(surrogate));
+  v1.surrogate = surrogateKindOf(surrogate);
   v1.bracket = computeBracket(scenario, v1.schedule);
   return v1;
 }

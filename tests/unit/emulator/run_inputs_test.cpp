@@ -61,7 +61,7 @@ class RunInputsStart : public ::testing::Test {
     v.version = number;
     v.effective_episode = episode;
     v.schedule = RateSchedule(run_.scenario.horizon_s, Eigen::MatrixXd::Constant(2, 1, static_cast<double>(number)));
-    v.surrogate = "file";
+    v.surrogate = SurrogateKind::File;
     ASSERT_EQ(publishSchedule(schedule_writer_, run_id_, run_.digest, v),
               dds::WriteResult::Written);
   }

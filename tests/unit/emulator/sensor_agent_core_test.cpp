@@ -86,7 +86,7 @@ class SensorAgentCoreTest : public ::testing::Test {
     v.effective_episode = episode;
     v.effective_time_s = at;
     v.schedule = RateSchedule(run_.scenario.horizon_s, rates);
-    v.surrogate = "file";
+    v.surrogate = SurrogateKind::File;
     withScheduleSample("run", run_.digest, v, [&](const sensornet_Schedule& s) {
       inputs_.onSchedule(s, update_);
     });
