@@ -23,6 +23,7 @@
 #include "sensornet/launcher/fault.hpp"
 #include "sensornet/launcher/run_verdict.hpp"
 #include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/report/run_record.hpp"
 
 namespace sensornet::launcher {
 
@@ -45,8 +46,8 @@ struct RunEnd {
 };
 
 struct RunOutcome {
-  nlohmann::json report;  // as written (or should have been, see write_problem); without
-                          // per_episode when the episode log beside it holds the entries
+  report::RunRecord report;  // as written (or should have been, see write_problem); without
+                             // per_episode when the episode log beside it holds the entries
   emulator::RunStatus status = emulator::RunStatus::Failed;
   int exit_code = 1;
   bool amended = false;  // the launcher rewrote the report

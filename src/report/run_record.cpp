@@ -460,6 +460,12 @@ json encode(const FaultRecord& r) {
   return doc;
 }
 
+json encode(const std::vector<FaultRecord>& faults) {
+  json list = json::array();
+  for (const FaultRecord& f : faults) list.push_back(encode(f));
+  return list;
+}
+
 json encode(const EpisodeRecord& r) {
   json doc = {{"episode", r.episode},
               {"realized_cost", orNull(r.realized_cost)},
@@ -540,9 +546,7 @@ json encode(const RunRecord& run) {
   putIf(doc, "schema_version", run.schema_version);
   doc["run_id"] = run.run_id;
   doc["status"] = std::string(wordOf(run.status));
-  json faults = json::array();
-  for (const FaultRecord& f : run.faults) faults.push_back(encode(f));
-  doc["faults"] = std::move(faults);
+  doc["faults"] = encode(run.faults);
   if (run.scenario) {
     doc["scenario"] = {{"digest", run.scenario->digest},
                        {"sensors", run.scenario->sensors},

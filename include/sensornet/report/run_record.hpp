@@ -212,6 +212,7 @@ struct RunRecord {
 [[nodiscard]] nlohmann::json encode(const RunRecord& run);
 [[nodiscard]] nlohmann::json encode(const EpisodeRecord& episode);
 [[nodiscard]] nlohmann::json encode(const FaultRecord& fault);
+[[nodiscard]] nlohmann::json encode(const std::vector<FaultRecord>& faults);
 [[nodiscard]] nlohmann::json encode(const SummaryRecord& summary);
 [[nodiscard]] nlohmann::json encode(const BracketRecord& bracket);
 [[nodiscard]] nlohmann::json encode(const RejectionTally& tally);

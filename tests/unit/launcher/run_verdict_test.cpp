@@ -23,7 +23,11 @@ using nlohmann::json;
 constexpr int kPlanned = 20;
 
 ReportSeen reported(const std::string& status, std::uint64_t finished = kPlanned) {
-  return {true, "", status, finished};
+  ReportSeen seen;
+  seen.readable = true;
+  seen.status = status;
+  seen.finished_episodes = finished;
+  return seen;
 }
 
 Fault survivedDeath() {

@@ -56,7 +56,11 @@ const A* first(const std::vector<Action>& actions) {
 
 // The verdict of a run the fusion center reported as `reported` with every episode finished.
 Verdict verdictOf(const Supervisor& s, const std::string& reported = "completed") {
-  return decideVerdict(s.faults(), s.interrupted(), {true, "", reported, 20}, 20);
+  ReportSeen seen;
+  seen.readable = true;
+  seen.status = reported;
+  seen.finished_episodes = 20;
+  return decideVerdict(s.faults(), s.interrupted(), seen, 20);
 }
 
 // The run ends in order and by itself: coordinator, fusion center, sensor agents.
