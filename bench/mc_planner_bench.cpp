@@ -180,7 +180,7 @@ void runInstance(Point& point, int i, int planner_seed, const Options& options) 
         "  n=%d M=%d #%d/%d: info %.4f cov %.4f unif %.4f mc %.4f (planner %.4f +- %.4f, %s, "
         "%lld episodes, %.1f s) mc-best %+.5f +- %.5f %s\n",
         point.n, point.m, i, planner_seed, means[0], means[1], means[2], means[3], plan.objective / normalizer,
-        plan.objective_half_width / normalizer, plan.status.c_str(), plan.episodes,
+        plan.objective_half_width / normalizer, std::string(wordOf(plan.status)).c_str(), plan.episodes,
         point.mc_seconds.back(), md, halfWidth(paired, 0.05),
         v > 0 ? "WORSE" : (v < 0 ? "better" : "n.s."));
     std::fflush(stdout);

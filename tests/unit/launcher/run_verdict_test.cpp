@@ -30,6 +30,16 @@ ReportSeen reported(const std::string& status, std::uint64_t finished = kPlanned
   return seen;
 }
 
+// The report the launcher could not believe or find (it was rebuilt), and why.
+ReportSeen unreadable(const std::string& problem, const std::string& status,
+                      std::uint64_t finished) {
+  ReportSeen seen;
+  seen.problem = problem;
+  seen.status = status;
+  seen.finished_episodes = finished;
+  return seen;
+}
+
 Fault survivedDeath() {
   Fault f{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, {2, 0.5}, "killed"};
   f.survived = true;
@@ -79,7 +89,7 @@ TEST(RunVerdict, FailedReportStaysFailed) {
 
 TEST(RunVerdict, MissingReportFailsTheRunAndSaysSo) {
   const Verdict v =
-      decideVerdict({}, false, {false, "wrote no report at r.json", "failed", 0}, kPlanned);
+      decideVerdict({}, false, unreadable("wrote no report at r.json", "failed", 0), kPlanned);
   EXPECT_EQ(v.status, RunStatus::Failed);
   ASSERT_EQ(v.faults.size(), 1u);
   EXPECT_EQ(v.faults[0].kind, FaultKind::ReportMissing);
@@ -88,7 +98,7 @@ TEST(RunVerdict, MissingReportFailsTheRunAndSaysSo) {
 
 TEST(RunVerdict, MissingReportOfADeadFusionCenterIsNotASecondFault) {
   const Fault died{FaultKind::ProcessKilled, kFusionCenter, {}, {}, "killed"};
-  const Verdict v = decideVerdict({died}, false, {false, "wrote no report", "failed", 0}, kPlanned);
+  const Verdict v = decideVerdict({died}, false, unreadable("wrote no report", "failed", 0), kPlanned);
   EXPECT_EQ(v.faults.size(), 1u);
 }
 
