@@ -137,7 +137,7 @@ struct ScheduleVersionRecord {
   double effective_time_s = 0.0;
   std::string surrogate;  // how it was made: uniform, info, cov, mc, file
   BracketRecord bracket;
-  std::string command_id;
+  std::uint64_t command_id = 0;  // the re-plan command that made it (0: none)
   double horizon_s = 0.0;
   std::vector<std::vector<double>> rates;  // N intervals of M rates (Hz)
   nlohmann::json other = nlohmann::json::object();

@@ -36,7 +36,7 @@ json handWrittenReport() {
     "episodes_planned": 2,
     "schedule_versions": [
       {"version": 1, "effective_episode": 0, "effective_time_s": 0.0, "surrogate": "info",
-       "bracket": {"info": 1.5, "cov": 2.5}, "command_id": "", "horizon_s": 2.0,
+       "bracket": {"info": 1.5, "cov": 2.5}, "command_id": 0, "horizon_s": 2.0,
        "rates": [[1.0, 2.0], [3.0, 0.5]]}
     ],
     "summary": {"episodes": 2, "episodes_complete": 1, "episodes_incomplete": 1, "mean": 2.0,
