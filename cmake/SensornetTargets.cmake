@@ -33,6 +33,8 @@ function(sensornet_target_options target)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
   target_compile_options(${target} PRIVATE ${SENSORNET_ARCH_FLAGS})
+  # Release at -O2, after CMake's -O3 (the last -O wins): the code RelWithDebInfo runs.
+  target_compile_options(${target} PRIVATE $<$<CONFIG:Release>:-O2>)
   if(SENSORNET_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
                                              -fno-sanitize-recover=undefined)

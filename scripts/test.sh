@@ -10,16 +10,20 @@ scripts/install-deps.sh --tests
 run_suite() {
   local build_dir=$1
   shift
+  local started=$SECONDS
   cmake -S . -B "$build_dir" -G Ninja -DSENSORNET_WERROR=ON "$@" >/dev/null
   cmake --build "$build_dir" -j "$(nproc)"
+  echo "test.sh: $build_dir built in $((SECONDS - started)) s" >&2
+  started=$SECONDS
   ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" --timeout 600
+  echo "test.sh: $build_dir tests ran in $((SECONDS - started)) s" >&2
 }
 
 case "${1:-}" in
-  "") run_suite build -DCMAKE_BUILD_TYPE=RelWithDebInfo ;;
+  "") run_suite build -DCMAKE_BUILD_TYPE=Release ;;
   --sanitize) run_suite build-asan -DCMAKE_BUILD_TYPE=Debug -DSENSORNET_SANITIZE=ON ;;
   --all)
-    run_suite build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+    run_suite build -DCMAKE_BUILD_TYPE=Release
     run_suite build-asan -DCMAKE_BUILD_TYPE=Debug -DSENSORNET_SANITIZE=ON
     ;;
   *)
