@@ -39,7 +39,7 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"

@@ -95,10 +95,10 @@
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
-#include "sensornet/emulator/run_recorder.hpp"
+#include "sensornet/recording/run_recorder.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"
@@ -109,6 +109,8 @@ namespace {
 using namespace std::chrono_literals;
 using sensornet::testing::BackgroundProcess;
 namespace fs = std::filesystem;
+namespace recording = sensornet::recording;
+namespace wire = sensornet::wire;
 
 const std::string kCoordinator = SENSORNET_COORDINATOR;
 const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
@@ -186,7 +188,7 @@ double startupSeconds(int process_count, int sensors, int repeat) {
       runId("startup" + std::to_string(process_count) + "x" + std::to_string(sensors), repeat);
   Processes processes(fs::temp_directory_path() / run);
   const fs::path scenario = writeRandomScenario(processes.dir(), 5, sensors, 5.0);
-  sensornet::emulator::RunOptions options;
+  wire::RunOptions options;
   options.run_id = run;
   sensornet::dds::Domain domain(options.domainConfig());
   sensornet::dds::Participant participant(domain);
@@ -759,9 +761,9 @@ std::optional<OverloadRun> throughputRun(const std::string& run,
   Processes processes(fs::temp_directory_path() / run);
   std::optional<sensornet::dds::Domain> record_domain;
   std::optional<sensornet::dds::Participant> record_participant;
-  std::optional<sensornet::emulator::RunRecorder> recorder;
+  std::optional<recording::RunRecorder> recorder;
   if (record) {
-    sensornet::emulator::RunOptions options;
+    wire::RunOptions options;
     options.run_id = run;
     record_domain.emplace(options.domainConfig());
     record_participant.emplace(*record_domain);

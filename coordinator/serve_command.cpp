@@ -25,12 +25,12 @@
 #include "sensornet/emulator/coordinator_core.hpp"
 #include "sensornet/emulator/coordinator_journal.hpp"
 #include "sensornet/emulator/coordinator_start.hpp"
-#include "sensornet/emulator/coordinator_wire.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_inputs.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/coordinator_wire.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_inputs.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
-#include "sensornet/emulator/sensor_speakers.hpp"
+#include "sensornet/wire/sensor_speakers.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/forwarded_options.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -47,7 +47,7 @@ using emulator::CoordinatorCore;
 using emulator::wallNowNs;
 
 struct ServeOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   emulator::CoordinatorConfig core;
   std::string scenario_path;
   PlanSurrogate surrogate = PlanSurrogate::Covariance;
@@ -133,11 +133,11 @@ class CoordinatorNode {
   void readSamples() {
     for (auto& received : launcher_commands_.take(8).samples) {
       carryOut(core_.onCommand(
-          emulator::commandOf(*received.sample, emulator::CommandSender::Launcher), wallNowNs()));
+          wire::commandOf(*received.sample, emulator::CommandSender::Launcher), wallNowNs()));
     }
     for (auto& received : operator_commands_.take(8).samples) {
       carryOut(core_.onCommand(
-          emulator::commandOf(*received.sample, emulator::CommandSender::Operator), wallNowNs()));
+          wire::commandOf(*received.sample, emulator::CommandSender::Operator), wallNowNs()));
     }
     auto statuses = status_reader_.take(64);
     for (const auto& change : statuses.changes) {
@@ -147,7 +147,7 @@ class CoordinatorNode {
     }
     for (auto& received : statuses.samples) {
       const sensornet_SensorStatus& s = *received.sample;
-      if (const auto state = emulator::sensorStateOf(s.state)) {
+      if (const auto state = wire::sensorStateOf(s.state)) {
         const int sensor = static_cast<int>(s.sensor_id);
         core_.onSensorLiveliness(sensor, received.info.instance_state == dds::InstanceState::Alive,
                                  wallNowNs());
@@ -162,10 +162,10 @@ class CoordinatorNode {
     }
     for (auto& received : report_reader_.take(16).samples) {
       heard_report_ = true;
-      carryOut(core_.onReport(emulator::reportOf(*received.sample), wallNowNs()));
+      carryOut(core_.onReport(wire::reportOf(*received.sample), wallNowNs()));
     }
     for (auto& received : state_reader_.take(8).samples) {
-      carryOut(core_.onFusionState(emulator::fusionStateOf(*received.sample), wallNowNs()));
+      carryOut(core_.onFusionState(wire::fusionStateOf(*received.sample), wallNowNs()));
     }
     core_.onFusionCenterMatched(fusionCenterPresent());
   }
@@ -213,15 +213,15 @@ class CoordinatorNode {
 
  public:  // std::visit's overloads, one per action
   void operator()(const emulator::PublishScenario&) {
-    mustWrite(emulator::publishScenario(scenario_writer_, options_.run.run_id, run_), "scenario");
+    mustWrite(wire::publishScenario(scenario_writer_, options_.run.run_id, run_), "scenario");
   }
   void operator()(const emulator::PublishVersion& a) {
-    mustWrite(emulator::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest,
+    mustWrite(wire::publishSchedule(schedule_writer_, options_.run.run_id, run_.digest,
                                         a.version),
               "schedule");
   }
   void operator()(const emulator::PublishControl& a) {
-    mustWrite(control_writer_.write(wireControl(a.control, options_.run.run_id)),
+    mustWrite(control_writer_.write(wire::wireControl(a.control, options_.run.run_id)),
               "episode control");
   }
   void operator()(const emulator::SendReply& a) {
@@ -244,7 +244,7 @@ class CoordinatorNode {
     }
   }
   void operator()(const emulator::ShutDownRun& a) {
-    if (control_writer_.write(wireControl(a.control, options_.run.run_id)) ==
+    if (control_writer_.write(wire::wireControl(a.control, options_.run.run_id)) ==
         dds::WriteResult::TimedOut) {
       spdlog::warn("the shutdown announcement timed out");
     }
@@ -290,7 +290,7 @@ class CoordinatorNode {
   dds::Reader<sensornet_Command> launcher_commands_;
   dds::Reader<sensornet_Command> operator_commands_;
   dds::Reader<sensornet_SensorStatus> status_reader_;
-  emulator::SensorSpeakers speakers_;
+  wire::SensorSpeakers speakers_;
   dds::Reader<sensornet_Report> report_reader_;
   dds::Reader<sensornet_FusionState> state_reader_;
   dds::WaitSet waitset_;
@@ -411,7 +411,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "fusion center and the launcher set); 1 = the coordinator failed: its peers were not "
       "ready within --ready-timeout, no report came within the report timeout, or a write "
       "failed; 2 = bad input (a file, a flag, a journal of another run).");
-  emulator::addRunOptions(*cmd, options->run);
+  wire::addRunOptions(*cmd, options->run);
   options->run.security_identity = dds::SecurityRole::Coordinator;
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
   // The options the launcher forwards: declared once (io/forwarded_options.hpp).
@@ -427,7 +427,7 @@ Subcommand addServeCommand(CLI::App& app) {
                   "wall seconds between one episode's end and the next one's start (the next "
                   "episode is announced while the current one runs)")
       ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
+      ->check(positiveNumber(kMaxWallSeconds));
   addOnSensorFailureOption(*cmd, options->core.on_sensor_failure,
                            ". --sensor-deaths says who tells; with stop the report says the run "
                            "failed and the coordinator itself exits 0");
@@ -443,7 +443,7 @@ Subcommand addServeCommand(CLI::App& app) {
                   "with --sensor-deaths liveliness: wall seconds a sensor may stay without "
                   "liveliness (a stall, a cut link) before it counts as dead")
       ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
+      ->check(positiveNumber(kMaxWallSeconds));
   cmd->add_flag(std::string(kNetworkAwareFlag), options->core.network_aware,
                 "plan the initial schedule and every re-plan for the rates the scenario's "
                 "network: section delivers (loss thins them, outages of every episode zero "

@@ -32,14 +32,14 @@
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/emulator/arrival_inbox.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
-#include "sensornet/emulator/fusion_center_events.hpp"
+#include "sensornet/wire/fusion_center_events.hpp"
 #include "sensornet/emulator/fusion_metrics.hpp"
 #include "sensornet/io/metrics_server.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_inputs.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_inputs.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
-#include "sensornet/emulator/sensor_speakers.hpp"
+#include "sensornet/wire/sensor_speakers.hpp"
 #include "sensornet/emulator/report_page.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
@@ -57,7 +57,7 @@ using emulator::wallNowNs;
 using nlohmann::json;
 
 struct ServeOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   std::string report_path;
   double lag_s = 0.05;           // wall seconds a measurement may take to arrive before fusion
   double stall_limit_s = 12.0;   // wall seconds a sensor that owes measurements may stay silent
@@ -152,7 +152,7 @@ class ReaderFacts final : public emulator::WriterFacts {
   const dds::detail::ReaderCore& measurements_;
   const dds::detail::ReaderCore& tallies_;
   const dds::detail::ReaderCore& statuses_;
-  mutable emulator::SensorSpeakers speakers_;  // main thread only
+  mutable wire::SensorSpeakers speakers_;  // main thread only
 };
 
 emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
@@ -303,7 +303,7 @@ class FusionCenter {
  private:
   // Hands what the run announced to the core; the run's end on RUN_SHUTDOWN.
   std::optional<emulator::RunEnd> follow(std::int64_t now) {
-    return emulator::feedInputs(core_, inputs_.state(), inputs_.poll(), now);
+    return wire::feedInputs(core_, inputs_.state(), inputs_.poll(), now);
   }
 
   // In Cyclone's receive thread, as measurements are delivered: takes them, stamps their arrival
@@ -317,7 +317,7 @@ class FusionCenter {
       const std::size_t count = measurement_reader_.takeEach(
           kBatch,
           [&](const sensornet_Measurement& m, const dds::SampleInfo& info) {
-            arrivals.push_back(emulator::arrivalOfSample(m, received_ns, info.publication,
+            arrivals.push_back(wire::arrivalOfSample(m, received_ns, info.publication,
                                                          options_.run.run_id));
           },
           [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
@@ -333,13 +333,13 @@ class FusionCenter {
   void readTallies(std::int64_t now) {
     if (!core_.hasScenario()) return;  // kept by the reader (transient local) until then
     for (auto& received : tally_reader_.take(64).samples) {
-      core_.onTally(emulator::tallyOfSample(*received.sample, received.info.publication), now);
+      core_.onTally(wire::tallyOfSample(*received.sample, received.info.publication), now);
     }
   }
 
   void readStatuses(std::int64_t now) {
     for (auto& received : status_reader_.take(64).samples) {
-      core_.onStatus(emulator::statusOfSample(*received.sample, received.info.publication), now);
+      core_.onStatus(wire::statusOfSample(*received.sample, received.info.publication), now);
     }
   }
 
@@ -348,7 +348,7 @@ class FusionCenter {
   void readReplies(std::int64_t now) {
     for (auto& received : reply_reader_.take(64).samples) {
       const sensornet_CommandReply& r = *received.sample;
-      if (const auto why = emulator::refusalByRight(r, options_.run.run_id)) {
+      if (const auto why = wire::refusalByRight(r, options_.run.run_id)) {
         core_.onCommandRefused(r.command_id, *why, now);
       }
     }
@@ -369,7 +369,7 @@ class FusionCenter {
                    a.result.episode, json(a.lacking_writers).dump());
     }
     std::vector<sensornet_SensorCounts> counts;
-    const sensornet_Report r = emulator::reportSample(options_.run.run_id, a.result, a.summary, counts);
+    const sensornet_Report r = wire::reportSample(options_.run.run_id, a.result, a.summary, counts);
     if (report_writer_.write(r) == dds::WriteResult::TimedOut) {
       spdlog::warn("the report of episode {} timed out on the wire (kept in the file)",
                    a.result.episode);
@@ -445,7 +445,7 @@ class FusionCenter {
   std::unique_ptr<MetricsServer> metrics_;  // --metrics; made first: a bad address is bad input
   dds::Domain domain_;
   dds::Participant participant_;
-  emulator::RunInputs inputs_;
+  wire::RunInputs inputs_;
   dds::Topic<sensornet_Measurement> measurement_topic_;
   dds::Topic<sensornet_EpisodeTally> tally_topic_;
   dds::Topic<sensornet_SensorStatus> status_topic_;
@@ -490,7 +490,7 @@ Subcommand addServeCommand(CLI::App& app) {
       "Each finished episode is appended at once to the JSON Lines log beside the report "
       "(report.jsonl beside report.json). Example:\n  fusion_center serve --run-id demo "
       "--report report.json");
-  emulator::addRunOptions(*cmd, options->run);
+  wire::addRunOptions(*cmd, options->run);
   options->run.security_identity = dds::SecurityRole::FusionCenter;
   CLI::Option* report = cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down (missing folders are made "
@@ -499,19 +499,19 @@ Subcommand addServeCommand(CLI::App& app) {
                   "wall seconds a measurement may take to arrive before it is fused (a later "
                   "one is still fused in order: the episode is re-fused at its end)")
       ->capture_default_str()
-      ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
+      ->check(nonNegativeNumber(kMaxWallSeconds));
   cmd->add_option("--stall-limit", options->stall_limit_s,
                   "wall seconds a sensor that still owes measurements may stay silent after an "
                   "episode's end before the episode is closed incomplete (longer than the 10 s "
                   "stalls a run absorbs)")
       ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
+      ->check(positiveNumber(kMaxWallSeconds));
   cmd->add_option("--keep-up-limit", options->keep_up_limit_s,
                   "wall seconds of drain after the last of an episode arrived (not counting "
                   "samples the network held back: those are stalls), or of a sensor's lag behind "
                   "the emulated clock, past which the run is reported as overloaded (degraded)")
       ->capture_default_str()
-      ->check(positiveNumber(emulator::kMaxWallSeconds));
+      ->check(positiveNumber(kMaxWallSeconds));
   cmd->add_flag("--reference", options->reference,
                 "run as the reference beside an external fusion center (sensornet launch "
                 "--reference-fusion): fuse the same measurements, write the report file, and "

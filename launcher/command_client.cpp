@@ -5,7 +5,7 @@
 #include <span>
 
 #include "sensornet/dds/wire.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 
 namespace sensornet::launcher {
 namespace {

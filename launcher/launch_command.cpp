@@ -38,10 +38,10 @@
 #include "sensornet/dds/security.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
 #include "sensornet/emulator/junit_report.hpp"
-#include "sensornet/emulator/run_recorder.hpp"
+#include "sensornet/recording/run_recorder.hpp"
 #include "sensornet/io/metrics_server.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -66,7 +66,7 @@ constexpr std::size_t kLogLinesShown = 15;
 
 // The launch's options (launch_plan.hpp) and how its processes reach the run's DDS domain.
 struct CommandOptions : LaunchOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
 };
 
 // --require as parseRequirements() takes it, so that an unknown criterion is refused before
@@ -440,9 +440,9 @@ int runLaunch(CommandOptions options) {
     spdlog::warn("cannot record the run in {}: {}", plan.log_dir.string(), e.what());
   }
   // Recording starts before any process: volatile samples written before it would be lost.
-  std::unique_ptr<emulator::RunRecorder> recorder;
+  std::unique_ptr<recording::RunRecorder> recorder;
   if (!options.record_path.empty()) {
-    recorder = std::make_unique<emulator::RunRecorder>(
+    recorder = std::make_unique<recording::RunRecorder>(
         progress.participant(), plan.run_id, options.record_path,
         McapMap{{"seed", options.seed},
                 {"scenario", fs::absolute(options.scenario_path).string()},
@@ -477,7 +477,7 @@ int runLaunch(CommandOptions options) {
   // known (its run-end metadata).
   bool recording_fell_short = false;
   if (recorder) {
-    if (const emulator::RecordingSummary& drained = recorder->drain(); !drained.error.empty()) {
+    if (const recording::RecordingSummary& drained = recorder->drain(); !drained.error.empty()) {
       recording_fell_short = true;
       std::error_code unknown;
       const std::uintmax_t kept = fs::file_size(drained.path, unknown);
@@ -508,7 +508,7 @@ int runLaunch(CommandOptions options) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
   }
   if (recorder) {  // a recording that fell short is a fault (above); one that cannot close, a warning
-    const emulator::RecordingSummary recorded =
+    const recording::RecordingSummary recorded =
         recorder->stop({{"status", std::string(wordOf(outcome.status))},
                         {"exit_code", std::to_string(outcome.exit_code)},
                         {"ended_at", utcNow()}});
@@ -599,7 +599,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
                      ". Default cov: its realized cost beat uniform and info on the paper's "
                      "sweeps (bench/README.md)");
   addScheduleOption(*cmd, options->schedule_path);
-  emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  wire::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   options->run.security_identity = dds::SecurityRole::Launcher;
   cmd->add_option("--hosts", options->hosts_path,
                   "run across several hosts: a YAML file naming each host's address, the "
@@ -626,7 +626,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")
-      ->check(nonNegativeNumber(emulator::kMaxWallSeconds));
+      ->check(nonNegativeNumber(kMaxWallSeconds));
   addOnSensorFailureOption(*cmd, options->on_sensor_failure,
                            ". A sensor agent dies when it is killed, crashes, or by a scripted "
                            "crash of the scenario's faults:");

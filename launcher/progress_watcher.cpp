@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 
 namespace sensornet::launcher {
 namespace {

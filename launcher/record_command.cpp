@@ -12,9 +12,9 @@
 #include "output_file.hpp"
 #include "run_follower.hpp"
 #include "runs_command.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
-#include "sensornet/emulator/run_recorder.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
+#include "sensornet/recording/run_recorder.hpp"
 #include "sensornet/launcher/run_view.hpp"
 
 namespace sensornet::launcher {
@@ -24,7 +24,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::chrono::milliseconds kPoll{100};
 
 struct RecordOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   std::string path;
   double wait_s = 30.0;
 };
@@ -37,7 +37,7 @@ int runRecord(RecordOptions options) {
   RunViewConfig config;
   config.run_id = options.run.run_id;
   RunView view(config);
-  emulator::RunRecorder recorder(follower.participant(), options.run.run_id, options.path,
+  recording::RunRecorder recorder(follower.participant(), options.run.run_id, options.path,
                                  {{"joined_at", utcNow()}, {"joined", "sensornet record"}});
   std::fprintf(stderr, "sensornet record: recording run %s into %s until it ends (Ctrl-C stops)\n",
                options.run.run_id.c_str(), options.path.c_str());
@@ -62,12 +62,12 @@ int runRecord(RecordOptions options) {
       break;
     }
   }
-  if (const emulator::RecordingSummary& drained = recorder.drain(); !drained.error.empty()) {
+  if (const recording::RecordingSummary& drained = recorder.drain(); !drained.error.empty()) {
     std::fprintf(stderr, "sensornet record: the recording fell short: %s\n",
                  drained.error.c_str());
     code = kExitFailure;
   }
-  const emulator::RecordingSummary s = recorder.stop({{"status", ended}, {"ended_at", utcNow()}});
+  const recording::RecordingSummary s = recorder.stop({{"status", ended}, {"ended_at", utcNow()}});
   std::printf("recorded %llu samples (%llu bytes) of run %s in %s (%s)\n",
               static_cast<unsigned long long>(s.messages),
               static_cast<unsigned long long>(s.bytes), options.run.run_id.c_str(),
@@ -90,7 +90,7 @@ Subcommand addRecordCommand(CLI::App& app) {
       "summary either way. Exit 0 when the file holds all it took, 1 when the run never "
       "answered within --wait or the disk refused part of it, 2 on bad input. Example:\n"
       "  sensornet record run.mcap            (the one run live on this host)");
-  emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  wire::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
       ->description(
           "the run to record (default: the one run live on this host; with several, it lists "

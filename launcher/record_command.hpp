@@ -1,6 +1,6 @@
 #pragma once
 // `sensornet record [--run-id ID] RUN.mcap`: joins a running emulation and records it, as
-// `sensornet launch --record` does from the start (emulator::RunRecorder: every sample of every
+// `sensornet launch --record` does from the start (recording::RunRecorder: every sample of every
 // topic in every partition of the run, into an MCAP file). It only reads. What was sent before
 // it joined is in the file only where the topic keeps it for late joiners (the scenario, the
 // schedule versions, the episode controls, the latest reports); measurements and tallies from

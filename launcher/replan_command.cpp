@@ -13,8 +13,8 @@
 #include "command_client.hpp"
 #include "run_files.hpp"
 #include "sensornet/core/planner.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -24,7 +24,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct ReplanOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   std::string surrogate;
   std::vector<std::uint32_t> exclude;
   std::vector<std::uint32_t> include;
@@ -156,7 +156,7 @@ Subcommand addReplanCommand(CLI::App& app) {
                    "adopt this schedule file (JSON) for the rest of the run")
       ->check(CLI::ExistingFile);
   change->require_option(1);
-  emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  wire::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
       ->description("the run to change (default: the run last launched on this host)");
   cmd->add_option("--timeout", options->timeout_s, "seconds to wait for the coordinator's answer")

@@ -11,9 +11,9 @@
 
 #include "output_file.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/live_replay.hpp"
-#include "sensornet/emulator/recording_replay.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/recording/live_replay.hpp"
+#include "sensornet/recording/recording_replay.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/mcap.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -30,7 +30,7 @@ struct ReplayOptions {
   bool json = false;
   std::string report;  // the replay's report; default beside the recording: RUN.replay.json
   bool live = false;   // republish into a new run instead of fusing here
-  emulator::RunOptions run;  // --live: the new run
+  wire::RunOptions run;  // --live: the new run
   double time_scale = 1.0;
   double ready_timeout_s = 30.0;
 };
@@ -45,8 +45,8 @@ int runLive(const ReplayOptions& options) {
                "center now (fusion_center serve --run-id %s, or your own)\n",
                options.path.c_str(), options.run.run_id.c_str(), options.time_scale,
                options.run.run_id.c_str());
-  const emulator::LiveReplayResult r =
-      emulator::replayLive(file, options.path, options.run, options.time_scale,
+  const recording::LiveReplayResult r =
+      recording::replayLive(file, options.path, options.run, options.time_scale,
                            options.ready_timeout_s);
   std::printf("run %s replayed live from %s: %llu samples in %.2f s\n", options.run.run_id.c_str(),
               options.path.c_str(), static_cast<unsigned long long>(r.written), r.wall_s);
@@ -147,10 +147,10 @@ int runOffline(const ReplayOptions& options) {
   makeParentFolders(report, "--report");
   checkOutputFile(report, "--report");
   spdlog::set_level(spdlog::level::warn);  // the fusion center's progress lines are the live run's
-  const emulator::ReplayResult r = emulator::replayRecording(file, options.path, report);
+  const recording::ReplayResult r = recording::replayRecording(file, options.path, report);
   std::size_t compared = 0, equal = 0;
   nlohmann::json episodes = nlohmann::json::array();
-  for (const emulator::ReplayedEpisode& e : r.episodes) {
+  for (const recording::ReplayedEpisode& e : r.episodes) {
     const bool both = e.replayed_cost && e.recorded_cost;
     const bool same = both && *e.replayed_cost == *e.recorded_cost;  // to the bit
     compared += both ? 1 : 0;
@@ -214,7 +214,7 @@ Subcommand addReplayCommand(CLI::App& app) {
                 "republish the recorded run's own traffic (scenario, schedules, episode controls, "
                 "every sensor's measurements, tallies and statuses) into the new run --run-id at "
                 "the recorded timing, for a fusion center of that run (ours or yours) to fuse");
-  emulator::addRunOptions(*cmd, options->run, false);
+  wire::addRunOptions(*cmd, options->run, false);
   cmd->add_option("--time-scale", options->time_scale,
                   "with --live: how much faster than recorded (2: twice as fast)")
       ->capture_default_str()

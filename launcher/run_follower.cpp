@@ -5,7 +5,7 @@
 #include <thread>
 
 #include "sensornet/dds/wire.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet::launcher {
@@ -27,7 +27,7 @@ ScheduleSeen scheduleOf(const sensornet_Schedule& s) {
 SensorStatusSeen statusOf(const sensornet_SensorStatus& s, bool alive) {
   SensorStatusSeen out;
   out.sensor_id = s.sensor_id;
-  out.state = emulator::sensorStateOf(s.state).value_or(emulator::SensorState::Starting);
+  out.state = wire::sensorStateOf(s.state).value_or(emulator::SensorState::Starting);
   out.episode = s.episode;
   out.schedule_version = s.schedule_version;
   out.rate_hz = s.current_rate_hz;
@@ -141,7 +141,7 @@ void RunFollower::recordReportsTo(const std::filesystem::path& path, int sensor_
 void RunFollower::record(const sensornet_Report& report) {
   if (!record_ || recorded_.contains(report.episode)) return;
   try {
-    record_->append(emulator::episodeEntryOfReport(report, record_sensor_count_));
+    record_->append(wire::episodeEntryOfReport(report, record_sensor_count_));
     recorded_.insert(report.episode);
   } catch (const std::exception& e) {  // a Report that does not fit, or a log that cannot grow
     ++reports_refused_;

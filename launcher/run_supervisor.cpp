@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "interrupts.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 
 namespace sensornet::launcher {
 namespace {

@@ -10,8 +10,8 @@
 #include "live_runs.hpp"
 #include "run_files.hpp"
 #include "run_follower.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/launcher/run_view.hpp"
 
 namespace sensornet::launcher {
@@ -21,7 +21,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::chrono::milliseconds kWaitStep{50};
 
 struct StatusOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   // An upper bound: it answers as soon as every sensor of the scenario has (or is known dead).
   // Discovery under DDS Security takes seconds for a handful of sensors.
   double wait_s = 10.0;
@@ -146,7 +146,7 @@ Subcommand addStatusCommand(CLI::App& app) {
       "Show the sensors of a running emulation (state, episode, schedule version, current "
       "rate, measurements sent, process id) and the latest schedule version. Example:\n"
       "  sensornet status --json");
-  emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  wire::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
       ->description(
           "the run to look at (default: the one run live on this host; with several, "

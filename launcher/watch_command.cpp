@@ -10,8 +10,8 @@
 
 #include "live_runs.hpp"
 #include "run_follower.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/launcher/run_view.hpp"
 
 namespace sensornet::launcher {
@@ -21,7 +21,7 @@ using Clock = std::chrono::steady_clock;
 constexpr std::chrono::milliseconds kRefresh{250};
 
 struct WatchOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   double wait_s = 30.0;
   bool plain = false;
 };
@@ -84,7 +84,7 @@ Subcommand addWatchCommand(CLI::App& app) {
       "ends (once its last reports are in and its sensors have stopped). Episode numbers are "
       "the run's own (0, 1, ..., as in report.json); [k/N] is the episode's place among the N "
       "planned. Example:\n  sensornet watch            (the one run live on this host)");
-  emulator::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
+  wire::addRunOptions(*cmd, options->run, /*run_id_required=*/false);
   cmd->get_option("--run-id")
       ->description(
           "the run to watch (default: the one run live on this host; with several, "

@@ -3,7 +3,7 @@
 // the episodes come over DDS.
 
 #include "sensor_agent.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/command_line.hpp"
 
@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
         "on the emulated clock. Example:\n  sensor_agent --run-id demo --sensors 0-5"};
     app.name("sensor_agent");
     sensornet::sensor_agent::AgentOptions options;
-    sensornet::emulator::addRunOptions(app, options.run);
+    sensornet::wire::addRunOptions(app, options.run);
     std::string sensors;
     app.add_option("--sensors", sensors,
                    "the sensor ids (0-based) this process emulates: 3, 0-9 or 0,2,5-7")
@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
     app.add_option("--status-period", options.status_period_s,
                    "seconds between SensorStatus samples when nothing changes")
         ->capture_default_str()
-        ->check(sensornet::positiveNumber(sensornet::emulator::kMaxWallSeconds));
+        ->check(sensornet::positiveNumber(sensornet::kMaxWallSeconds));
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     options.sensors = sensornet::emulator::parseSensorIds(sensors, "--sensors");
     options.run.security_identity = {sensornet::dds::SecurityRole::Sensor,

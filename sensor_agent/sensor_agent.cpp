@@ -13,8 +13,8 @@
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_inputs.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_inputs.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_agent_core.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
@@ -134,7 +134,7 @@ class Agent {
     sensornet_SensorStatus s{};
     s.sensor_id = static_cast<std::uint32_t>(a.sensor);
     s.run_id = dds::borrowString(options_.run.run_id);
-    s.state = emulator::wireSensorState(a.state);
+    s.state = wire::wireSensorState(a.state);
     s.episode = a.episode;
     s.schedule_version = a.schedule_version;
     s.current_rate_hz = a.current_rate_hz;
@@ -168,7 +168,7 @@ class Agent {
   AgentOptions options_;
   dds::Domain domain_;
   dds::Participant participant_;
-  emulator::RunInputs inputs_;
+  wire::RunInputs inputs_;
   dds::Topic<sensornet_Measurement> measurement_topic_;
   dds::Topic<sensornet_EpisodeTally> tally_topic_;
   dds::Topic<sensornet_SensorStatus> status_topic_;

@@ -18,12 +18,12 @@
 
 #include <vector>
 
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/run_options.hpp"
 
 namespace sensornet::sensor_agent {
 
 struct AgentOptions {
-  emulator::RunOptions run;
+  wire::RunOptions run;
   std::vector<int> sensors;
   double status_period_s = 1.0;  // SensorStatus republished at least this often
 };

@@ -139,23 +139,6 @@ struct CommandEvent {
   std::string detail;                    // SensorsFailed: what happened
 };
 
-// An EpisodeControl sample, without the run id (the executable adds it).
-enum class ControlKind { EpisodeStart, SensorsFailed, RunShutdown };
-
-struct EpisodeControl {
-  ControlKind kind = ControlKind::EpisodeStart;
-  std::uint32_t episode = 0;
-  std::int64_t start_wall_ns = 0;  // EpisodeStart: emulated time 0; else when it was sent
-  double time_scale = 1.0;
-  std::uint64_t seed = 0;
-  std::uint32_t schedule_version = 0;
-  std::uint32_t episodes_planned = 0;  // RunShutdown: how many ran
-  std::vector<std::uint32_t> failed_sensors;
-  double failed_at_s = 0.0;  // SensorsFailed
-  bool aborted = false;      // RunShutdown: the run could not finish
-  std::string detail;
-};
-
 // Actions, to carry out in the order given.
 struct PublishScenario {};
 struct PublishVersion {

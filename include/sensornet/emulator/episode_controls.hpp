@@ -1,7 +1,8 @@
 #pragma once
 // What a run's episode controls say, as plain values without DDS: the emulated clock of an
-// episode, an episode's start, sensors that died, the end of the run. RunInputs reads them off
-// the EpisodeControl topic; the process cores take and make them.
+// episode, an episode's start, sensors that died, the end of the run, and the control itself.
+// The wire reads them off the EpisodeControl topic (wire/run_inputs.hpp); the process cores
+// take and make them.
 //
 //   const EpisodeClock clock{start_wall_ns, time_scale};
 //   clock.emulatedAt(now_ns);          // emulated seconds into the episode at wall time now_ns
@@ -10,11 +11,12 @@
 #include <cstdint>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace sensornet::emulator {
 
-// CLOCK_REALTIME in nanoseconds since the epoch (messages.hpp declares it too; a core takes the
-// time as an argument and never calls this).
+// CLOCK_REALTIME in nanoseconds since the epoch (a core takes the time as an argument and never
+// calls this).
 [[nodiscard]] std::int64_t wallNowNs();
 
 // The emulated clock of one episode: emulated time 0 at start_wall_ns, time_scale emulated
@@ -52,6 +54,25 @@ struct SensorFailure {
 struct RunEnd {
   std::uint32_t episodes_run = 0;
   bool aborted = false;  // the run could not finish; `detail` says why
+  std::string detail;
+};
+
+// An EpisodeControl sample as a plain value, without the run id: what the coordinator core
+// decides to send (the executable adds the run id) and what RunInputState takes (the wire
+// decodes it: wire/coordinator_wire.hpp, both directions).
+enum class ControlKind { EpisodeStart, EpisodeStop, SensorsFailed, RunShutdown };
+
+struct EpisodeControl {
+  ControlKind kind = ControlKind::EpisodeStart;
+  std::uint32_t episode = 0;
+  std::int64_t start_wall_ns = 0;  // EpisodeStart: emulated time 0; else when it was sent
+  double time_scale = 1.0;
+  std::uint64_t seed = 0;
+  std::uint32_t schedule_version = 0;
+  std::uint32_t episodes_planned = 0;  // EpisodeStart: the run's; RunShutdown: how many ran
+  std::vector<std::uint32_t> failed_sensors;
+  double failed_at_s = 0.0;  // SensorsFailed
+  bool aborted = false;      // RunShutdown: the run could not finish
   std::string detail;
 };
 

@@ -33,7 +33,7 @@
 #include "sensornet/emulator/episode_controls.hpp"
 #include "sensornet/emulator/log_line.hpp"
 #include "sensornet/emulator/network_emulation.hpp"
-#include "sensornet/emulator/run_inputs.hpp"
+#include "sensornet/emulator/run_input_state.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/emulator/stall_watch.hpp"
 #include "sensornet/emulator/vocabulary.hpp"

@@ -26,8 +26,8 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "emulation_fixture.hpp"
@@ -131,7 +131,7 @@ TEST(Emulation, LiveScheduleChangeTakesEffectAtItsEffectiveTimeEverywhere) {
                         std::to_string(episodes), "--time-scale", std::to_string(1.0 / kSlow),
                         "--switch-margin", std::to_string(1.0 * kSlow)});
 
-  emulator::RunOptions options;
+  wire::RunOptions options;
   options.run_id = run.runId();
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);

@@ -35,7 +35,7 @@
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet {
@@ -97,8 +97,8 @@ class SkewedRelay {
   }
 
  private:
-  static emulator::RunOptions optionsOf(const std::string& run_id) {
-    emulator::RunOptions options;
+  static wire::RunOptions optionsOf(const std::string& run_id) {
+    wire::RunOptions options;
     options.run_id = run_id;
     return options;
   }
@@ -118,7 +118,7 @@ class SkewedRelay {
     }
   }
 
-  emulator::RunOptions options_;
+  wire::RunOptions options_;
   dds::Domain domain_;
   dds::Participant participant_;
   dds::Topic<sensornet_Report> reports_;

@@ -1,4 +1,4 @@
-// Recording a run (`sensornet launch --record RUN.mcap`, emulator/run_recorder.hpp), read back by
+// Recording a run (`sensornet launch --record RUN.mcap`, recording/run_recorder.hpp), read back by
 // @mcap/core, the format's reference reader (tests/integration/recording/read_with_mcap_core.cjs,
 // installed by scripts/install-deps.sh), indexed and streamed with every CRC checked: every
 // channel has its schema (the project's IDL, omgidl), the counts per topic are what the report

@@ -38,8 +38,8 @@
 #include "sensornet/dds/dds_error.hpp"
 #include "sensornet/dds/writer.hpp"
 #include "sensornet/dds/reader.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
@@ -150,7 +150,7 @@ dds::WriteResult writeHijackingSchedule(dds::Writer<sensornet_Schedule>& writer,
   rates.col(0).setConstant(12.0);
   v.schedule = RateSchedule(scenario.horizon_s, rates);
   v.surrogate = SurrogateKind::File;
-  return emulator::publishSchedule(writer, run_id, emulator::digestOf(yaml), v);
+  return wire::publishSchedule(writer, run_id, emulator::digestOf(yaml), v);
 }
 
 // Makes the security files of a run of the default scenario in `dir` with `sensornet pki init`
@@ -199,7 +199,7 @@ TEST_F(Security, SecondWriterClaimingASensorIsKeptOutAndReported) {
   const std::vector<double> clean = cleanCosts();
 
   RunningProgram launcher(launch("foreign", "2"), 120s);
-  emulator::RunOptions options;
+  wire::RunOptions options;
   options.run_id = run_id_;
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);
@@ -271,7 +271,7 @@ TEST_F(SecuredRun, ParticipantWithoutCertificateChangesNothing) {
   const LeftoverGuard guard(run_id_);
   const std::vector<double> clean = cleanCosts();
   RunningProgram launcher(secured("intruded", "2"), 120s);
-  emulator::RunOptions options;  // no --security: a plain participant on the run's domain
+  wire::RunOptions options;  // no --security: a plain participant on the run's domain
   options.run_id = run_id_;
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);
@@ -320,7 +320,7 @@ dds::WriteResult writeTally(dds::Writer<sensornet_EpisodeTally>& writer, const s
 TEST_F(SecuredRun, AStolenSensorIdentitySpeaksForItsOwnSensorsOnlyWhateverItsOrder) {
   const LeftoverGuard guard(run_id_);
   const std::vector<double> clean = cleanCosts();
-  emulator::RunOptions options;
+  wire::RunOptions options;
   options.run_id = run_id_;
   options.security_dir = (pki_ / kStolenSensor).string();
   options.security_identity = {dds::SecurityRole::Sensor, "1"};
@@ -385,7 +385,7 @@ TEST_F(SecuredRun, AFailureNoticeFromTheOperatorIsRefusedByRight) {
   const LeftoverGuard guard(run_id_);
   const std::vector<double> clean = cleanCosts();
   RunningProgram launcher(secured("forged-failure", "2"), 120s);
-  emulator::RunOptions options;
+  wire::RunOptions options;
   options.run_id = run_id_;
   options.security_dir = pki_.string();
   options.security_identity = dds::SecurityRole::Operator;

@@ -31,8 +31,8 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/io/scenario_file.hpp"
@@ -404,7 +404,7 @@ TEST_F(Trust, RogueMeasurementsAreRefusedCountedAndNeverFused) {
   Emulation run(uniqueRunId("rogue"));
   run.startFusionCenter();
 
-  emulator::RunOptions options;
+  wire::RunOptions options;
   options.run_id = run.runId();
   dds::Domain domain(options.domainConfig());
   dds::Participant participant(domain);

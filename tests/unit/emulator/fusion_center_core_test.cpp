@@ -17,12 +17,14 @@
 #include "sensornet/emulator/fault_causes.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
-#include "sensornet/emulator/fusion_center_events.hpp"
+#include "sensornet/wire/fusion_center_events.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "emulator_test_support.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using namespace sensornet::wire;  // the samples a run carries, fed to the core as live
 
 using nlohmann::json;
 using test::smallScenario;

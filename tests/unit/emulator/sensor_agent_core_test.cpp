@@ -14,12 +14,14 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/wire.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 #include "sensornet/emulator/sensor_agent_core.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using namespace sensornet::wire;  // the samples a run carries, fed to the core as live
 
 constexpr std::int64_t kSecond = 1'000'000'000;
 constexpr std::uint64_t kSeed = 17;
@@ -74,7 +76,7 @@ class SensorAgentCoreTest : public ::testing::Test {
     run_.digest = digestOf(yaml);
     run_.seed = kSeed;
     withScenarioSample("run", run_, [&](const sensornet_Scenario& s) {
-      inputs_.onScenario(s, update_);
+      feedSample(inputs_, s, update_);
     });
   }
 
@@ -88,7 +90,7 @@ class SensorAgentCoreTest : public ::testing::Test {
     v.schedule = RateSchedule(run_.scenario.horizon_s, rates);
     v.surrogate = SurrogateKind::File;
     withScheduleSample("run", run_.digest, v, [&](const sensornet_Schedule& s) {
-      inputs_.onSchedule(s, update_);
+      feedSample(inputs_, s, update_);
     });
   }
 
@@ -106,7 +108,7 @@ class SensorAgentCoreTest : public ::testing::Test {
     c.episodes_planned = 5;
     c.detail = dds::borrowString(empty);
     dds::borrowSequence(c.failed_sensors, std::span<const std::uint32_t>(failed));
-    inputs_.onControl(c, update_);
+    feedSample(inputs_, c, update_);
   }
 
   // What RunInputState made of the samples since the last feed, handed to the core.

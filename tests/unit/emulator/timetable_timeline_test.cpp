@@ -13,13 +13,15 @@
 #include "emulator_test_support.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/wire.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using namespace sensornet::wire;  // the samples a run carries, fed to the core as live
 
 using test::smallScenario;
 using test::versionOf;

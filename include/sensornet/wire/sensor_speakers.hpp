@@ -16,7 +16,7 @@
 
 #include "sensornet/dds/reader.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 
 class SensorSpeakers {
  public:
@@ -35,4 +35,4 @@ class SensorSpeakers {
   std::map<dds_instance_handle_t, std::vector<int>> known_;  // handles are never reused
 };
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

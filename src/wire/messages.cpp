@@ -1,4 +1,4 @@
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -13,7 +13,10 @@
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
+
+using namespace sensornet::emulator;  // the core types this file encodes and decodes
+
 namespace {
 
 using dds::borrowSequence;
@@ -22,23 +25,6 @@ using dds::viewSequence;
 using dds::viewString;
 
 }  // namespace
-
-std::int64_t wallNowNs() {
-  timespec now{};
-  ::clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
-std::string digestOf(std::string_view text) {
-  std::uint64_t hash = 0xcbf29ce484222325ULL;
-  for (const char c : text) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001b3ULL;
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
-  return hex;
-}
 
 void withScenarioSample(const std::string& run_id, const RunScenario& scenario,
                         const std::function<void(const sensornet_Scenario&)>& use) {
@@ -289,4 +275,68 @@ nlohmann::json episodeEntryOfReport(const sensornet_Report& r, int sensor_count)
   return entry;
 }
 
-}  // namespace sensornet::emulator
+sensornet_EpisodeCommand episodeCommandOf(ControlKind kind) {
+  switch (kind) {
+    case ControlKind::EpisodeStart:
+      return sensornet_EPISODE_START;
+    case ControlKind::EpisodeStop:
+      return sensornet_EPISODE_STOP;
+    case ControlKind::SensorsFailed:
+      return sensornet_EPISODE_SENSORS_FAILED;
+    case ControlKind::RunShutdown:
+      return sensornet_RUN_SHUTDOWN;
+  }
+  return sensornet_RUN_SHUTDOWN;
+}
+
+sensornet_EpisodeControl wireControl(const EpisodeControl& control, const std::string& run_id) {
+  sensornet_EpisodeControl c{};
+  c.run_id = borrowString(run_id);
+  c.episode = control.episode;
+  c.command = episodeCommandOf(control.kind);
+  c.start_wall_time_ns = control.start_wall_ns;
+  c.time_scale = control.time_scale;
+  c.seed = control.seed;
+  c.schedule_version = control.schedule_version;
+  c.episodes_planned = control.episodes_planned;
+  c.failed_at_s = control.failed_at_s;
+  c.aborted = control.aborted;
+  c.detail = borrowString(control.detail);
+  borrowSequence(c.failed_sensors, control.failed_sensors);
+  return c;
+}
+
+EpisodeControl controlOf(const sensornet_EpisodeControl& c) {
+  EpisodeControl control;
+  switch (c.command) {
+    case sensornet_EPISODE_START:
+      control.kind = ControlKind::EpisodeStart;
+      break;
+    case sensornet_EPISODE_STOP:
+      control.kind = ControlKind::EpisodeStop;
+      break;
+    case sensornet_EPISODE_SENSORS_FAILED:
+      control.kind = ControlKind::SensorsFailed;
+      break;
+    case sensornet_RUN_SHUTDOWN:
+      control.kind = ControlKind::RunShutdown;
+      break;
+    default:
+      throw InputError("DDS EpisodeControl of episode " + std::to_string(c.episode), "command",
+                       "one of the IDL's EpisodeCommand values");
+  }
+  control.episode = c.episode;
+  control.start_wall_ns = c.start_wall_time_ns;
+  control.time_scale = c.time_scale;
+  control.seed = c.seed;
+  control.schedule_version = c.schedule_version;
+  control.episodes_planned = c.episodes_planned;
+  const auto failed = viewSequence(c.failed_sensors);
+  control.failed_sensors.assign(failed.begin(), failed.end());
+  control.failed_at_s = c.failed_at_s;
+  control.aborted = c.aborted;
+  control.detail = std::string(viewString(c.detail));
+  return control;
+}
+
+}  // namespace sensornet::wire

@@ -1,8 +1,11 @@
-#include "sensornet/emulator/coordinator_wire.hpp"
+#include "sensornet/wire/coordinator_wire.hpp"
 
 #include "sensornet/dds/wire.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
+
+using namespace sensornet::emulator;  // the core types this file encodes and decodes
+
 
 CommandKind commandKindOf(sensornet_CommandKind kind) {
   using K = CommandKind;
@@ -60,33 +63,4 @@ FusionStateEvent fusionStateOf(const sensornet_FusionState& s) {
   return {s.episode, s.emulated_time_s, s.state_dim, {values.begin(), values.end()}};
 }
 
-sensornet_EpisodeCommand episodeCommandOf(ControlKind kind) {
-  switch (kind) {
-    case ControlKind::EpisodeStart:
-      return sensornet_EPISODE_START;
-    case ControlKind::SensorsFailed:
-      return sensornet_EPISODE_SENSORS_FAILED;
-    case ControlKind::RunShutdown:
-      return sensornet_RUN_SHUTDOWN;
-  }
-  return sensornet_RUN_SHUTDOWN;
-}
-
-sensornet_EpisodeControl wireControl(const EpisodeControl& control, const std::string& run_id) {
-  sensornet_EpisodeControl c{};
-  c.run_id = dds::borrowString(run_id);
-  c.episode = control.episode;
-  c.command = episodeCommandOf(control.kind);
-  c.start_wall_time_ns = control.start_wall_ns;
-  c.time_scale = control.time_scale;
-  c.seed = control.seed;
-  c.schedule_version = control.schedule_version;
-  c.episodes_planned = control.episodes_planned;
-  c.failed_at_s = control.failed_at_s;
-  c.aborted = control.aborted;
-  c.detail = dds::borrowString(control.detail);
-  dds::borrowSequence(c.failed_sensors, control.failed_sensors);
-  return c;
-}
-
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

@@ -1,11 +1,11 @@
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/run_options.hpp"
 
 #include <cstdlib>
 #include <filesystem>
 
 #include "sensornet/core/input_error.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 namespace {
 
 constexpr const char* kSource = "command line";
@@ -71,4 +71,4 @@ void addRunOptions(CLI::App& app, RunOptions& options, bool run_id_required) {
                  "role's identity and permissions): authenticated, access-controlled, encrypted");
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

@@ -1,13 +1,16 @@
-#include "sensornet/emulator/fusion_center_events.hpp"
+#include "sensornet/wire/fusion_center_events.hpp"
 
 #include <Eigen/Core>
 #include <string_view>
 
 #include "sensornet/dds/wire.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
+
+using namespace sensornet::emulator;  // the core events this file decodes
+
 
 // Touches nothing but the sample: safe in Cyclone's receive thread.
 MeasurementArrival arrivalOfSample(const sensornet_Measurement& m, std::int64_t received_ns,
@@ -85,4 +88,4 @@ std::optional<RunEnd> feedInputs(FusionCenterCore& core, const RunInputState& in
   return std::nullopt;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

@@ -18,30 +18,25 @@
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/episode_controls.hpp"
+#include "sensornet/emulator/run_input_state.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 
-// CLOCK_REALTIME in nanoseconds since the epoch (the wall clock every process shares).
-[[nodiscard]] std::int64_t wallNowNs();
-
-// A 16-hex-digit digest of a text (FNV-1a 64), to check that processes agree on the scenario.
-[[nodiscard]] std::string digestOf(std::string_view text);
+using emulator::EpisodeControl;
+using emulator::EpisodeResult;
+using emulator::RunScenario;
+using emulator::RunSummary;
+using emulator::ScheduleVersion;
+using emulator::SensorState;
 
 // A SensorStatus's state in the vocabulary (vocabulary.hpp), and back; nullopt for a value the
 // IDL does not define (a malformed sample).
 [[nodiscard]] std::optional<SensorState> sensorStateOf(sensornet_SensorState state);
 [[nodiscard]] sensornet_SensorState wireSensorState(SensorState state);
-
-// What a process learns from the Scenario topic.
-struct RunScenario {
-  Scenario scenario;
-  std::string digest;
-  std::string yaml;
-  std::uint64_t seed = 0;
-};
 
 // The sample publishScenario writes, handed to `use` instead (it borrows from the arguments):
 // for a core fed in-process, or a test.
@@ -84,4 +79,11 @@ void withScheduleSample(const std::string& run_id, const std::string& scenario_d
 // [0, sensor_count) or twice, or a complete episode's realized cost is not finite.
 [[nodiscard]] nlohmann::json episodeEntryOfReport(const sensornet_Report& r, int sensor_count);
 
-}  // namespace sensornet::emulator
+// The EpisodeControl sample of `control`, borrowing from it and `run_id` (which must outlive
+// it), and back: controlOf throws InputError for a command the IDL does not define.
+[[nodiscard]] sensornet_EpisodeCommand episodeCommandOf(emulator::ControlKind kind);
+[[nodiscard]] sensornet_EpisodeControl wireControl(const EpisodeControl& control,
+                                                   const std::string& run_id);
+[[nodiscard]] EpisodeControl controlOf(const sensornet_EpisodeControl& sample);
+
+}  // namespace sensornet::wire

@@ -23,7 +23,7 @@
 #include "sensornet/dds/security.hpp"
 #include "sensornet/io/forwarded_options.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 
 // Limits of the numeric options (--time-scale, --episodes, wall-clock durations): declared with
 // the options the launcher forwards (io/forwarded_options.hpp).
@@ -61,4 +61,4 @@ struct RunOptions {
 // --security.
 void addRunOptions(CLI::App& app, RunOptions& options, bool run_id_required = true);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

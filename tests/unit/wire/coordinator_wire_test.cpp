@@ -2,7 +2,7 @@
 // event kind, a command's fields and sender arrive as sent, a
 // report's summary and a fusion state's covariance are copied, and an episode control sample
 // says what the control says.
-#include "sensornet/emulator/coordinator_wire.hpp"
+#include "sensornet/wire/coordinator_wire.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +11,10 @@
 
 #include "sensornet/dds/wire.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 namespace {
+
+using namespace sensornet::emulator;  // the core types the samples carry
 
 TEST(CoordinatorWire, EveryCommandKindIsItsEventKind) {
   EXPECT_EQ(commandKindOf(sensornet_COMMAND_REPLAN), CommandKind::Replan);
@@ -113,4 +115,4 @@ TEST(CoordinatorWire, AnEpisodeControlSampleSaysWhatTheControlSays) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

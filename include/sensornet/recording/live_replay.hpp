@@ -15,10 +15,10 @@
 #include <cstdint>
 #include <string>
 
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/io/mcap.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::recording {
 
 struct LiveReplayResult {
   std::uint64_t written = 0;
@@ -26,7 +26,7 @@ struct LiveReplayResult {
 };
 
 [[nodiscard]] LiveReplayResult replayLive(const McapReader& file, const std::string& source,
-                                          const RunOptions& new_run, double time_scale,
+                                          const wire::RunOptions& new_run, double time_scale,
                                           double ready_timeout_s);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::recording

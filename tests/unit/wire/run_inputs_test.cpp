@@ -16,13 +16,15 @@
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/dds/writer.hpp"
-#include "sensornet/emulator/messages.hpp"
-#include "sensornet/emulator/run_inputs.hpp"
-#include "sensornet/emulator/run_options.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_inputs.hpp"
+#include "sensornet/wire/run_options.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 namespace {
+
+using namespace sensornet::emulator;  // the core types the samples carry
 
 using namespace std::chrono_literals;
 
@@ -122,4 +124,4 @@ TEST_F(RunInputsStart, WaitsForTheVersionItNamesAndNotLonger) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

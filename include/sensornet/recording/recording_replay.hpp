@@ -23,7 +23,7 @@
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/mcap.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::recording {
 
 struct ReplayedEpisode {
   std::uint32_t episode = 0;
@@ -34,7 +34,7 @@ struct ReplayedEpisode {
 
 struct ReplayResult {
   std::string run_id;
-  RunStatus status = RunStatus::Failed;
+  emulator::RunStatus status = emulator::RunStatus::Failed;
   std::vector<ReplayedEpisode> episodes;
   std::uint64_t samples_fused = 0;   // Measurements handed to the fusion center
   std::uint64_t samples_read = 0;    // every message of the file
@@ -46,4 +46,4 @@ struct ReplayResult {
 [[nodiscard]] ReplayResult replayRecording(const McapReader& file, const std::string& source,
                                            const std::filesystem::path& report_path);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::recording

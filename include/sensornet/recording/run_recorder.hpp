@@ -33,7 +33,7 @@
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/io/mcap.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::recording {
 
 struct RecordingSummary {
   std::filesystem::path path;
@@ -84,4 +84,4 @@ class RunRecorder {
   std::thread thread_;
 };
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::recording

@@ -1,4 +1,4 @@
-#include "sensornet/emulator/live_replay.hpp"
+#include "sensornet/recording/live_replay.hpp"
 
 #include <dds/dds.h>
 #include <spdlog/spdlog.h>
@@ -18,9 +18,13 @@
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/sample_fields.hpp"
 #include "sensornet/dds/topics.hpp"
-#include "sensornet/emulator/recording_replay.hpp"
+#include "sensornet/recording/recording_replay.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::recording {
+
+using namespace sensornet::emulator;  // the cores and their events
+using namespace sensornet::wire;      // the samples' codecs
+
 namespace {
 
 using Clock = std::chrono::system_clock;
@@ -197,4 +201,4 @@ LiveReplayResult replayLive(const McapReader& file, const std::string& source,
   return result;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::recording

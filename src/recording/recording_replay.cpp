@@ -1,4 +1,4 @@
-#include "sensornet/emulator/recording_replay.hpp"
+#include "sensornet/recording/recording_replay.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -13,14 +13,18 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/sample_fields.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
-#include "sensornet/emulator/fusion_center_events.hpp"
-#include "sensornet/emulator/run_inputs.hpp"
+#include "sensornet/wire/fusion_center_events.hpp"
+#include "sensornet/wire/run_inputs.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/utc_time.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::recording {
+
+using namespace sensornet::emulator;  // the cores and their events
+using namespace sensornet::wire;      // the samples' codecs
+
 namespace {
 
 using nlohmann::json;
@@ -129,17 +133,17 @@ ReplayResult replayRecording(const McapReader& file, const std::string& source,
     const std::string topic = type->second->topic;
     RunInputState::Update update;
     if (topic == "sensornet/Scenario") {
-      inputs.onScenario(sample.as<sensornet_Scenario>(), update);
+      wire::feedSample(inputs, sample.as<sensornet_Scenario>(), update);
       follow(update, now);
     } else if (topic == "sensornet/Schedule") {
       if (!inputs.hasScenario()) {
         held_schedules.push_back(index);
         return;
       }
-      inputs.onSchedule(sample.as<sensornet_Schedule>(), update);
+      wire::feedSample(inputs, sample.as<sensornet_Schedule>(), update);
       follow(update, now);
     } else if (topic == "sensornet/EpisodeControl") {
-      inputs.onControl(sample.as<sensornet_EpisodeControl>(), update);
+      wire::feedSample(inputs, sample.as<sensornet_EpisodeControl>(), update);
       follow(update, now);
     } else if (topic == "sensornet/Measurement") {
       core.onMeasurement(
@@ -194,4 +198,4 @@ ReplayResult replayRecording(const McapReader& file, const std::string& source,
   return result;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::recording

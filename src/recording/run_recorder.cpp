@@ -1,4 +1,4 @@
-#include "sensornet/emulator/run_recorder.hpp"
+#include "sensornet/recording/run_recorder.hpp"
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
@@ -15,7 +15,10 @@
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet_idl_text.hpp"  // generated: kSensornetIdlText, idl/sensornet.idl verbatim
 
-namespace sensornet::emulator {
+namespace sensornet::recording {
+
+using namespace sensornet::emulator;  // the run's partitions
+
 
 // One reader of one topic in one partition (pattern), and the MCAP channel of each writer it
 // received from.
@@ -256,4 +259,4 @@ RecordingSummary RunRecorder::stop(const McapMap& final_metadata) {
   return summary_;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::recording

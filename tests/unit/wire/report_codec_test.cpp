@@ -1,4 +1,4 @@
-// A Report sample and back (emulator/messages.hpp): what the launcher records of an external
+// A Report sample and back (wire/messages.hpp): what the launcher records of an external
 // fusion center's Report must be the per_episode entry of the same result, field by field, for
 // everything the wire carries; what it does not carry is null or zero, never invented.
 #include <gtest/gtest.h>
@@ -8,11 +8,13 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/messages.hpp"
+#include "sensornet/wire/messages.hpp"
 #include "sensornet/emulator/run_report.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
 namespace {
+
+using namespace sensornet::emulator;  // the core types the samples carry
 
 using nlohmann::json;
 
@@ -125,4 +127,4 @@ TEST(ReportCodec, AReportWithoutNeesMakesANullNeesAndACompleteOneNeedsAFiniteCos
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire

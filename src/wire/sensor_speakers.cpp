@@ -1,11 +1,13 @@
-#include "sensornet/emulator/sensor_speakers.hpp"
+#include "sensornet/wire/sensor_speakers.hpp"
 
 #include <algorithm>
 
 #include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::wire {
+
+using emulator::sensorsOfPartitions;
 
 const std::vector<int>& SensorSpeakers::of(const dds::detail::ReaderCore& reader,
                                            dds_instance_handle_t publication) {
@@ -22,4 +24,4 @@ bool SensorSpeakers::speaksFor(const dds::detail::ReaderCore& reader,
   return std::binary_search(sensors.begin(), sensors.end(), sensor);
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::wire
