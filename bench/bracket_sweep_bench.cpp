@@ -39,7 +39,7 @@
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/report/svg_plot.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace {

@@ -100,11 +100,14 @@
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/recording/run_recorder.hpp"
 #include "sensornet/emulator/run_report.hpp"
+#include "sensornet/report/report_files.hpp"
 #include "support/background_process.hpp"
 #include "support/ddsperf.hpp"
 #include "support/process.hpp"
 
 namespace {
+
+using sensornet::report::readReport;
 
 using namespace std::chrono_literals;
 using sensornet::testing::BackgroundProcess;
@@ -163,7 +166,7 @@ std::vector<std::string> withFlags(std::vector<std::string> argv,
 
 // The report, or null when the run wrote none (or not a whole one).
 nlohmann::json readReport(const fs::path& path) {
-  return sensornet::emulator::readReport(path).report;
+  return sensornet::report::readReport(path).report;
 }
 
 // Sets an environment variable for the processes started while it lives.
@@ -493,7 +496,7 @@ int memory(std::uint64_t episodes, std::uint64_t checkpoint) {
               static_cast<unsigned long long>(checkpoint),
               static_cast<unsigned long long>(checkpoint));
   std::fflush(stdout);
-  LineCounter logged(sensornet::emulator::episodeLogPath(report));
+  LineCounter logged(sensornet::report::episodeLogPath(report));
   std::vector<std::pair<std::uint64_t, MemorySample>> samples;
   std::uint64_t next = checkpoint;
   std::optional<int> code;

@@ -40,17 +40,20 @@
 #include "sensornet/wire/run_options.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/wire/sensor_speakers.hpp"
-#include "sensornet/emulator/report_page.hpp"
+#include "sensornet/report/report_page.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/report/report_files.hpp"
 
 // The fusion center's wiring: DDS endpoints, codecs from wire types to the events of
 // FusionCenterCore (which decides everything), and a loop that feeds it and carries out its
 // actions.
 namespace sensornet::fusion_center {
 namespace {
+
+using sensornet::report::faultLogPath;
 
 using namespace std::chrono_literals;
 using emulator::wallNowNs;
@@ -163,14 +166,14 @@ emulator::FusionCenterConfig coreConfig(const ServeOptions& options) {
   config.keep_up_limit_s = options.keep_up_limit_s;
   config.state_period_s = options.state_period_s;
   if (!options.report_path.empty()) {
-    const auto log_path = emulator::episodeLogPath(options.report_path);
+    const auto log_path = sensornet::report::episodeLogPath(options.report_path);
     config.episode_log = true;
     config.episode_log_path = log_path.string();
     if (options.resume) {
-      config.resumed_log = emulator::readEpisodeLog(log_path);
+      config.resumed_log = sensornet::report::readEpisodeLog(log_path);
       spdlog::info("resuming from {} episodes in the episode log {}", config.resumed_log->size(),
                    log_path.string());
-      config.resumed_faults = emulator::readFaultLog(emulator::faultLogPath(options.report_path));
+      config.resumed_faults = sensornet::report::readFaultLog(sensornet::report::faultLogPath(options.report_path));
     }
   }
   if (options.resume && !config.resumed_log) config.resumed_log.emplace();
@@ -236,12 +239,12 @@ class FusionCenter {
     waitset_.attach(tally_ready_, 1);
     waitset_.attach(status_ready_, 2);
     if (!options_.report_path.empty()) {
-      const auto log_path = emulator::episodeLogPath(options_.report_path);
+      const auto log_path = sensornet::report::episodeLogPath(options_.report_path);
       const auto mode =
-          options_.resume ? emulator::EpisodeLog::Mode::Append : emulator::EpisodeLog::Mode::Truncate;
+          options_.resume ? sensornet::report::EpisodeLog::Mode::Append : sensornet::report::EpisodeLog::Mode::Truncate;
       episode_log_.emplace(log_path, mode);
       spdlog::info("episode log: {}", log_path.string());
-      fault_log_.emplace(emulator::faultLogPath(options_.report_path), mode);
+      fault_log_.emplace(sensornet::report::faultLogPath(options_.report_path), mode);
     }
   }
 
@@ -411,11 +414,11 @@ class FusionCenter {
       });
       spdlog::info("report written to {}", options_.report_path);
       if (options_.page) {
-        if (const auto problem = emulator::writePageBeside(options_.report_path)) {
+        if (const auto problem = sensornet::report::writePageBeside(options_.report_path)) {
           spdlog::warn("{}", *problem);
         } else {
           spdlog::info("report page written to {}",
-                       emulator::pagePathBeside(options_.report_path).string());
+                       sensornet::report::pagePathBeside(options_.report_path).string());
         }
       }
     }
@@ -465,8 +468,8 @@ class FusionCenter {
   dds::ReadCondition status_ready_;
   ReaderFacts facts_;
   emulator::FusionCenterCore core_;
-  std::optional<emulator::EpisodeLog> episode_log_;
-  std::optional<emulator::EpisodeLog> fault_log_;  // faultLogPath: what a restart carries over
+  std::optional<sensornet::report::EpisodeLog> episode_log_;
+  std::optional<sensornet::report::EpisodeLog> fault_log_;  // faultLogPath: what a restart carries over
   emulator::ArrivalInbox<Arrival> inbox_;
   std::vector<Arrival> taken_;    // the listener's batch (receive thread only)
   std::vector<Arrival> drained_;  // the main loop's (main thread only)
@@ -536,7 +539,7 @@ Subcommand addServeCommand(CLI::App& app) {
       ->excludes("--resume");
   return {cmd, [options] {
             if (options->resume_unfinished) {
-              const std::filesystem::path log = emulator::episodeLogPath(options->report_path);
+              const std::filesystem::path log = sensornet::report::episodeLogPath(options->report_path);
               options->resume =
                   std::filesystem::exists(log) && !std::filesystem::exists(options->report_path);
               if (options->resume) {

@@ -32,12 +32,12 @@
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/coordinator_core.hpp"
-#include "sensornet/emulator/report_page.hpp"
+#include "sensornet/report/report_page.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/dds/security.hpp"
 #include "sensornet/emulator/hosts_file.hpp"
-#include "sensornet/emulator/junit_report.hpp"
+#include "sensornet/report/junit_report.hpp"
 #include "sensornet/recording/run_recorder.hpp"
 #include "sensornet/io/metrics_server.hpp"
 #include "sensornet/wire/messages.hpp"
@@ -75,7 +75,7 @@ CLI::Validator requirementList() {
   return CLI::Validator(
       [](std::string& input) -> std::string {
         try {
-          (void)emulator::parseRequirements(input);
+          (void)sensornet::report::parseRequirements(input);
         } catch (const InputError& e) {
           return (e.field().empty() ? "" : e.field() + ": ") + "expected " + e.expected();
         }
@@ -141,8 +141,8 @@ void writeLauncherConfig(const LaunchPlan& plan, const dds::DomainConfig& domain
 void checkReportPaths(const LaunchPlan& plan) {
   const std::string option = plan.default_report ? "report" : "--report";
   checkOutputFile(plan.report_path, option);
-  checkOutputFile(emulator::episodeLogPath(plan.report_path), option + " (its episode log)");
-  checkOutputFile(emulator::faultLogPath(plan.report_path), option + " (its fault log)");
+  checkOutputFile(sensornet::report::episodeLogPath(plan.report_path), option + " (its episode log)");
+  checkOutputFile(sensornet::report::faultLogPath(plan.report_path), option + " (its fault log)");
 }
 
 // The log folder: made if missing (private when it is the default one, in the scratch folder;
@@ -204,13 +204,13 @@ std::unique_ptr<RunLock> claimRun(const LaunchPlan& plan, const ProgressWatcher&
   for (const ChildSpec& child : plan.children) checkOutputFile(child.log_path, "log");
   // Results of an earlier run of this id must not pass for this run's.
   removeRegularFile(plan.report_path);
-  removeRegularFile(emulator::episodeLogPath(plan.report_path));
-  removeRegularFile(emulator::faultLogPath(plan.report_path));
+  removeRegularFile(sensornet::report::episodeLogPath(plan.report_path));
+  removeRegularFile(sensornet::report::faultLogPath(plan.report_path));
   removeRegularFile(plan.coordinator_state);
   if (!plan.reference_report.empty()) {
     removeRegularFile(plan.reference_report);
-    removeRegularFile(emulator::episodeLogPath(plan.reference_report));
-    removeRegularFile(emulator::faultLogPath(plan.reference_report));
+    removeRegularFile(sensornet::report::episodeLogPath(plan.reference_report));
+    removeRegularFile(sensornet::report::faultLogPath(plan.reference_report));
   }
   return lock;
 }
@@ -400,7 +400,7 @@ int runLaunch(CommandOptions options) {
   // An external fusion center's Reports are the run's results: the launcher keeps them in the
   // episode log, as our fusion center would, and builds the report from it.
   if (options.external_fusion_center) {
-    progress.recordReportsTo(emulator::episodeLogPath(plan.report_path), scenario.sensorCount());
+    progress.recordReportsTo(sensornet::report::episodeLogPath(plan.report_path), scenario.sensorCount());
   }
 
   // The flags a tool on this host needs to reach the run (--hosts: the launcher's config).
@@ -497,8 +497,8 @@ int runLaunch(CommandOptions options) {
       options.episodes,
       std::move(faults),
       core.interrupted(),
-      options.require.empty() ? std::vector<emulator::Requirement>{}
-                              : emulator::parseRequirements(options.require),
+      options.require.empty() ? std::vector<sensornet::report::Requirement>{}
+                              : sensornet::report::parseRequirements(options.require),
       external,
       options.external_fusion_center,
       plan.reference_report,
@@ -523,18 +523,18 @@ int runLaunch(CommandOptions options) {
     }
   }
   if (!options.junit_path.empty()) {  // like the page: a warning, never an exit code
-    const emulator::JunitRun junit{
+    const sensornet::report::JunitRun junit{
         plan.run_id, std::string(wordOf(outcome.status)), outcome.exit_code,
         report::encode(outcome.report.faults), outcome.checks,
         std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count()};
     try {
-      replaceFileAtomically(options.junit_path, emulator::junitXml(junit));
+      replaceFileAtomically(options.junit_path, sensornet::report::junitXml(junit));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "sensornet: warning: --junit: %s\n", e.what());
     }
   }
   if (!options.no_html) {  // a page that cannot be written is a warning, never an exit code
-    if (const auto problem = emulator::writePageBeside(plan.report_path)) {
+    if (const auto problem = sensornet::report::writePageBeside(plan.report_path)) {
       std::fprintf(stderr, "sensornet: warning: %s\n", problem->c_str());
     }
   }
@@ -677,7 +677,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
                   "meets-bracket,no-loss,latency-p99<=5ms,episodes-complete. A criterion is a "
                   "property, or a quantity with <=, <, >=, > or = and a limit (durations in us, "
                   "ms or s). Known:\n" +
-                      emulator::requirementsHelp())
+                      sensornet::report::requirementsHelp())
       ->check(requirementList());
   cmd->add_flag("--no-html", options->no_html,
                 "do not write the report page (report.json -> report.html beside it; see "

@@ -6,7 +6,7 @@
 
 #include "output_file.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/report_page.hpp"
+#include "sensornet/report/report_page.hpp"
 #include "sensornet/io/output_path.hpp"
 
 namespace sensornet::launcher {
@@ -33,7 +33,7 @@ void writeOutput(const fs::path& path, const std::string& text, const std::strin
 }
 
 // Returns the files written.
-std::vector<fs::path> writeCsv(const fs::path& dir, const emulator::ReportTables& tables) {
+std::vector<fs::path> writeCsv(const fs::path& dir, const sensornet::report::ReportTables& tables) {
   makeFolders(dir, "--csv");
   writeOutput(dir / "episodes.csv", tables.episodes, "--csv");
   writeOutput(dir / "sensors.csv", tables.sensors, "--csv");
@@ -41,16 +41,16 @@ std::vector<fs::path> writeCsv(const fs::path& dir, const emulator::ReportTables
 }
 
 int runReport(const ReportOptions& options) {
-  const nlohmann::json report = emulator::readReportFile(options.report);
+  const nlohmann::json report = sensornet::report::readReportFile(options.report);
   if (options.html.empty() && options.csv_dir.empty()) {
     throw InputError("sensornet report", "--html / --csv", "at least one output");
   }
   if (!options.html.empty()) {
-    writeOutput(options.html, emulator::reportPage(report, options.report), "--html");
+    writeOutput(options.html, sensornet::report::reportPage(report, options.report), "--html");
   }
   std::vector<fs::path> tables;
   if (!options.csv_dir.empty()) {
-    tables = writeCsv(options.csv_dir, emulator::reportTables(report, options.report));
+    tables = writeCsv(options.csv_dir, sensornet::report::reportTables(report, options.report));
   }
   if (options.json) {
     nlohmann::json csv = nlohmann::json::array();

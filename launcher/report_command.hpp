@@ -4,7 +4,7 @@
 // DIR/sensors.csv). Bad input (a missing or malformed report, an output that cannot be written)
 // is one line naming the file and the problem, exit 2.
 //
-// The launcher writes the page beside every report it settles (emulator::writePageBeside).
+// The launcher writes the page beside every report it settles (sensornet::report::writePageBeside).
 
 #include "sensornet/io/command_line.hpp"
 

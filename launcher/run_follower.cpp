@@ -134,7 +134,7 @@ void RunFollower::pollInto(RunView& view, std::chrono::milliseconds wait) {
 }
 
 void RunFollower::recordReportsTo(const std::filesystem::path& path, int sensor_count) {
-  record_ = std::make_unique<emulator::EpisodeLog>(path);
+  record_ = std::make_unique<sensornet::report::EpisodeLog>(path);
   record_sensor_count_ = sensor_count;
 }
 

@@ -73,7 +73,7 @@ class RunFollower {
   dds::WaitSet waitset_;
   bool coordinator_seen_ = false;  // the episode controls had a writer
   bool report_writer_seen_ = false;
-  std::unique_ptr<emulator::EpisodeLog> record_;  // recordReportsTo
+  std::unique_ptr<sensornet::report::EpisodeLog> record_;  // recordReportsTo
   int record_sensor_count_ = 0;
   std::set<std::uint32_t> recorded_;
   std::uint64_t reports_refused_ = 0;

@@ -31,9 +31,9 @@ using report::SummaryRecord;
 // millions of episodes is never held.
 std::optional<RunRecord> readRunReport(const fs::path& path, const std::string& run_id,
                                        bool logged, std::string& problem) {
-  emulator::ReportFile file = emulator::readReport(
-      path, logged ? emulator::EpisodeEntries::Skipped : emulator::EpisodeEntries::Read);
-  if (file.problem == emulator::ReportFile::Problem::Unreadable) {
+  sensornet::report::ReportFile file = sensornet::report::readReport(
+      path, logged ? sensornet::report::EpisodeEntries::Skipped : sensornet::report::EpisodeEntries::Read);
+  if (file.problem == sensornet::report::ReportFile::Problem::Unreadable) {
     problem = "wrote no report at " + path.string();
     return std::nullopt;
   }
@@ -58,19 +58,19 @@ std::optional<RunRecord> readRunReport(const fs::path& path, const std::string& 
 // The report rebuilt from the episode log beside `report_path` (no log: no episode); with a log,
 // without per_episode (a rewrite streams it in from the log).
 RunRecord rebuildReport(const RunEnd& end, bool logged) {
-  const fs::path log = emulator::episodeLogPath(end.report_path);
+  const fs::path log = sensornet::report::episodeLogPath(end.report_path);
   // What our fusion center recorded before it died: its fault log (the launch removed an
   // earlier run's; an external fusion center keeps none).
   json faults = json::array();
   if (!end.external_fusion_center) {
-    for (json& fault : emulator::readFaultLog(emulator::faultLogPath(end.report_path))) {
+    for (json& fault : sensornet::report::readFaultLog(sensornet::report::faultLogPath(end.report_path))) {
       faults.push_back(std::move(fault));
     }
   }
   json doc;
   if (logged) {
     emulator::RunReport rebuilt(end.run_id, "", end.sensor_count, 0, log);
-    emulator::forEachReportedEpisode(log, [&rebuilt](const json& entry) { rebuilt.add(entry); });
+    sensornet::report::forEachReportedEpisode(log, [&rebuilt](const json& entry) { rebuilt.add(entry); });
     doc = rebuilt.toJsonWithoutEpisodes("failed", faults, json::array());
   } else {
     doc = emulator::reportFromEpisodes(end.run_id, end.sensor_count, {}, "failed", faults);
@@ -96,7 +96,7 @@ FaultRecord fusionCenterFault(emulator::FaultKind kind, const std::string& detai
 RunRecord externalReport(const RunEnd& end, bool logged) {
   RunRecord run = rebuildReport(end, logged);
   run.rebuilt_from.reset();
-  const fs::path log = emulator::episodeLogPath(end.report_path);
+  const fs::path log = sensornet::report::episodeLogPath(end.report_path);
   run.built_from = "the Reports of the external fusion center, recorded in " + log.string();
   run.faults.clear();
   if (run.summary.lost > 0) {
@@ -116,7 +116,7 @@ RunRecord externalReport(const RunEnd& end, bool logged) {
   double median = 0.0;
   double p99 = 0.0;
   if (logged) {
-    emulator::forEachReportedEpisode(log, [&](const json& entry) {
+    sensornet::report::forEachReportedEpisode(log, [&](const json& entry) {
       const report::EpisodeRecord episode = report::decodeEpisode(entry);
       median = episode.latency_median_s;
       p99 = episode.latency_p99_s;
@@ -141,7 +141,7 @@ std::map<std::uint32_t, double> realizedCosts(const fs::path& log) {
   std::map<std::uint32_t, double> costs;
   std::error_code missing;
   if (!fs::is_regular_file(log, missing)) return costs;
-  emulator::forEachReportedEpisode(log, [&costs](const json& entry) {
+  sensornet::report::forEachReportedEpisode(log, [&costs](const json& entry) {
     const report::EpisodeRecord episode = report::decodeEpisode(entry);
     if (episode.realized_cost) costs.emplace(episode.episode, *episode.realized_cost);
   });
@@ -152,9 +152,9 @@ std::map<std::uint32_t, double> realizedCosts(const fs::path& log) {
 // relative difference |external - reference| / |reference|, and the largest over the episodes
 // both fused (null when there is none).
 json referenceComparison(const RunEnd& end) {
-  const fs::path reference_log = emulator::episodeLogPath(end.reference_report);
+  const fs::path reference_log = sensornet::report::episodeLogPath(end.reference_report);
   const std::map<std::uint32_t, double> external =
-      realizedCosts(emulator::episodeLogPath(end.report_path));
+      realizedCosts(sensornet::report::episodeLogPath(end.report_path));
   const std::map<std::uint32_t, double> reference = realizedCosts(reference_log);
   std::set<std::uint32_t> episodes;
   for (const auto& [k, cost] : external) episodes.insert(k);
@@ -289,7 +289,7 @@ void writeSettled(const RunEnd& end, const RunRecord& run, bool logged) {
   const json doc = report::encode(run);
   if (logged) {
     replaceFileAtomically(end.report_path, [&](std::ostream& out) {
-      emulator::writeReportWithLog(out, doc, emulator::episodeLogPath(end.report_path), 2);
+      sensornet::report::writeReportWithLog(out, doc, sensornet::report::episodeLogPath(end.report_path), 2);
       out << '\n';
     });
   } else {
@@ -302,7 +302,7 @@ void writeSettled(const RunEnd& end, const RunRecord& run, bool logged) {
 RunOutcome settleRun(const RunEnd& end) {
   RunOutcome outcome;
   ReportSeen seen;
-  const fs::path log = emulator::episodeLogPath(end.report_path);
+  const fs::path log = sensornet::report::episodeLogPath(end.report_path);
   std::error_code missing;
   const bool logged = fs::is_regular_file(log, missing);
   std::optional<RunRecord> read;
@@ -352,9 +352,9 @@ RunOutcome settleRun(const RunEnd& end) {
     outcome.amended = true;
   }
   if (!end.requirements.empty()) {  // against the settled report: its status and faults
-    outcome.checks = emulator::checkRequirements(end.requirements, report::encode(run));
-    run.other["requirements"] = emulator::toJson(outcome.checks);
-    outcome.exit_code = emulator::gatedExitCode(outcome.exit_code, outcome.checks);
+    outcome.checks = sensornet::report::checkRequirements(end.requirements, report::encode(run));
+    run.other["requirements"] = sensornet::report::toJson(outcome.checks);
+    outcome.exit_code = sensornet::report::gatedExitCode(outcome.exit_code, outcome.checks);
     outcome.amended = true;
   }
   if (outcome.amended) {
@@ -427,8 +427,8 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
     std::printf("emulated network delay: mean %s ms, largest %s ms (emulated time)\n",
                 shown(ms(run.network_delay_s->mean)).c_str(), shown(ms(delay_max)).c_str());
   }
-  for (const emulator::RequirementCheck& check : outcome.checks) {
-    std::printf("%s\n", emulator::describe(check).c_str());
+  for (const sensornet::report::RequirementCheck& check : outcome.checks) {
+    std::printf("%s\n", sensornet::report::describe(check).c_str());
   }
   if (outcome.write_problem) {
     std::printf("report: NOT WRITTEN: %s\n", outcome.write_problem->c_str());
@@ -454,7 +454,7 @@ void printOutcomeJson(const RunOutcome& outcome, const fs::path& report_path) {
   line["report"] = report_path.string();
   if (outcome.rebuilt && run.rebuilt_from) line["rebuilt_from"] = *run.rebuilt_from;
   if (outcome.write_problem) line["report_error"] = *outcome.write_problem;
-  if (!outcome.checks.empty()) line["requirements"] = emulator::toJson(outcome.checks);
+  if (!outcome.checks.empty()) line["requirements"] = sensornet::report::toJson(outcome.checks);
   line["exit_code"] = outcome.exit_code;
   printJson(line);
 }

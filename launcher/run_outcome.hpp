@@ -22,7 +22,7 @@
 
 #include "sensornet/launcher/fault.hpp"
 #include "sensornet/launcher/run_verdict.hpp"
-#include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/report/run_requirements.hpp"
 #include "sensornet/report/run_record.hpp"
 
 namespace sensornet::launcher {
@@ -35,7 +35,7 @@ struct RunEnd {
   int episodes_planned = 0;
   std::vector<Fault> faults;  // the launcher's own
   bool interrupted = false;   // a signal stopped the run
-  std::vector<emulator::Requirement> requirements;  // --require: checked against the report
+  std::vector<sensornet::report::Requirement> requirements;  // --require: checked against the report
   std::vector<int> external_sensors;  // --external-sensors: recorded in the report
   // --external-fusion-center: the report is built from the Reports the launcher recorded in the
   // episode log beside report_path (none written by a process of ours).
@@ -53,7 +53,7 @@ struct RunOutcome {
   bool amended = false;  // the launcher rewrote the report
   bool rebuilt = false;  // ... from the episode log, the fusion center's being missing
   std::optional<std::string> write_problem;  // the amended report could not be written
-  std::vector<emulator::RequirementCheck> checks;  // of RunEnd::requirements, in order
+  std::vector<sensornet::report::RequirementCheck> checks;  // of RunEnd::requirements, in order
 };
 
 // Reads the fusion center's report (or rebuilds it), decides status and exit code, checks the

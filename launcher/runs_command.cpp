@@ -94,9 +94,9 @@ RunEntry examine(const fs::path& folder) {
   facts.lock = {lock.exists(), lock.heldElsewhere(), lock.modified()};
   facts.launcher_alive = processAlive(launcherPidOf(facts));
   if (isLive(facts)) {
-    facts.episodes_logged = linesIn(emulator::episodeLogPath(reportOf(facts)));
-  } else if (const emulator::ReportFile file =
-                 emulator::readReport(reportOf(facts), emulator::EpisodeEntries::Skipped);
+    facts.episodes_logged = linesIn(sensornet::report::episodeLogPath(reportOf(facts)));
+  } else if (const sensornet::report::ReportFile file =
+                 sensornet::report::readReport(reportOf(facts), sensornet::report::EpisodeEntries::Skipped);
              file.ok()) {
     facts.report = file.report;
   }

@@ -7,7 +7,7 @@
 
 #include "sensornet/core/network.hpp"
 #include "sensornet/emulator/covariance_trace.hpp"
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 
 namespace sensornet::emulator {
@@ -871,9 +871,9 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
   // A cause the fusion center records itself is named here: the launcher's death, or the
   // coordinator's abort (gatherStatusEvidence's run_aborted entry).
   if (launcher_gone_) {
-    fault[kCausedByField] = launcherDeath();
+    fault[sensornet::report::kCausedByField] = launcherDeath();
   } else if (cause == FaultKind::RunAborted) {
-    fault[kCausedByField] = {{"kind", std::string(wordOf(FaultKind::RunAborted))},
+    fault[sensornet::report::kCausedByField] = {{"kind", std::string(wordOf(FaultKind::RunAborted))},
                              {"process", "coordinator"}};
   }
   log(spdlog::level::warn, fault.at("detail").get<std::string>());

@@ -29,8 +29,8 @@ bool isConsequenceOf(const json& entry, const Fault& cause) {
   if (!entry.is_object()) return false;
   // The fusion center marks what it saw as the cause (the coordinator's abort); when that
   // followed from the launcher's cause, the launcher names the root instead.
-  if (entry.contains(emulator::kCausedByField)) {
-    const std::optional<FaultKind> marked = kindOf(entry[emulator::kCausedByField]);
+  if (entry.contains(sensornet::report::kCausedByField)) {
+    const std::optional<FaultKind> marked = kindOf(entry[sensornet::report::kCausedByField]);
     if (!marked || !followsFromStop(*marked)) return false;
   }
   const std::optional<FaultKind> known = kindOf(entry);
@@ -90,7 +90,7 @@ json faultList(const std::vector<Fault>& launcher_faults, const json& reported) 
       continue;
     }
     if (cause != nullptr && isConsequenceOf(entry, *cause)) {
-      entry[emulator::kCausedByField] = {{"kind", std::string(wordOf(cause->kind))},
+      entry[sensornet::report::kCausedByField] = {{"kind", std::string(wordOf(cause->kind))},
                                          {"process", cause->process}};
     }
     listed.push_back(std::move(entry));

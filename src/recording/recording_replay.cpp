@@ -19,6 +19,7 @@
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/utc_time.hpp"
+#include "sensornet/report/report_files.hpp"
 
 namespace sensornet::recording {
 
@@ -26,6 +27,9 @@ using namespace sensornet::emulator;  // the cores and their events
 using namespace sensornet::wire;      // the samples' codecs
 
 namespace {
+
+using sensornet::report::EpisodeLog;
+using sensornet::report::episodeLogPath;
 
 using nlohmann::json;
 

@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 
 namespace sensornet::chaos {
 namespace {
@@ -374,7 +374,7 @@ std::vector<std::string> checkInvariants(const TrialRecord& r) {
     if (r.exit_code != table) {
       v.push_back("exit code " + std::to_string(r.exit_code) + " with status " + status);
     }
-    if (status != "completed" && emulator::causeCount(report["faults"]) == 0) {
+    if (status != "completed" && sensornet::report::causeCount(report["faults"]) == 0) {
       v.push_back("cause: status " + status + " with no fault that is not a consequence");
     }
     checkDeathsListed(r, report, v);

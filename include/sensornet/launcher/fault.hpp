@@ -8,7 +8,7 @@
 //
 //   Fault killed{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, at, "killed by ..."};
 //   json faults = faultList({killed}, report["faults"]);  // stalls after it: caused_by killed
-//   emulator::causeCount(faults);                           // 1 (emulator/fault_causes.hpp)
+//   sensornet::report::causeCount(faults);                           // 1 (report/fault_causes.hpp)
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::launcher {

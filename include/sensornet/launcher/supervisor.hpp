@@ -24,7 +24,7 @@
 #include <variant>
 #include <vector>
 
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/launcher/fault.hpp"
 

@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "sensornet/dds/domain.hpp"
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "support/background_process.hpp"
 #include "support/occurrences.hpp"
 #include "support/process.hpp"
@@ -462,7 +462,7 @@ TEST_F(Launcher, AJournalThatCannotBeWrittenEndsTheRunNamingIt) {
   ASSERT_TRUE(report.is_object()) << r.err;
   EXPECT_EQ(report["status"], "failed");
   const json& faults = report["faults"];
-  EXPECT_EQ(sensornet::emulator::causeCount(faults), 1u) << faults.dump(2);
+  EXPECT_EQ(sensornet::report::causeCount(faults), 1u) << faults.dump(2);
   const auto aborted = std::find_if(faults.begin(), faults.end(), [](const json& f) {
     return f.value("kind", "") == "run_aborted";
   });
@@ -503,7 +503,7 @@ TEST_F(Launcher, KilledLauncherTakesItsChildrenAlong) {
   EXPECT_NE(report["faults"][0]["detail"].get<std::string>().find("the launcher"),
             std::string::npos)
       << report["faults"].dump();
-  EXPECT_EQ(sensornet::emulator::causeCount(report["faults"]), 1u) << report["faults"].dump();
+  EXPECT_EQ(sensornet::report::causeCount(report["faults"]), 1u) << report["faults"].dump();
   // The killed launcher could not forget its current-run record; `status` sees it is stale.
   const ProcessResult status = runProcess({kLauncher, "status"}, 10s);
   EXPECT_EQ(status.exit_code, 2);

@@ -16,10 +16,13 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/report/report_files.hpp"
 #include "support/file_size_limit.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using sensornet::report::EpisodeLog;
 
 namespace fs = std::filesystem;
 using nlohmann::json;

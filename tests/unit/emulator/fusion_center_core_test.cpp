@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "sensornet/core/rate_schedule.hpp"
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/fusion_center_core.hpp"
 #include "sensornet/wire/fusion_center_events.hpp"
@@ -704,8 +704,8 @@ TEST_F(FusionCenterCoreTest, ALauncherThatDiedIsTheCauseOfTheInterruptedRun) {
   EXPECT_NE(faults[1].at("detail").get<std::string>().find("open when the launcher died"),
             std::string::npos)
       << faults[1].dump();
-  EXPECT_EQ(faults[1].at(kCausedByField), (json{{"kind", "interrupted"}, {"process", "sensornet"}}));
-  EXPECT_EQ(causeCount(final_.at("faults")), 1u);
+  EXPECT_EQ(faults[1].at(sensornet::report::kCausedByField), (json{{"kind", "interrupted"}, {"process", "sensornet"}}));
+  EXPECT_EQ(sensornet::report::causeCount(final_.at("faults")), 1u);
 }
 
 // Every notice names every sensor failed so far: each gets one sensor_died, at its first notice.
@@ -735,8 +735,8 @@ TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
   EXPECT_EQ(cut.at("ended_by"), "run_aborted");
   // The abort, recorded here too, is the cause of the cut (the launcher names the death as the
   // abort's cause when it supervises; without one the death stands beside the abort).
-  EXPECT_EQ(cut.at(kCausedByField), (json{{"kind", "run_aborted"}, {"process", "coordinator"}}));
-  EXPECT_EQ(causeCount(core_->faults()), 2u) << core_->faults().dump();
+  EXPECT_EQ(cut.at(sensornet::report::kCausedByField), (json{{"kind", "run_aborted"}, {"process", "coordinator"}}));
+  EXPECT_EQ(sensornet::report::causeCount(core_->faults()), 2u) << core_->faults().dump();
   EXPECT_EQ(cut.at("detail").get<std::string>().rfind("episode 0 was open when", 0), 0u)
       << cut.dump();
 }

@@ -13,9 +13,13 @@
 #include <vector>
 
 #include "sensornet/emulator/run_report.hpp"
+#include "sensornet/report/report_files.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using sensornet::report::EpisodeLog;
+using sensornet::report::writeReportWithLog;
 
 namespace fs = std::filesystem;
 using nlohmann::json;

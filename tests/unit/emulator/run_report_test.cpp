@@ -14,10 +14,15 @@
 #include <vector>
 
 #include "sensornet/emulator/episode_fusion.hpp"
+#include "sensornet/report/report_files.hpp"
 #include "support/scratch_dir.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using sensornet::report::EpisodeLog;
+using sensornet::report::episodeLogPath;
+using sensornet::report::readEpisodeLog;
 
 using sensornet::testing::ScratchDir;
 

@@ -19,9 +19,15 @@
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/run_report.hpp"
+#include "sensornet/report/report_files.hpp"
 
 namespace sensornet::emulator {
 namespace {
+
+using sensornet::report::EpisodeEntries;
+using sensornet::report::EpisodeLog;
+using sensornet::report::ReportFile;
+using sensornet::report::readReport;
 
 using nlohmann::json;
 

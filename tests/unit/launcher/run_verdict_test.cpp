@@ -8,9 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/emulator/run_report.hpp"
-#include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/report/run_requirements.hpp"
 #include "sensornet/launcher/supervisor.hpp"
 
 namespace sensornet::launcher {
@@ -120,14 +120,14 @@ TEST(RunVerdict, CompletedWithEpisodesMissingFails) {
 // stays 1.
 TEST(RunVerdict, FailedRequirementExitsFourUnlessTheRunFailed) {
   const auto checks =
-      emulator::checkRequirements(emulator::parseRequirements("no-faults"),
+      sensornet::report::checkRequirements(sensornet::report::parseRequirements("no-faults"),
                                   json{{"faults", json::array({{{"kind", "lost"}}})}});
   ASSERT_EQ(checks.size(), 1u);
   EXPECT_FALSE(checks[0].pass);
-  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Completed), checks), 4);
-  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Degraded), checks), 4);
-  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Failed), checks), 1);
-  EXPECT_EQ(emulator::gatedExitCode(exitCodeOf(RunStatus::Interrupted), checks), 1);
+  EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Completed), checks), 4);
+  EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Degraded), checks), 4);
+  EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Failed), checks), 1);
+  EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Interrupted), checks), 1);
 }
 
 json entry(const std::string& kind, json episode, json sensor = nullptr) {
@@ -154,7 +154,7 @@ TEST(FaultList, EntriesAfterTheRunEndingCauseAreItsConsequences) {
               (json{{"kind", "process_killed"}, {"process", "sensor_agent-0-2"}}));
   }
   EXPECT_FALSE(faults[6].contains("caused_by")) << "rejected samples have causes of their own";
-  EXPECT_EQ(emulator::causeCount(faults), 3u);
+  EXPECT_EQ(sensornet::report::causeCount(faults), 3u);
 }
 
 // The fusion center records sensor_died from the coordinator's notice (what a run without a
@@ -176,7 +176,7 @@ TEST(FaultList, InterruptBeforeTheFirstEpisodeOwnsEveryStopEntry) {
   const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
   const json faults = faultList({signal}, json::array({entry("cut_short", 0, 1)}));
   EXPECT_EQ(faults[1]["caused_by"]["kind"], "interrupted");
-  EXPECT_EQ(emulator::causeCount(faults), 1u);
+  EXPECT_EQ(sensornet::report::causeCount(faults), 1u);
 }
 
 // The fusion center marks its cut as caused by the coordinator's abort; the abort came from the
@@ -199,14 +199,14 @@ TEST(FaultList, TheLauncherNamesTheRootOfACauseTheFusionCenterMarked) {
 TEST(FaultList, SurvivedFaultsLeaveTheOthersCausesOfTheirOwn) {
   const json faults = faultList({survivedDeath()}, json::array({entry("lost", 3, 4)}));
   EXPECT_FALSE(faults[1].contains("caused_by"));
-  EXPECT_EQ(emulator::causeCount(faults), 2u);
+  EXPECT_EQ(sensornet::report::causeCount(faults), 2u);
 }
 
 TEST(FaultList, NoFaultsCriterionCountsCauses) {
   const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
   const json report = {{"faults", faultList({signal}, json::array({entry("stall", 1, 0)}))}};
-  EXPECT_EQ(emulator::causeCount(report["faults"]), 1u);
-  const auto checks = emulator::checkRequirements(emulator::parseRequirements("no-faults"), report);
+  EXPECT_EQ(sensornet::report::causeCount(report["faults"]), 1u);
+  const auto checks = sensornet::report::checkRequirements(sensornet::report::parseRequirements("no-faults"), report);
   EXPECT_FALSE(checks.at(0).pass);
 }
 

@@ -24,7 +24,7 @@
 #include <optional>
 #include <string>
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 
 // Reads a run report: InputError("<path>", ...) when the file cannot be read, is not JSON, or
 // lacks what a report has (run_id, per_episode, sensors, summary).
@@ -58,4 +58,4 @@ struct ReportTables {
 };
 [[nodiscard]] ReportTables reportTables(const nlohmann::json& report, const std::string& source);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -1,12 +1,12 @@
-#include "sensornet/emulator/junit_report.hpp"
+#include "sensornet/report/junit_report.hpp"
 
 #include <map>
 #include <optional>
 
 #include "sensornet/core/xml_text.hpp"
-#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/report/svg_plot.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
 
 std::string testcase(const std::string& classname, const std::string& name,
@@ -57,4 +57,4 @@ std::string junitXml(const JunitRun& run) {
   return xml + "  </testsuite>\n</testsuites>\n";
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

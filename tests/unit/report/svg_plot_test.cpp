@@ -1,7 +1,7 @@
 // The SVG builder of the report page: data -> pixel geometry computed here by hand from the
 // frame, ticks, and what a mark's element carries.
 
-#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/report/svg_plot.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
 
 // The default frame: the plot area is x in [72, 740] and y in [34, 250] pixels.
@@ -177,4 +177,4 @@ TEST(SvgPlot, FormatsTicksWithoutTrailingZeros) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -1,12 +1,12 @@
 // --require: the grammar (what is accepted, what is refused with which message) and the checks
 // against a report built here by hand, so every measured value is known independently.
-#include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/report/run_requirements.hpp"
 
 #include <gtest/gtest.h>
 
 #include "sensornet/core/input_error.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
 
 using nlohmann::json;
@@ -164,4 +164,4 @@ TEST(RunRequirements, HelpListsEveryCriterion) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

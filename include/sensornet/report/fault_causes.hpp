@@ -17,7 +17,7 @@
 
 #include "sensornet/emulator/vocabulary.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 
 inline constexpr const char* kCausedByField = "caused_by";
 
@@ -33,4 +33,4 @@ inline constexpr const char* kCausedByField = "caused_by";
   return causes;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -1,12 +1,12 @@
 // The run as JUnit XML (junit_report.hpp): a case for the run, one per criterion, failures where
 // the run did not complete or a criterion failed, and every message escaped.
-#include "sensornet/emulator/junit_report.hpp"
+#include "sensornet/report/junit_report.hpp"
 
 #include <gtest/gtest.h>
 
 #include "support/occurrences.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
 
 using sensornet::testing::occurrences;
@@ -59,4 +59,4 @@ TEST(JunitReport, ACompletedRunWithoutCriteriaIsOnePassingCase) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -1,4 +1,4 @@
-#include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/report/run_requirements.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -7,9 +7,9 @@
 #include <system_error>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/fault_causes.hpp"
+#include "sensornet/report/fault_causes.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
 
 using nlohmann::json;
@@ -338,4 +338,4 @@ std::string requirementsHelp() {
   return help;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

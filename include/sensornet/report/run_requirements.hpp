@@ -20,7 +20,7 @@
 #include <string_view>
 #include <vector>
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 
 // Exit code of a launch whose run ended (completed or degraded) but failed a --require
 // criterion. A failed or interrupted run keeps its own exit code 1.
@@ -64,4 +64,4 @@ struct RequirementCheck {
 // One line per property for --help: "  latency-p99<=DURATION   99th percentile of ...".
 [[nodiscard]] std::string requirementsHelp();
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -1,6 +1,5 @@
-#include "sensornet/emulator/report_page.hpp"
+#include "sensornet/report/report_page.hpp"
 
-#include "sensornet/emulator/run_report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,15 +13,16 @@
 
 #include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/emulator/fault_causes.hpp"
-#include "sensornet/emulator/run_report.hpp"
+#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/core/student_t.hpp"
-#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/report/svg_plot.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/report/report_files.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
+
 
 using nlohmann::json;
 
@@ -969,4 +969,4 @@ std::optional<std::string> writePageBeside(const std::filesystem::path& report_p
   }
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -2,7 +2,7 @@
 // covariance traces (against independent computations), and the page and CSV tables made from a
 // report (counts against the report's own).
 
-#include "sensornet/emulator/report_page.hpp"
+#include "sensornet/report/report_page.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,19 +12,21 @@
 #include <utility>
 #include <vector>
 
-#include "emulator_test_support.hpp"
+#include "unit/emulator/emulator_test_support.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/covariance_trace.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
-#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/report/svg_plot.hpp"
 #include "support/csv_rows.hpp"
 #include "support/occurrences.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
+
+using namespace sensornet::emulator;  // the reports the page is drawn from
 
 using nlohmann::json;
 
@@ -139,7 +141,12 @@ json sampleReport() {
     report.addLatencies(e.latencies_s);
     report.add(episodeEntry(e));
   }
-  json faults = json::array({faultEntry(FaultKind::SensorDied, "sensor_agent", 1, 1, 0.5, "killed <9>")});
+  json faults = json::array({{{"kind", "sensor_died"},
+                              {"process", "sensor_agent"},
+                              {"sensor", 1},
+                              {"episode", 1},
+                              {"emulated_time_s", 0.5},
+                              {"detail", "killed <9>"}}});
   return report.toJson("degraded", faults, json::array());
 }
 
@@ -368,4 +375,4 @@ TEST(ReportPage, WritesFaultNumbersToSixDigitsNotAsRawFloats) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -1,11 +1,11 @@
-#include "sensornet/emulator/svg_plot.hpp"
+#include "sensornet/report/svg_plot.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 namespace {
 
 // The tick step niceTicks uses: 1, 2 or 5 times a power of ten, about span / count.
@@ -339,4 +339,4 @@ std::string SvgPlot::svg(const std::string& id, const std::string& title) const 
   return s + "</svg>\n";
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "sensornet/emulator/run_requirements.hpp"
+#include "sensornet/report/run_requirements.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 
 struct JunitRun {
   std::string run_id;
@@ -26,4 +26,4 @@ struct JunitRun {
 
 [[nodiscard]] std::string junitXml(const JunitRun& run);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report

@@ -23,7 +23,7 @@
 
 #include "sensornet/core/xml_text.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::report {
 
 struct Interval {
   double lo = 0.0;
@@ -162,4 +162,4 @@ inline constexpr double kRuleLabelCharPx = 6.6;  // 11 px sans-serif, with room 
 // Writes a number of pixels as the builder does (two decimals).
 [[nodiscard]] std::string formatPixels(double pixels);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::report
