@@ -36,7 +36,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/report/svg_plot.hpp"
@@ -215,7 +215,7 @@ void printSummary(const std::vector<SeedSweep>& sweeps, const Options& options) 
 }
 
 void writeSvg(const std::vector<SeedSweep>& sweeps, const Options& options) {
-  namespace plot = sensornet::emulator;
+  namespace plot = sensornet::report;
   double lo = 0.0, hi = 0.0;
   for (const SeedSweep& sweep : sweeps) {
     for (const Row& r : sweep.rows) {

@@ -1,6 +1,6 @@
 // Scheduling in closed loop against open-loop plans (issue 29): where does feedback pay, and how
 // much? For each scenario: the open-loop info, cov, uniform and mc plans, and the closed loop of
-// `--replan-every DT` (emulator::simulateClosedLoop: the coordinator's Replanner, planning in no
+// `--replan-every DT` (evaluation::simulateClosedLoop: the coordinator's Replanner, planning in no
 // time) with the info and the cov surrogate at a few DT, every episode starting from the
 // surrogate's own open-loop plan. All on common random numbers (the same unit-rate points per
 // episode, TimeChangedArrivals), so each closed loop is compared with its open-loop plan episode
@@ -22,14 +22,15 @@
 #include <string>
 #include <vector>
 
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/student_t.hpp"
-#include "sensornet/emulator/closed_loop.hpp"
+#include "sensornet/evaluation/closed_loop.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace {
 
+namespace evaluation = sensornet::evaluation;
 using sensornet::PlanSurrogate;
 using sensornet::RateSchedule;
 using sensornet::Scenario;
@@ -125,7 +126,7 @@ void runScenario(const Options& o, const std::string& name) {
     if (surrogate == PlanSurrogate::MonteCarlo) request.max_seconds = o.mc_seconds;
     const sensornet::PlanResult plan = sensornet::planSchedule(s, request);
     Open entry{std::string(sensornet::wordOf(surrogate)), surrogate, plan.schedule, {}};
-    entry.costs = sensornet::emulator::openLoopCosts(s, plan.schedule, o.runs, o.seed, 0);
+    entry.costs = evaluation::openLoopCosts(s, plan.schedule, o.runs, o.seed, 0);
     row(o, name, "open " + entry.name + " (" + sensornet::statusText(plan.status, plan.failure) + ")", statOf(entry.costs), normalizer,
         "", nullptr, secondsSince(start));
     open.push_back(std::move(entry));
@@ -136,15 +137,15 @@ void runScenario(const Options& o, const std::string& name) {
     }
     for (const double every : o.every) {
       const auto start = std::chrono::steady_clock::now();
-      sensornet::emulator::ClosedLoopOptions loop;
+      evaluation::ClosedLoopOptions loop;
       loop.replan_every_s = every;
       loop.surrogate = base.surrogate;
       loop.replanner.switch_margin_s = o.margin;
       loop.replanner.time_scale = 1.0;
       loop.runs = o.runs;
       loop.seed = o.seed;
-      const sensornet::emulator::ClosedLoopResult closed =
-          sensornet::emulator::simulateClosedLoop(s, base.schedule, loop);
+      const evaluation::ClosedLoopResult closed =
+          evaluation::simulateClosedLoop(s, base.schedule, loop);
       const Stat against_own = sensornet::pairedDifference(closed.episode_costs, base.costs);
       char policy[64];
       std::snprintf(policy, sizeof policy, "closed %s DT %g (%.1f tails%s)", base.name.c_str(),

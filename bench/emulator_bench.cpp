@@ -107,7 +107,6 @@
 
 namespace {
 
-using sensornet::report::readReport;
 
 using namespace std::chrono_literals;
 using sensornet::testing::BackgroundProcess;
@@ -1135,7 +1134,7 @@ std::optional<TurnaroundRun> turnaroundRun(const std::string& run, int episodes,
   const Programs programs = benchPrograms();
   Processes processes(fs::temp_directory_path() / run);
   const fs::path report = processes.dir() / "report.json";
-  em::RunOptions options;
+  sensornet::wire::RunOptions options;
   options.run_id = run;
   sensornet::dds::Domain domain(options.domainConfig());
   sensornet::dds::Participant participant(domain);

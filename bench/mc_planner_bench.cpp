@@ -23,9 +23,9 @@
 #include <string>
 #include <vector>
 
-#include "sensornet/core/mc_planner.hpp"
+#include "sensornet/planning/mc_planner.hpp"
 #include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/student_t.hpp"

@@ -39,12 +39,12 @@
 #include <vector>
 
 #include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/random.hpp"
-#include "sensornet/core/rate_polytope.hpp"
+#include "sensornet/planning/rate_polytope.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/planning/surrogate_transcription.hpp"
 #include "sensornet/io/scenario_file.hpp"
 
 namespace {

@@ -14,7 +14,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/network.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/plan_summary.hpp"
 #include "sensornet/io/scenario_file.hpp"

@@ -13,7 +13,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/network.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/dds/participant.hpp"

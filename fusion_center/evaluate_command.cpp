@@ -12,11 +12,11 @@
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/emulator/closed_loop.hpp"
-#include "sensornet/emulator/evaluation_summary.hpp"
+#include "sensornet/evaluation/closed_loop.hpp"
+#include "sensornet/evaluation/evaluation_summary.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -46,9 +46,9 @@ std::string scheduleName(const EvaluateOptions& options) {
 
 int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
                   const RateSchedule& schedule, const CostBracket& bracket) {
-  emulator::ClosedLoopOptions loop;
+  evaluation::ClosedLoopOptions loop;
   loop.replan_every_s = options.replan_every;
-  loop.surrogate = emulator::closedLoopSurrogate(
+  loop.surrogate = evaluation::closedLoopSurrogate(
       options.surrogate,
       options.schedule_path.empty() ? "" : readTextFile(options.schedule_path, "schedule"));
   if (loop.surrogate != PlanSurrogate::Information && loop.surrogate != PlanSurrogate::Covariance) {
@@ -68,9 +68,9 @@ int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
     }
   };
   const auto start = std::chrono::steady_clock::now();
-  const emulator::ClosedLoopResult closed = emulator::simulateClosedLoop(scenario, schedule, loop);
+  const evaluation::ClosedLoopResult closed = evaluation::simulateClosedLoop(scenario, schedule, loop);
   const std::vector<double> open =
-      emulator::openLoopCosts(scenario, schedule, options.runs, options.seed, options.threads);
+      evaluation::openLoopCosts(scenario, schedule, options.runs, options.seed, options.threads);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!options.costs_path.empty()) {
@@ -82,7 +82,7 @@ int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
   }
   double open_mean = 0.0;
   for (const double c : open) open_mean += c / static_cast<double>(open.size());
-  const emulator::ClosedLoopEvaluation e{scenario,
+  const evaluation::ClosedLoopEvaluation e{scenario,
                                          options.scenario_path,
                                          scheduleName(options),
                                          bracket,
@@ -95,9 +95,9 @@ int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
                                          options.seed,
                                          seconds};
   if (options.json) {
-    printJson(emulator::closedLoopJson(e));
+    printJson(evaluation::closedLoopJson(e));
   } else {
-    std::fputs(emulator::closedLoopText(e).c_str(), stdout);
+    std::fputs(evaluation::closedLoopText(e).c_str(), stdout);
   }
   return kExitOk;
 }
@@ -135,7 +135,7 @@ int runEvaluate(const EvaluateOptions& options) {
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const emulator::OpenLoopEvaluation e{scenario,
+  const evaluation::OpenLoopEvaluation e{scenario,
                                        options.scenario_path,
                                        scheduleName(options),
                                        bracket,
@@ -146,9 +146,9 @@ int runEvaluate(const EvaluateOptions& options) {
                                        options.seed,
                                        seconds};
   if (options.json) {
-    printJson(emulator::evaluationJson(e));
+    printJson(evaluation::evaluationJson(e));
   } else {
-    std::fputs(emulator::evaluationText(e).c_str(), stdout);
+    std::fputs(evaluation::evaluationText(e).c_str(), stdout);
   }
   return kExitOk;
 }

@@ -53,7 +53,6 @@
 namespace sensornet::fusion_center {
 namespace {
 
-using sensornet::report::faultLogPath;
 
 using namespace std::chrono_literals;
 using emulator::wallNowNs;

@@ -44,13 +44,13 @@ std::vector<LocalAddress> localAddresses() {
 
 // launcher.address if given (it must be this machine's), else the address of the local
 // interface on the coordinator host's network.
-std::string findLauncherAddress(const emulator::HostsFile& hosts) {
+std::string findLauncherAddress(const launcher::HostsFile& hosts) {
   return chooseLauncherAddress(localAddresses(), hosts.launcher_address,
                                hosts.coordinatorHost().address, hosts.source);
 }
 
 // The prefix with its program as an absolute path (ProcessGroup does not search PATH).
-std::vector<std::string> resolvedPrefix(const emulator::Host& host) {
+std::vector<std::string> resolvedPrefix(const launcher::Host& host) {
   std::vector<std::string> prefix = host.exec;
   if (prefix.empty()) return prefix;
   const std::string& program = prefix.front();
@@ -77,15 +77,15 @@ std::vector<std::string> resolvedPrefix(const emulator::Host& host) {
 
 }  // namespace
 
-HostPlacement::HostPlacement(const emulator::HostsFile& hosts)
+HostPlacement::HostPlacement(const launcher::HostsFile& hosts)
     : hosts_(hosts), launcher_address_(findLauncherAddress(hosts)), peers_(hosts.hubAddresses()) {
   if (std::find(peers_.begin(), peers_.end(), launcher_address_) == peers_.end()) {
     peers_.push_back(launcher_address_);
   }
-  for (const emulator::Host& host : hosts.hosts) prefixes_.push_back(resolvedPrefix(host));
+  for (const launcher::Host& host : hosts.hosts) prefixes_.push_back(resolvedPrefix(host));
 }
 
-void HostPlacement::place(ChildSpec& child, const emulator::Host& host,
+void HostPlacement::place(ChildSpec& child, const launcher::Host& host,
                           dds::DiscoveryRole role) const {
   child.argv.insert(child.argv.end(),
                     {"--cyclone-config", dds::unicastConfigXml(host.address, peers_, role)});

@@ -5,7 +5,7 @@
 // and the launcher; dds/unicast_config.hpp), and the launcher's own participant gets one that
 // reaches the hosts from the machine it runs on.
 //
-//   const HostsFile hosts = emulator::loadHostsFile(path, scenario.sensorCount());
+//   const HostsFile hosts = launcher::loadHostsFile(path, scenario.sensorCount());
 //   const HostPlacement placement(hosts);          // finds the launcher's address, the prefixes
 //   placement.place(child, hosts.hostOfSensor(3), dds::DiscoveryRole::Leaf);
 //   domain.cyclone_config = placement.launcherConfigXml();
@@ -21,7 +21,7 @@
 
 #include "process_group.hpp"
 #include "sensornet/dds/domain.hpp"
-#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
 
 namespace sensornet::launcher {
 
@@ -29,18 +29,18 @@ class HostPlacement {
  public:
   // Throws InputError naming the hosts file when a prefix's program is not found or the
   // launcher has no address on the hosts' network (or launcher.address is not this machine's).
-  explicit HostPlacement(const emulator::HostsFile& hosts);
+  explicit HostPlacement(const launcher::HostsFile& hosts);
 
   // Puts `child` on `host`: appends --cyclone-config with the host's configuration for `role`
   // to its argv, then puts the host's prefix in front.
-  void place(ChildSpec& child, const emulator::Host& host, dds::DiscoveryRole role) const;
+  void place(ChildSpec& child, const launcher::Host& host, dds::DiscoveryRole role) const;
 
   [[nodiscard]] const std::string& launcherAddress() const noexcept { return launcher_address_; }
   // The launcher's configuration: a hub on its own address with the same peers as every host.
   [[nodiscard]] std::string launcherConfigXml() const;
 
  private:
-  const emulator::HostsFile& hosts_;
+  const launcher::HostsFile& hosts_;
   std::string launcher_address_;
   std::vector<std::string> peers_;  // the hub hosts' addresses and the launcher's
   std::vector<std::vector<std::string>> prefixes_;  // per host: its exec prefix, resolved

@@ -34,9 +34,9 @@
 #include "sensornet/emulator/coordinator_core.hpp"
 #include "sensornet/report/report_page.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/dds/security.hpp"
-#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
 #include "sensornet/report/junit_report.hpp"
 #include "sensornet/recording/run_recorder.hpp"
 #include "sensornet/io/metrics_server.hpp"
@@ -100,7 +100,7 @@ std::vector<std::string> runFlags(const CommandOptions& options, const dds::Doma
 // What planLaunch needs of this host and the run's domain.
 PlanContext planContext(const CommandOptions& options, const Scenario& scenario,
                         const EmulatorPrograms& programs, const dds::DomainConfig& domain,
-                        const emulator::HostsFile* hosts) {
+                        const launcher::HostsFile* hosts) {
   PlanContext context{options.run.run_id,       programs,
                       runFlags(options, domain), defaultLogDirectory(options.run.run_id),
                       scenario.sensorCount(),   scenario.network.has_value(),
@@ -114,7 +114,7 @@ PlanContext planContext(const CommandOptions& options, const Scenario& scenario,
 }
 
 // --hosts: every child runs through its host's prefix with its host's Cyclone configuration.
-void placeOnHosts(LaunchPlan& plan, const emulator::HostsFile& hosts,
+void placeOnHosts(LaunchPlan& plan, const launcher::HostsFile& hosts,
                   const HostPlacement& placement) {
   for (ChildSpec& child : plan.children) {
     if (child.name == kCoordinator) {
@@ -122,7 +122,7 @@ void placeOnHosts(LaunchPlan& plan, const emulator::HostsFile& hosts,
     } else if (child.name == kFusionCenter || child.name == kReferenceFusionCenter) {
       placement.place(child, hosts.fusionCenterHost(), dds::DiscoveryRole::Hub);
     } else {
-      const emulator::Host& host = hosts.hostOfSensor(plan.sensors_of.at(child.name).front());
+      const launcher::Host& host = hosts.hostOfSensor(plan.sensors_of.at(child.name).front());
       placement.place(child, host, dds::DiscoveryRole::Leaf);
     }
   }
@@ -337,10 +337,10 @@ int runLaunch(CommandOptions options) {
   if (made_up_id) options.run.run_id = generateRunId();
   const bool loopback_only = options.run.chosenCycloneConfig().empty();
   dds::DomainConfig domain = options.run.domainConfig();
-  std::optional<emulator::HostsFile> hosts;
+  std::optional<launcher::HostsFile> hosts;
   std::optional<HostPlacement> placement;
   if (!options.hosts_path.empty()) {
-    hosts = emulator::loadHostsFile(options.hosts_path, scenario.sensorCount());
+    hosts = launcher::loadHostsFile(options.hosts_path, scenario.sensorCount());
     placement.emplace(*hosts);
     domain.cyclone_config = placement->launcherConfigXml();
   }

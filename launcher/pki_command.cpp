@@ -26,7 +26,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/xml_text.hpp"
 #include "sensornet/dds/security.hpp"
-#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
 #include "sensornet/emulator/sensor_ids.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/output_path.hpp"
@@ -372,8 +372,8 @@ class PkiMaker {
       for (int j = 0; j < options.sensors; ++j) blocks.push_back({j});
     } else {
       const int sensor_count = loadScenarioFile(options.scenario).sensorCount();
-      std::optional<emulator::HostsFile> hosts;
-      if (!options.hosts.empty()) hosts = emulator::loadHostsFile(options.hosts, sensor_count);
+      std::optional<launcher::HostsFile> hosts;
+      if (!options.hosts.empty()) hosts = launcher::loadHostsFile(options.hosts, sensor_count);
       blocks = sensorBlocks(hosts ? &*hosts : nullptr, sensor_count,
                             sensorsPerProcess(options.sensors_per_process, sensor_count));
     }

@@ -12,7 +12,7 @@
 
 #include "command_client.hpp"
 #include "run_files.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/wire/messages.hpp"
 #include "sensornet/wire/run_options.hpp"
 #include "sensornet/io/scenario_file.hpp"

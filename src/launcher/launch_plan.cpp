@@ -123,14 +123,14 @@ int sensorsPerProcess(const std::string& given, int sensor_count) {
   return std::max(1, (sensor_count + kAutoSensorProcesses - 1) / kAutoSensorProcesses);
 }
 
-std::vector<std::vector<int>> sensorBlocks(const emulator::HostsFile* hosts, int sensor_count,
+std::vector<std::vector<int>> sensorBlocks(const launcher::HostsFile* hosts, int sensor_count,
                                            int per_process) {
   std::vector<std::vector<int>> groups;
   if (hosts == nullptr) {
     groups.emplace_back();
     for (int j = 0; j < sensor_count; ++j) groups.back().push_back(j);
   } else {
-    for (const emulator::Host& host : hosts->hosts) groups.push_back(host.sensors);
+    for (const launcher::Host& host : hosts->hosts) groups.push_back(host.sensors);
   }
   std::vector<std::vector<int>> blocks;
   const auto size = static_cast<std::size_t>(std::max(1, per_process));

@@ -21,7 +21,7 @@ namespace sensornet::dds {
 
 // `interface_address`: the host's own IPv4 address (the interface Cyclone binds to);
 // `peer_addresses`: the hub hosts' addresses (a hub lists its own too when other hubs share its
-// host). Addresses are taken as given (check them first: emulator/hosts_file.hpp).
+// host). Addresses are taken as given (check them first: launcher/hosts_file.hpp).
 [[nodiscard]] std::string unicastConfigXml(const std::string& interface_address,
                                            const std::vector<std::string>& peer_addresses,
                                            DiscoveryRole role);

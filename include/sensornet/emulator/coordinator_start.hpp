@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/coordinator_journal.hpp"

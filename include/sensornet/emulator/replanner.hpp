@@ -42,7 +42,7 @@
 #include <vector>
 
 #include "sensornet/core/emulated_plant.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 

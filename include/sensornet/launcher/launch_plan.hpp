@@ -26,7 +26,7 @@
 
 #include "sensornet/core/surrogate_kind.hpp"
 #include "sensornet/dds/security.hpp"  // SecurityIdentity: header-only names, no DDS
-#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::launcher {
@@ -88,7 +88,7 @@ struct PlanContext {
   std::filesystem::path default_log_dir;  // <scratch>/<run id>, for a launch without --log-dir
   int sensor_count = 0;
   bool scenario_has_network = false;
-  const emulator::HostsFile* hosts = nullptr;  // --hosts; nullptr: this host
+  const launcher::HostsFile* hosts = nullptr;  // --hosts; nullptr: this host
   // A secured run (--security): the folder a process of this identity receives; empty: none.
   std::function<std::string(const dds::SecurityIdentity&)> security_folder;
 };
@@ -129,7 +129,7 @@ inline constexpr int kMaxSensorsPerProcess = 1'000'000;
 [[nodiscard]] int sensorsPerProcess(const std::string& given, int sensor_count);
 // The sensors of each sensor_agent process, `per_process` at most each: consecutive blocks of
 // 0..sensor_count-1 on one host; on several hosts, blocks of each host's sensors in file order.
-[[nodiscard]] std::vector<std::vector<int>> sensorBlocks(const emulator::HostsFile* hosts,
+[[nodiscard]] std::vector<std::vector<int>> sensorBlocks(const launcher::HostsFile* hosts,
                                                          int sensor_count, int per_process);
 
 }  // namespace sensornet::launcher

@@ -28,8 +28,6 @@
 
 namespace sensornet::testing {
 
-using sensornet::report::episodeLogPath;
-
 inline const std::string kCoordinator = SENSORNET_COORDINATOR;
 inline const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
 inline const std::string kSensorAgent = SENSORNET_SENSOR_AGENT;

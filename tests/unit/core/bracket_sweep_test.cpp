@@ -16,7 +16,7 @@
 #include <string>
 
 #include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "support/surrogate_references.hpp"

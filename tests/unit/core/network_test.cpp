@@ -5,10 +5,10 @@
 #include <cmath>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/random.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/planning/surrogate_transcription.hpp"
 #include "support/eigen_near.hpp"
 
 namespace sensornet {

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "sensornet/core/emulated_plant.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 
 #include "emulator_test_support.hpp"

@@ -12,7 +12,7 @@
 
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/io/scenario_file.hpp"
 

@@ -15,6 +15,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_inputs.hpp"
 #include "sensornet/emulator/sensor_agent_core.hpp"
 #include "sensornet/io/scenario_file.hpp"
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "sensornet/core/arrival_mode.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::emulator {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "sensornet/core/arrival_mode.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/io/command_line.hpp"
 
 namespace sensornet {

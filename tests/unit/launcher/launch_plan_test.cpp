@@ -174,7 +174,7 @@ TEST(LaunchPlan, ExternalSensorsMustBeTheScenarios) {
 }
 
 TEST(LaunchPlan, OnSeveralHostsEachHostsSensorsFormTheirOwnBlocks) {
-  emulator::HostsFile hosts;
+  launcher::HostsFile hosts;
   hosts.hosts = {{"a", "10.0.0.1", {}, true, true, {0, 1, 2}, "h:1"},
                  {"b", "10.0.0.2", {}, false, false, {3, 4}, "h:7"}};
   EXPECT_EQ(sensorBlocks(&hosts, 5, 2),

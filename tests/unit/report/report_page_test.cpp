@@ -14,7 +14,7 @@
 
 #include "unit/emulator/emulator_test_support.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/covariance_trace.hpp"
 #include "sensornet/emulator/run_report.hpp"

@@ -3,6 +3,8 @@
 // refused, counted as a malformed episode control, while the run's inputs go on.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -60,7 +62,11 @@ TEST(EpisodeControlCodec, EachKindHasItsOwnCommand) {
 TEST(EpisodeControlCodec, AnUndefinedCommandIsRefusedAndCounted) {
   const EpisodeControl stop = distinctFields(ControlKind::EpisodeStop);
   sensornet_EpisodeControl sample = wireControl(stop, "run-7");
-  sample.command = static_cast<sensornet_EpisodeCommand>(99);
+  // A value the IDL does not define, as a newer or broken writer's CDR may carry (the C enum's
+  // own range holds only the defined ones, so it goes in as the 32-bit integer on the wire).
+  const std::int32_t undefined = 99;
+  static_assert(sizeof sample.command == sizeof undefined);
+  std::memcpy(&sample.command, &undefined, sizeof undefined);
   EXPECT_THROW((void)controlOf(sample), InputError);
 
   RunInputState state;

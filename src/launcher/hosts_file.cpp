@@ -1,4 +1,4 @@
-#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
 
 #include <arpa/inet.h>
 #include <yaml-cpp/yaml.h>
@@ -14,7 +14,7 @@
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/yaml_text.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::launcher {
 namespace {
 
 // "file:line" of a node (the file alone when the node has no position).
@@ -107,7 +107,7 @@ Host parseHost(const std::string& source, const YAML::Node& node, const std::str
   if (const YAML::Node sensors = node["sensors"]; sensors && !sensors.IsNull()) {
     const std::string spec = text(source, sensors, field + ".sensors");
     try {
-      host.sensors = parseSensorIds(spec, source);
+      host.sensors = emulator::parseSensorIds(spec, source);
     } catch (const InputError& e) {
       fail(source, sensors, field + ".sensors", e.expected());
     }
@@ -259,4 +259,4 @@ std::vector<std::string> HostsFile::hubAddresses() const {
   return addresses;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::launcher

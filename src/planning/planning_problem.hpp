@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "sensornet/core/planner.hpp"
-#include "sensornet/core/rate_polytope.hpp"
-#include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/planning/planner.hpp"
+#include "sensornet/planning/rate_polytope.hpp"
+#include "sensornet/planning/surrogate_transcription.hpp"
 
 namespace sensornet::planning {
 

@@ -1,7 +1,7 @@
-// The hosts file of `sensornet launch --hosts` (emulator/hosts_file.hpp): a good file is read
+// The hosts file of `sensornet launch --hosts` (launcher/hosts_file.hpp): a good file is read
 // as written; every bad one is refused with the file and line, the field and what was expected.
 
-#include "sensornet/emulator/hosts_file.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include "sensornet/core/input_error.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::launcher {
 namespace {
 
 constexpr const char* kGood = R"(hosts:
@@ -164,4 +164,4 @@ TEST(HostsFile, Ipv4AddressesAreDottedQuadUnicast) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::launcher

@@ -1,4 +1,4 @@
-#include "sensornet/core/rate_polytope.hpp"
+#include "sensornet/planning/rate_polytope.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/planning/surrogate_transcription.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>

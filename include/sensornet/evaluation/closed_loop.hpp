@@ -26,12 +26,12 @@
 #include <functional>
 #include <vector>
 
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/replanner.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::evaluation {
 
 // The instants of an episode at which the tail is re-planned: DT, 2 DT, ... strictly below T
 // (none when DT >= T). Throws InputError unless DT is a finite number > 0.
@@ -42,7 +42,7 @@ struct ClosedLoopOptions {
   PlanSurrogate surrogate = PlanSurrogate::Information;
   // The switch margin in wall seconds and the run's time scale: the tail takes effect
   // switch_margin_s * time_scale emulated seconds after its instant, as in the live run.
-  ReplannerOptions replanner;
+  emulator::ReplannerOptions replanner;
   int runs = 1000;
   std::uint64_t seed = 1;
   int threads = 0;  // 0: one per core
@@ -74,4 +74,4 @@ struct ClosedLoopResult {
                                                 const RateSchedule& schedule, int runs,
                                                 std::uint64_t seed, int threads);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::evaluation

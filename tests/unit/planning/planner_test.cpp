@@ -1,4 +1,4 @@
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,8 +13,8 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/monte_carlo.hpp"
 #include "sensornet/core/random.hpp"
-#include "sensornet/core/rate_polytope.hpp"
-#include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/planning/rate_polytope.hpp"
+#include "sensornet/planning/surrogate_transcription.hpp"
 
 namespace sensornet {
 namespace {

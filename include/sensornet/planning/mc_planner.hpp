@@ -46,7 +46,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/scenario.hpp"
 
 namespace sensornet {

@@ -16,12 +16,12 @@
 
 #include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/emulator/closed_loop.hpp"
+#include "sensornet/evaluation/closed_loop.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::evaluation {
 
 // The closed loop's surrogate: `flag` (--surrogate) when given, else the schedule file's
 // "surrogate" when it is one the closed loop plans with (info, cov), else cov (the run's
@@ -70,4 +70,4 @@ struct ClosedLoopEvaluation {
 [[nodiscard]] nlohmann::json closedLoopJson(const ClosedLoopEvaluation& e);
 [[nodiscard]] std::string closedLoopText(const ClosedLoopEvaluation& e);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::evaluation

@@ -1,9 +1,9 @@
-// The offline closed loop (emulator::simulateClosedLoop): its instants, its pairing with the
+// The offline closed loop (evaluation::simulateClosedLoop): its instants, its pairing with the
 // open loop, and one episode recomputed here step by step from the planner and the filter, so
 // that the switch time, the covariance a tail is planned from and the schedule in force after
 // it are checked against a computation that does not go through the Replanner or the book.
 
-#include "sensornet/emulator/closed_loop.hpp"
+#include "sensornet/evaluation/closed_loop.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,9 @@
 #include "sensornet/core/poisson_arrivals.hpp"
 #include "sensornet/core/surrogate.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::evaluation {
+
+using namespace sensornet::emulator;  // the coordinator's re-planner, as the live run uses it
 namespace {
 
 // Three states, four sensors, a non-symmetric drift (the paper's generator), T = 1.5, N = 6.
@@ -149,4 +151,4 @@ TEST(ClosedLoop, RefusesOptionsOutOfRange) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::evaluation

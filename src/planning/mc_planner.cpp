@@ -1,4 +1,4 @@
-#include "sensornet/core/mc_planner.hpp"
+#include "sensornet/planning/mc_planner.hpp"
 
 #include <algorithm>
 #include <atomic>

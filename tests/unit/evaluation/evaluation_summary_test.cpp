@@ -1,7 +1,7 @@
 // What `fusion_center evaluate` says of its runs, from results made up here (no simulation):
 // whether the interval meets the bracket, the closed loop's surrogate when none is given, the
 // verdict of the paired difference, and the fields and lines of both summaries.
-#include "sensornet/emulator/evaluation_summary.hpp"
+#include "sensornet/evaluation/evaluation_summary.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,9 @@
 
 #include "sensornet/io/scenario_file.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::evaluation {
+
+using namespace sensornet::emulator;  // the coordinator's re-planner, as the live run uses it
 namespace {
 
 Scenario defaultScenario() {
@@ -125,4 +127,4 @@ TEST(EvaluationSummary, TheClosedLoopSaysItsSurrogateMarginAndVerdict) {
 }
 
 }  // namespace
-}  // namespace sensornet::emulator
+}  // namespace sensornet::evaluation

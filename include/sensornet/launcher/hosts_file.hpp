@@ -27,7 +27,7 @@
 #include <string_view>
 #include <vector>
 
-namespace sensornet::emulator {
+namespace sensornet::launcher {
 
 struct Host {
   std::string name;               // letters, digits, '.', '_', '-'
@@ -63,4 +63,4 @@ struct HostsFile {
 // not the broadcast address).
 [[nodiscard]] bool isHostIpv4Address(std::string_view text);
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::launcher

@@ -1,4 +1,4 @@
-#include "sensornet/core/planner.hpp"
+#include "sensornet/planning/planner.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "planning_problem.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/mc_planner.hpp"
+#include "sensornet/planning/mc_planner.hpp"
 
 namespace sensornet {
 namespace {

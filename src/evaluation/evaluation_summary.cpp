@@ -1,8 +1,8 @@
-#include "sensornet/emulator/evaluation_summary.hpp"
+#include "sensornet/evaluation/evaluation_summary.hpp"
 
 #include "sensornet/io/append_format.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::evaluation {
 namespace {
 
 nlohmann::json toJson(const CostBracket& bracket) {
@@ -142,4 +142,4 @@ std::string closedLoopText(const ClosedLoopEvaluation& e) {
   return out;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::evaluation

@@ -1,4 +1,4 @@
-#include "sensornet/emulator/closed_loop.hpp"
+#include "sensornet/evaluation/closed_loop.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -17,7 +17,9 @@
 #include "sensornet/core/surrogate.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
 
-namespace sensornet::emulator {
+namespace sensornet::evaluation {
+
+using namespace sensornet::emulator;  // the coordinator's re-planner, as the live run uses it
 namespace {
 
 constexpr const char* kSource = "closed loop";
@@ -218,4 +220,4 @@ std::vector<double> openLoopCosts(const Scenario& scenario, const RateSchedule& 
   return costs;
 }
 
-}  // namespace sensornet::emulator
+}  // namespace sensornet::evaluation

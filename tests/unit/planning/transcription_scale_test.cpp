@@ -12,7 +12,7 @@
 
 #include "sensornet/core/random.hpp"
 #include "sensornet/core/scenario.hpp"
-#include "sensornet/core/surrogate_transcription.hpp"
+#include "sensornet/planning/surrogate_transcription.hpp"
 #include "support/eigen_near.hpp"
 
 namespace sensornet {
