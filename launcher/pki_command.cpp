@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "host_placement.hpp"
+#include "sensornet/launcher/host_placement.hpp"
 #include "sensornet/launcher/launch_plan.hpp"
 #include "sensornet/launcher/security_policy.hpp"
 #include "sensornet/core/input_error.hpp"

@@ -8,9 +8,9 @@
 
 #include "interrupts.hpp"
 #include "sensornet/io/utc_time.hpp"
-#include "live_runs.hpp"
-#include "output_file.hpp"
-#include "run_follower.hpp"
+#include "sensornet/launcher/live_runs.hpp"
+#include "sensornet/io/output_file.hpp"
+#include "sensornet/launcher/run_follower.hpp"
 #include "runs_command.hpp"
 #include "sensornet/wire/messages.hpp"
 #include "sensornet/wire/run_options.hpp"

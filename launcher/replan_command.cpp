@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "command_client.hpp"
-#include "run_files.hpp"
+#include "sensornet/launcher/command_client.hpp"
+#include "sensornet/launcher/run_files.hpp"
 #include "sensornet/planning/planner.hpp"
 #include "sensornet/wire/messages.hpp"
 #include "sensornet/wire/run_options.hpp"

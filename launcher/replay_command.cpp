@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "output_file.hpp"
+#include "sensornet/io/output_file.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/recording/live_replay.hpp"
 #include "sensornet/recording/recording_replay.hpp"

@@ -4,7 +4,7 @@
 #include <memory>
 #include <vector>
 
-#include "output_file.hpp"
+#include "sensornet/io/output_file.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/report/report_page.hpp"
 #include "sensornet/io/output_path.hpp"

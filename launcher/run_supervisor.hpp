@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "failure_notices.hpp"
-#include "process_group.hpp"
-#include "progress_watcher.hpp"
+#include "sensornet/launcher/failure_notices.hpp"
+#include "sensornet/launcher/process_group.hpp"
+#include "sensornet/launcher/progress_watcher.hpp"
 #include "sensornet/launcher/supervisor.hpp"
 
 namespace sensornet::launcher {

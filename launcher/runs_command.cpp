@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "output_file.hpp"
-#include "run_files.hpp"
+#include "sensornet/io/output_file.hpp"
+#include "sensornet/launcher/run_files.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/vocabulary.hpp"

@@ -7,9 +7,9 @@
 #include <optional>
 #include <string>
 
-#include "live_runs.hpp"
-#include "run_files.hpp"
-#include "run_follower.hpp"
+#include "sensornet/launcher/live_runs.hpp"
+#include "sensornet/launcher/run_files.hpp"
+#include "sensornet/launcher/run_follower.hpp"
 #include "sensornet/wire/messages.hpp"
 #include "sensornet/wire/run_options.hpp"
 #include "sensornet/launcher/run_view.hpp"

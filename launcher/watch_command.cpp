@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "live_runs.hpp"
-#include "run_follower.hpp"
+#include "sensornet/launcher/live_runs.hpp"
+#include "sensornet/launcher/run_follower.hpp"
 #include "sensornet/wire/messages.hpp"
 #include "sensornet/wire/run_options.hpp"
 #include "sensornet/launcher/run_view.hpp"

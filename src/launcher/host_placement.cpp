@@ -1,11 +1,20 @@
 #include "sensornet/launcher/host_placement.hpp"
 
 #include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <net/if.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
+#include <memory>
+#include <optional>
+#include <sstream>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/dds/unicast_config.hpp"
+#include "sensornet/io/command_line.hpp"
 
 namespace sensornet::launcher {
 
@@ -51,6 +60,94 @@ std::string shellQuoted(const std::string& word) {
   std::string quoted = "'";
   for (const char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return quoted + "'";
+}
+
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The IPv4 addresses of this machine's interfaces that are up.
+std::vector<LocalAddress> localAddresses() {
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return {};
+  const std::unique_ptr<ifaddrs, decltype(&::freeifaddrs)> owner(list, &::freeifaddrs);
+  std::vector<LocalAddress> found;
+  for (const ifaddrs* entry = list; entry != nullptr; entry = entry->ifa_next) {
+    if (entry->ifa_addr == nullptr || entry->ifa_netmask == nullptr ||
+        entry->ifa_addr->sa_family != AF_INET || (entry->ifa_flags & IFF_UP) == 0) {
+      continue;
+    }
+    const auto* address = reinterpret_cast<const sockaddr_in*>(entry->ifa_addr);
+    const auto* netmask = reinterpret_cast<const sockaddr_in*>(entry->ifa_netmask);
+    char text[INET_ADDRSTRLEN] = {};
+    ::inet_ntop(AF_INET, &address->sin_addr, text, sizeof text);
+    found.push_back({ntohl(address->sin_addr.s_addr), ntohl(netmask->sin_addr.s_addr), text});
+  }
+  return found;
+}
+
+// launcher.address if given (it must be this machine's), else the address of the local
+// interface on the coordinator host's network.
+std::string findLauncherAddress(const launcher::HostsFile& hosts) {
+  return chooseLauncherAddress(localAddresses(), hosts.launcher_address,
+                               hosts.coordinatorHost().address, hosts.source);
+}
+
+// The prefix with its program as an absolute path (ProcessGroup does not search PATH).
+std::vector<std::string> resolvedPrefix(const launcher::Host& host) {
+  std::vector<std::string> prefix = host.exec;
+  if (prefix.empty()) return prefix;
+  const std::string& program = prefix.front();
+  const auto executable = [](const fs::path& path) {
+    return fs::is_regular_file(path) && ::access(path.c_str(), X_OK) == 0;
+  };
+  std::optional<fs::path> found;
+  if (program.find('/') != std::string::npos) {
+    if (executable(program)) found = fs::absolute(program);
+  } else if (const char* path = std::getenv("PATH")) {
+    std::istringstream dirs(path);
+    for (std::string dir; !found && std::getline(dirs, dir, ':');) {
+      if (!dir.empty() && executable(fs::path(dir) / program)) found = fs::path(dir) / program;
+    }
+  }
+  if (!found) {
+    throw InputError(host.where, "exec (host " + host.name + ")",
+                     "a prefix whose program is an executable file or on PATH, got '" + program +
+                         "'");
+  }
+  prefix.front() = found->string();
+  return prefix;
+}
+
+}  // namespace
+
+HostPlacement::HostPlacement(const launcher::HostsFile& hosts)
+    : hosts_(hosts), launcher_address_(findLauncherAddress(hosts)), peers_(hosts.hubAddresses()) {
+  if (std::find(peers_.begin(), peers_.end(), launcher_address_) == peers_.end()) {
+    peers_.push_back(launcher_address_);
+  }
+  for (const launcher::Host& host : hosts.hosts) prefixes_.push_back(resolvedPrefix(host));
+}
+
+void HostPlacement::place(ChildSpec& child, const launcher::Host& host,
+                          dds::DiscoveryRole role) const {
+  child.argv.insert(child.argv.end(),
+                    {"--cyclone-config", dds::unicastConfigXml(host.address, peers_, role)});
+  const auto index = static_cast<std::size_t>(&host - hosts_.hosts.data());
+  child.argv = prefixedArgv(prefixes_.at(index), child.argv);
+}
+
+std::string HostPlacement::launcherConfigXml() const {
+  return dds::unicastConfigXml(launcher_address_, peers_, dds::DiscoveryRole::Hub);
+}
+
+CLI::Validator sensorsPerProcessValue() {
+  return CLI::Validator(
+      [count = integerRange(1, kMaxSensorsPerProcess)](std::string& input) -> std::string {
+        return input == "auto" ? std::string() : count(input);
+      },
+      "auto|N");
 }
 
 }  // namespace sensornet::launcher

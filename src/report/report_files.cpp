@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <stdexcept>
@@ -128,13 +129,21 @@ json parseReportWithoutEpisodes(std::istream& in, std::size_t* listed) {
 
 ReportFile readReport(const std::filesystem::path& path, EpisodeEntries entries) {
   ReportFile file;
-  std::ifstream in(path);
-  if (!in) {
+  // Only a regular file is a report: a folder opens as a stream, and then throws on reading.
+  std::error_code error;
+  std::ifstream in;
+  if (std::filesystem::is_regular_file(path, error)) in.open(path);
+  if (!in.is_open()) {
     file.problem = ReportFile::Problem::Unreadable;
     return file;
   }
-  file.report = entries == EpisodeEntries::Skipped ? parseReportWithoutEpisodes(in)
-                                                   : json::parse(in, nullptr, false);
+  try {
+    file.report = entries == EpisodeEntries::Skipped ? parseReportWithoutEpisodes(in)
+                                                     : json::parse(in, nullptr, false);
+  } catch (const std::ios_base::failure&) {  // a read error (EIO) mid-file
+    file.problem = ReportFile::Problem::Unreadable;
+    return file;
+  }
   if (file.report.is_discarded()) {
     file.problem = ReportFile::Problem::NotJson;
     return file;

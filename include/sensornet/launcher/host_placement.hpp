@@ -1,8 +1,17 @@
 #pragma once
-// The decisions of placing a launch on several hosts (`sensornet launch --hosts FILE`), free of
-// the system: which address of this machine the launcher speaks from, and how a child's argv
-// runs through its host's exec prefix. launcher/host_placement.cpp lists the interfaces,
-// resolves the prefixes on PATH and writes the Cyclone configurations.
+// Where the processes of a launch run when a hosts file is given (`sensornet launch --hosts`):
+// each child's command goes through its host's exec prefix and carries a Cyclone configuration
+// of its own (that host's address as the interface, no multicast, unicast peers: the hub hosts
+// and the launcher; dds/unicast_config.hpp), and the launcher's own participant gets one that
+// reaches the hosts from the machine it runs on.
+//
+//   const HostsFile hosts = launcher::loadHostsFile(path, scenario.sensorCount());
+//   const HostPlacement placement(hosts);          // finds the launcher's address, the prefixes
+//   placement.place(child, hosts.hostOfSensor(3), dds::DiscoveryRole::Leaf);
+//   domain.cyclone_config = placement.launcherConfigXml();
+//
+// The decisions underneath are free functions, free of the system (unit-tested): which address
+// of this machine the launcher speaks from, and how a child's argv runs through a prefix.
 //
 //   const std::string me = chooseLauncherAddress(localAddresses(), hosts.launcher_address,
 //                                                hosts.coordinatorHost().address, hosts.source);
@@ -12,10 +21,15 @@
 // The prefix runs the program's own argv: `ip netns exec NS` execs it as given; `ssh` (the
 // prefix's program named ssh) hands the words to the remote shell, so each is quoted for it.
 
+#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "sensornet/dds/domain.hpp"
+#include "sensornet/launcher/hosts_file.hpp"
+#include "sensornet/launcher/launch_plan.hpp"  // ChildSpec
 
 namespace sensornet::launcher {
 
@@ -43,5 +57,29 @@ struct LocalAddress {
 
 // `word` quoted for a POSIX shell ('...', with ' as '\'').
 [[nodiscard]] std::string shellQuoted(const std::string& word);
+
+class HostPlacement {
+ public:
+  // Throws InputError naming the hosts file when a prefix's program is not found or the
+  // launcher has no address on the hosts' network (or launcher.address is not this machine's).
+  explicit HostPlacement(const launcher::HostsFile& hosts);
+
+  // Puts `child` on `host`: appends --cyclone-config with the host's configuration for `role`
+  // to its argv, then puts the host's prefix in front.
+  void place(ChildSpec& child, const launcher::Host& host, dds::DiscoveryRole role) const;
+
+  [[nodiscard]] const std::string& launcherAddress() const noexcept { return launcher_address_; }
+  // The launcher's configuration: a hub on its own address with the same peers as every host.
+  [[nodiscard]] std::string launcherConfigXml() const;
+
+ private:
+  const launcher::HostsFile& hosts_;
+  std::string launcher_address_;
+  std::vector<std::string> peers_;  // the hub hosts' addresses and the launcher's
+  std::vector<std::vector<std::string>> prefixes_;  // per host: its exec prefix, resolved
+};
+
+// --sensors-per-process: "auto" or a whole number in [1, kMaxSensorsPerProcess] (launch_plan.hpp).
+[[nodiscard]] CLI::Validator sensorsPerProcessValue();
 
 }  // namespace sensornet::launcher

@@ -5,7 +5,7 @@
 // coordinator, in that order, each with its argv, log file and death signal; where the report,
 // the coordinator's journal and the logs go. Pure: the caller resolves what needs the system or
 // DDS (the run's flags of its domain, the security folder of each identity, the programs' paths,
-// the default log folder) and starts the children (launcher/process_group.hpp).
+// the default log folder) and starts the children (process_group.hpp).
 //
 //   LaunchOptions options;                       // as the user gave them, checked
 //   const LaunchPlan plan = planLaunch(options, {.run_id = "run-1", .programs = programs,
@@ -61,7 +61,7 @@ struct LaunchOptions {
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
-// One process of the run, as launcher/process_group.hpp starts it.
+// One process of the run, as ProcessGroup (process_group.hpp) starts it.
 struct ChildSpec {
   std::string name;                // e.g. "coordinator", "sensor_agent-0-2"
   std::vector<std::string> argv;   // argv[0] is the program's path

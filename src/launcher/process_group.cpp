@@ -1,4 +1,4 @@
-#include "process_group.hpp"
+#include "sensornet/launcher/process_group.hpp"
 
 #include <fcntl.h>
 #include <sys/prctl.h>

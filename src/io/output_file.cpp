@@ -1,4 +1,4 @@
-#include "output_file.hpp"
+#include "sensornet/io/output_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -15,7 +15,7 @@
 
 #include "sensornet/core/input_error.hpp"
 
-namespace sensornet::launcher {
+namespace sensornet {
 namespace {
 
 namespace fs = std::filesystem;
@@ -175,4 +175,4 @@ void removeRegularFile(const fs::path& path) {
   if (::lstat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode)) ::unlink(path.c_str());
 }
 
-}  // namespace sensornet::launcher
+}  // namespace sensornet

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "command_client.hpp"
+#include "sensornet/launcher/command_client.hpp"
 
 namespace sensornet::launcher {
 

@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <string>
 
-#include "run_follower.hpp"
+#include "sensornet/launcher/run_follower.hpp"
 #include <algorithm>
 #include <cstdint>
 

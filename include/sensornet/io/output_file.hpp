@@ -15,7 +15,7 @@
 #include <optional>
 #include <string>
 
-namespace sensornet::launcher {
+namespace sensornet {
 
 // Why `path` cannot take an output file, or nullopt if it can: it must be a regular file or not
 // exist, and its folder must exist and let this process create a file in it (tried for real, so
@@ -35,4 +35,4 @@ void replaceFileAtomically(const std::filesystem::path& path,
 // Removes `path` if it is a regular file (a stale result); leaves anything else alone.
 void removeRegularFile(const std::filesystem::path& path);
 
-}  // namespace sensornet::launcher
+}  // namespace sensornet

@@ -1,4 +1,4 @@
-#include "progress_watcher.hpp"
+#include "sensornet/launcher/progress_watcher.hpp"
 
 #include <cstdio>
 

@@ -1,4 +1,4 @@
-#include "command_client.hpp"
+#include "sensornet/launcher/command_client.hpp"
 
 #include <spdlog/spdlog.h>
 

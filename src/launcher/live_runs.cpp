@@ -1,4 +1,4 @@
-#include "live_runs.hpp"
+#include "sensornet/launcher/live_runs.hpp"
 
 #include <signal.h>
 #include <sys/stat.h>
@@ -14,7 +14,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "run_files.hpp"
+#include "sensornet/launcher/run_files.hpp"
 #include "sensornet/core/input_error.hpp"
 
 namespace sensornet::launcher {

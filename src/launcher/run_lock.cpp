@@ -1,4 +1,4 @@
-#include "run_lock.hpp"
+#include "sensornet/launcher/run_lock.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>

@@ -1,4 +1,4 @@
-#include "failure_notices.hpp"
+#include "sensornet/launcher/failure_notices.hpp"
 
 #include <spdlog/spdlog.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "run_follower.hpp"
+#include "sensornet/launcher/run_follower.hpp"
 
 #include <spdlog/spdlog.h>
 

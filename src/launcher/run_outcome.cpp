@@ -1,4 +1,4 @@
-#include "run_outcome.hpp"
+#include "sensornet/launcher/run_outcome.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <optional>
 #include <set>
 
-#include "output_file.hpp"
+#include "sensornet/io/output_file.hpp"
 #include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/io/command_line.hpp"

@@ -1,4 +1,4 @@
-#include "run_files.hpp"
+#include "sensornet/launcher/run_files.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -14,7 +14,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "output_file.hpp"
+#include "sensornet/io/output_file.hpp"
 #include "sensornet/core/input_error.hpp"
 
 namespace sensornet::launcher {
