@@ -2,20 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
-#include <cmath>
 #include <cstdio>
-#include <iostream>
 #include <limits>
-#include <map>
 #include <memory>
-#include <stdexcept>
 #include <string>
-#include <vector>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/network.hpp"
-#include "sensornet/planning/planner.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/io/plan_request.hpp"
 #include "sensornet/io/plan_summary.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
@@ -25,16 +19,8 @@ namespace {
 
 struct PlanOptions {
   std::string scenario_path;
-  PlanSurrogate surrogate = PlanSurrogate::Covariance;
   std::string out_path;
-  std::string warm_start_path;
-  std::vector<int> excluded;
-  PlanMethod method = PlanMethod::ProjectedGradient;
-  double tolerance = PlanRequest{}.tolerance;
-  int max_iterations = 500;
-  double max_seconds = 120.0;
-  bool max_seconds_given = false;  // mc defaults to 55 s instead
-  bool network_aware = false;
+  PlanChoices choices;
   bool json = false;
 };
 
@@ -51,61 +37,14 @@ int runPlan(const PlanOptions& options) {
   const Scenario scenario = loadScenarioFile(options.scenario_path);
   // A folder the schedule cannot go in is bad input now, not after the solve.
   if (!to_stdout) makeParentFolders(options.out_path, "--out");
-  PlanRequest request;
-  request.surrogate = options.surrogate;
-  request.method = options.method;
-  request.tolerance = options.tolerance;
-  request.max_iterations = options.max_iterations;
-  request.max_seconds = options.max_seconds;
-  if (options.surrogate == PlanSurrogate::MonteCarlo && !options.max_seconds_given) {
-    request.max_seconds = 55.0;
-  }
-  for (const int sensor : options.excluded) {
-    if (sensor < 0 || sensor >= scenario.sensorCount()) {
-      throw InputError("command line", "--exclude",
-                       "sensor indices in [0, " + std::to_string(scenario.sensorCount()) +
-                           "), got " + std::to_string(sensor));
-    }
-  }
-  request.excluded_sensors = options.excluded;
-  if (options.network_aware) {
-    if (!scenario.network) {
-      throw InputError(options.scenario_path, "network",
-                       "a network: section for --network-aware (the scenario has none; see "
-                       "scenarios/lossy.yaml)");
-    }
-    request.delivery = deliveryFactors(scenario);
-  }
-  if (!options.warm_start_path.empty()) {
-    request.warm_start = loadScheduleFile(options.warm_start_path, scenario);
-  }
-  // Progress on long solves: one line every 2 s of wall time.
-  double next_report = 2.0;
-  const char* what = options.surrogate == PlanSurrogate::MonteCarlo
-                         ? "Monte Carlo cost (screening sample)"
-                         : "surrogate cost";
-  request.progress = [&next_report, what](const PlanProgress& p) {
-    if (p.elapsed_seconds >= next_report) {
-      next_report = p.elapsed_seconds + 2.0;
-      spdlog::info("plan: iteration {}, {} {:.8g}, {:.1f} s", p.iteration, what, p.objective,
-                   p.elapsed_seconds);
-    }
-    return true;
-  };
-
+  const PlanChoices& choices = options.choices;
+  PlanRequest request = planRequest(scenario, options.scenario_path, choices);
+  request.progress = planProgressLog(choices.surrogate);
   const PlanResult plan = planSchedule(scenario, request);
-  const PlanSummary summary{plan, options.surrogate,
+  const PlanSummary summary{plan, choices.surrogate,
                             deliveredBracket(scenario, plan.schedule, plan.bracket),
-                            options.network_aware};
-  const nlohmann::json record = planRecord(summary);
-  if (to_stdout) {
-    nlohmann::json doc = scheduleToJson(plan.schedule);
-    for (const auto& [key, value] : record.items()) doc[key] = value;
-    std::cout << doc.dump(2) << std::endl;
-    if (!std::cout) throw std::runtime_error("cannot write the schedule to standard output");
-  } else {
-    writeScheduleFile(options.out_path, plan.schedule, record);
-  }
+                            choices.network_aware};
+  writePlannedSchedule(options.out_path, plan.schedule, planRecord(summary));
   if (!solved(plan.status)) {
     spdlog::warn("plan: solver status '{}'; the best schedule found was written",
                  statusText(plan.status, plan.failure));
@@ -135,7 +74,7 @@ Subcommand addPlanCommand(CLI::App& app) {
       "scenarios/default.yaml --surrogate info --out plan.json --json");
   cmd->add_option("--scenario", options->scenario_path, "scenario file (YAML)")->required();
   wordOption<PlanSurrogate>(
-      cmd->add_option("--surrogate", options->surrogate,
+      cmd->add_option("--surrogate", options->choices.surrogate,
                       "info: information-form surrogate (lower bound, the paper's Info-NLP); cov: "
                       "covariance-form surrogate (upper bound, Cov-NLP); uniform: the baseline, "
                       "no optimization; mc: the expected realized cost E[J] itself, by Monte Carlo "
@@ -144,27 +83,27 @@ Subcommand addPlanCommand(CLI::App& app) {
                   "schedule file to write (JSON, written atomically; missing folders are made), "
                   "or - for standard output (then the summary goes to standard error)")
       ->required();
-  cmd->add_option("--warm-start", options->warm_start_path,
+  cmd->add_option("--warm-start", options->choices.warm_start_path,
                   "schedule file to start the optimizer from (default: the uniform schedule)");
-  cmd->add_option("--exclude", options->excluded,
+  cmd->add_option("--exclude", options->choices.excluded,
                   "sensor indices (0-based) taken out of service: rate 0 throughout")
       ->delimiter(',');
-  wordOption<PlanMethod>(cmd->add_option("--method", options->method,
+  wordOption<PlanMethod>(cmd->add_option("--method", options->choices.method,
                                          "optimizer: pqn (projected quasi-Newton, default) or "
                                          "ipopt (interior point, L-BFGS Hessian)"));
-  cmd->add_option("--tolerance", options->tolerance,
+  cmd->add_option("--tolerance", options->choices.tolerance,
                   "stop when the scale-free projected-gradient residual is below this")
       ->capture_default_str()
       ->check(positiveNumber());
-  cmd->add_option("--max-iterations", options->max_iterations, "iteration limit")
+  cmd->add_option("--max-iterations", options->choices.max_iterations, "iteration limit")
       ->capture_default_str()
       ->check(integerRange(0, std::numeric_limits<int>::max()));
   CLI::Option* max_seconds =
-      cmd->add_option("--max-seconds", options->max_seconds,
+      cmd->add_option("--max-seconds", options->choices.max_seconds,
                       "wall-time limit of the solve (mc: of the whole plan, default 55)")
           ->capture_default_str()
           ->check(positiveNumber());
-  cmd->add_flag("--network-aware", options->network_aware,
+  cmd->add_flag("--network-aware", options->choices.network_aware,
                 "plan for the rates the scenario's network: section delivers (loss thins them, "
                 "outages of every episode zero them) while C λ <= b binds the planned rates; "
                 "refused without a network: section");
@@ -174,7 +113,7 @@ Subcommand addPlanCommand(CLI::App& app) {
                 "\"substeps\" (RK4 steps per interval of the planner's transcription), "
                 "\"solve_seconds\", \"status\", \"kkt_residual\"} as one JSON line");
   return {cmd, [options, max_seconds] {
-            options->max_seconds_given = max_seconds->count() > 0;
+            options->choices.max_seconds_given = max_seconds->count() > 0;
             return runPlan(*options);
           }};
 }

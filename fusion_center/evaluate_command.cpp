@@ -1,22 +1,13 @@
 #include "evaluate_command.hpp"
 
-#include <spdlog/spdlog.h>
-
-#include <chrono>
-#include <cmath>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
 
-#include "sensornet/core/arrival_mode.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/monte_carlo.hpp"
-#include "sensornet/planning/planner.hpp"
-#include "sensornet/core/student_t.hpp"
 #include "sensornet/core/surrogate.hpp"
-#include "sensornet/evaluation/closed_loop.hpp"
 #include "sensornet/evaluation/evaluation_summary.hpp"
+#include "sensornet/evaluation/schedule_evaluation.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -51,49 +42,28 @@ int runClosedLoop(const EvaluateOptions& options, const Scenario& scenario,
   loop.surrogate = evaluation::closedLoopSurrogate(
       options.surrogate,
       options.schedule_path.empty() ? "" : readTextFile(options.schedule_path, "schedule"));
-  if (loop.surrogate != PlanSurrogate::Information && loop.surrogate != PlanSurrogate::Covariance) {
-    throw InputError("--surrogate", "", "info or cov for --replan-every");
-  }
   loop.replanner.switch_margin_s = options.switch_margin;
   loop.replanner.time_scale = options.time_scale;
   loop.runs = options.runs;
   loop.seed = options.seed;
   loop.threads = options.threads;
-  int last_decile = 0;
-  loop.progress = [&last_decile](int done, int total) {
-    const int decile = 10 * done / total;
-    if (decile > last_decile) {
-      last_decile = decile;
-      spdlog::info("closed loop: {}/{} episodes", done, total);
-    }
-  };
-  const auto start = std::chrono::steady_clock::now();
-  const evaluation::ClosedLoopResult closed = evaluation::simulateClosedLoop(scenario, schedule, loop);
-  const std::vector<double> open =
-      evaluation::openLoopCosts(scenario, schedule, options.runs, options.seed, options.threads);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  loop.progress = evaluation::decileProgress("closed loop");
+  const evaluation::ClosedLoopRun run = evaluation::runClosedLoop(scenario, schedule, loop);
   if (!options.costs_path.empty()) {
-    std::ofstream out(options.costs_path);
-    out.precision(17);
-    for (const double c : closed.episode_costs) out << c << "\n";
-    out.close();
-    if (!out) throw InputError(options.costs_path, "", "a writable file for --costs");
+    evaluation::writeEpisodeCosts(options.costs_path, run.closed.episode_costs);
   }
-  double open_mean = 0.0;
-  for (const double c : open) open_mean += c / static_cast<double>(open.size());
   const evaluation::ClosedLoopEvaluation e{scenario,
-                                         options.scenario_path,
-                                         scheduleName(options),
-                                         bracket,
-                                         closed,
-                                         open_mean,
-                                         pairedDifference(closed.episode_costs, open),
-                                         loop.surrogate,
-                                         options.replan_every,
-                                         options.switch_margin * options.time_scale,
-                                         options.seed,
-                                         seconds};
+                                           options.scenario_path,
+                                           scheduleName(options),
+                                           bracket,
+                                           run.closed,
+                                           run.open_mean,
+                                           run.gain,
+                                           loop.surrogate,
+                                           options.replan_every,
+                                           options.switch_margin * options.time_scale,
+                                           options.seed,
+                                           run.seconds};
   if (options.json) {
     printJson(evaluation::closedLoopJson(e));
   } else {
@@ -115,36 +85,21 @@ int runEvaluate(const EvaluateOptions& options) {
   mc_options.seed = options.seed;
   mc_options.threads = options.threads;
   mc_options.simulate_plant = !options.no_plant;
-  int last_decile = 0;
-  mc_options.progress = [&last_decile](int done, int total) {
-    const int decile = 10 * done / total;
-    if (decile > last_decile) {
-      last_decile = decile;
-      spdlog::info("monte carlo: {}/{} episodes", done, total);
-    }
-  };
-  const auto start = std::chrono::steady_clock::now();
-  const MonteCarloResult mc = evaluateSchedule(scenario, schedule, mc_options);
-  std::optional<MonteCarloResult> timetable;
+  mc_options.progress = evaluation::decileProgress("monte carlo");
   const ArrivalMode mode =
       options.arrivals.empty() ? scenario.arrivals
                                : parseWord<ArrivalMode>(options.arrivals, "--arrivals", "arrivals");
-  if (mode == ArrivalMode::Timetable) {
-    mc_options.arrivals = ArrivalMode::Timetable;
-    timetable = evaluateSchedule(scenario, schedule, mc_options);
-  }
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const evaluation::OpenLoopRun run = evaluation::runOpenLoop(scenario, schedule, mc_options, mode);
   const evaluation::OpenLoopEvaluation e{scenario,
                                        options.scenario_path,
                                        scheduleName(options),
                                        bracket,
-                                       mc,
-                                       timetable ? &*timetable : nullptr,
+                                       run.mc,
+                                       run.timetable ? &*run.timetable : nullptr,
                                        mode,
                                        mc_options.simulate_plant,
                                        options.seed,
-                                       seconds};
+                                       run.seconds};
   if (options.json) {
     printJson(evaluation::evaluationJson(e));
   } else {

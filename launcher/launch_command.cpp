@@ -434,7 +434,7 @@ int runLaunch(CommandOptions options) {
   }
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   try {
-    writeRunRecord(plan.log_dir, {plan.run_id, fs::absolute(options.scenario_path),
+    writeLaunchRecord(plan.log_dir, {plan.run_id, fs::absolute(options.scenario_path),
                                   options.episodes, plan.report_path, ::getpid(), utcNow()});
   } catch (const std::exception& e) {
     spdlog::warn("cannot record the run in {}: {}", plan.log_dir.string(), e.what());
@@ -524,8 +524,7 @@ int runLaunch(CommandOptions options) {
   }
   if (!options.junit_path.empty()) {  // like the page: a warning, never an exit code
     const sensornet::report::JunitRun junit{
-        plan.run_id, std::string(wordOf(outcome.status)), outcome.exit_code,
-        report::encode(outcome.report.faults), outcome.checks,
+        plan.run_id, outcome.status, outcome.exit_code, outcome.report.faults, outcome.checks,
         std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count()};
     try {
       replaceFileAtomically(options.junit_path, sensornet::report::junitXml(junit));

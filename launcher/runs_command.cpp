@@ -89,16 +89,14 @@ bool processAlive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno =
 RunEntry examine(const fs::path& folder) {
   RunFolderFacts facts;
   facts.folder = folder;
-  facts.record = readObject(folder / kRunRecordName);
+  facts.record = readObject(folder / kLaunchRecordName);
   const FolderLock lock(folder);
   facts.lock = {lock.exists(), lock.heldElsewhere(), lock.modified()};
   facts.launcher_alive = processAlive(launcherPidOf(facts));
   if (isLive(facts)) {
     facts.episodes_logged = linesIn(sensornet::report::episodeLogPath(reportOf(facts)));
-  } else if (const sensornet::report::ReportFile file =
-                 sensornet::report::readReport(reportOf(facts), sensornet::report::EpisodeEntries::Skipped);
-             file.ok()) {
-    facts.report = file.report;
+  } else {
+    facts.report = finishedReportAt(reportOf(facts));
   }
   return classifyRun(facts);
 }
@@ -246,8 +244,8 @@ int runRuns(const RunsOptions& options, bool remove_named) {
 
 }  // namespace
 
-void writeRunRecord(const fs::path& log_dir, const RunRecord& record) {
-  replaceFileAtomically(log_dir / kRunRecordName, runRecordJson(record).dump(2) + "\n");
+void writeLaunchRecord(const fs::path& log_dir, const LaunchRecord& record) {
+  replaceFileAtomically(log_dir / kLaunchRecordName, launchRecordJson(record).dump(2) + "\n");
 }
 
 Subcommand addRunsCommand(CLI::App& app) {

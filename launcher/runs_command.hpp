@@ -15,7 +15,7 @@
 // folder.
 //
 // The launcher leaves run.json in the log folder when it starts a run:
-//   writeRunRecord(log_dir, {run_id, scenario, episodes, report, pid, started});
+//   writeLaunchRecord(log_dir, {run_id, scenario, episodes, report, pid, started});
 
 #include <sys/types.h>
 
@@ -23,13 +23,13 @@
 #include <string>
 
 #include "sensornet/io/command_line.hpp"
-#include "sensornet/launcher/run_folder.hpp"  // RunRecord
+#include "sensornet/launcher/run_folder.hpp"  // LaunchRecord
 
 namespace sensornet::launcher {
 
 // Writes <log_dir>/run.json atomically; a record that cannot be written only costs `sensornet
 // runs` the scenario and start time (the caller warns).
-void writeRunRecord(const std::filesystem::path& log_dir, const RunRecord& record);
+void writeLaunchRecord(const std::filesystem::path& log_dir, const LaunchRecord& record);
 
 Subcommand addRunsCommand(CLI::App& app);
 

@@ -61,7 +61,14 @@ struct FusionCenterCore::OpenEpisode {
 FusionCenterCore::FusionCenterCore(FusionCenterConfig config, const WriterFacts& writers,
                                    std::int64_t joined_ns)
     : config_(std::move(config)), writers_(writers) {
-  for (json& fault : config_.resumed_faults) faults_.push_back(std::move(fault));
+  // The faults of the process's earlier lives; one this version cannot read is said in the log.
+  for (const json& fault : config_.resumed_faults) {
+    try {
+      faults_.push_back(report::decodeFault(fault));
+    } catch (const report::RecordError& e) {
+      log(spdlog::level::warn, "a fault of an earlier life is not kept: " + std::string(e.what()));
+    }
+  }
   config_.resumed_faults.clear();
   if (config_.resumed_log) {
     resumed_.emplace(*config_.resumed_log, joined_ns);
@@ -85,7 +92,7 @@ void FusionCenterCore::log(spdlog::level::level_enum level, std::string text) {
   emit<LogLine>(level, std::move(text));
 }
 
-void FusionCenterCore::recordFault(json fault) {
+void FusionCenterCore::recordFault(report::FaultRecord fault) {
   faults_.push_back(fault);
   emit<RecordFault>(std::move(fault));
 }
@@ -196,10 +203,9 @@ void FusionCenterCore::onSensorFailure(const SensorFailure& failure, std::int64_
 // failed so far, and a resumed process has the entries of its predecessor): the report of a run
 // that no launcher supervised says so too (coordinator serve --sensor-deaths liveliness).
 void FusionCenterCore::recordDeaths(const SensorFailure& failure) {
-  const std::string died(wordOf(FaultKind::SensorDied));
   for (const int j : failure.sensors) {
-    const bool known = std::any_of(faults_.begin(), faults_.end(), [&](const json& f) {
-      return f.value("kind", "") == died && f.value("sensor", -1) == j;
+    const bool known = std::any_of(faults_.begin(), faults_.end(), [&](const report::FaultRecord& f) {
+      return f.kind == FaultKind::SensorDied && f.sensor == j;
     });
     if (known) continue;
     recordFault(faultEntry(FaultKind::SensorDied, "sensor_agent", j, failure.episode, failure.at_s,
@@ -788,17 +794,14 @@ void FusionCenterCore::publishReport(const EpisodeResult& e, std::vector<int> la
 }
 
 // The launcher's death as a cause: {kind, process} as the launcher names its own faults.
-static json launcherDeath() {
-  return {{"kind", std::string(wordOf(FaultKind::Interrupted))}, {"process", "sensornet"}};
-}
+static report::FaultCause launcherDeath() { return {FaultKind::Interrupted, "sensornet"}; }
 
 void FusionCenterCore::onLauncherGone(const std::string& detail, std::int64_t /*now*/) {
   if (launcher_gone_) return;
   launcher_gone_ = true;
   log(spdlog::level::warn, detail);
-  const json cause = launcherDeath();
-  recordFault(faultEntry(FaultKind::Interrupted, cause.at("process").get<std::string>(),
-                         std::nullopt, std::nullopt, std::nullopt, detail));
+  recordFault(faultEntry(FaultKind::Interrupted, launcherDeath().process, std::nullopt,
+                         std::nullopt, std::nullopt, detail));
 }
 
 RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
@@ -858,25 +861,24 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
                  ": sensors " + listed(silent);
     }
   }
-  json fault = faultEntry(FaultKind::CutShort, kProcess, std::nullopt, episodes.front(),
+  report::FaultRecord fault = faultEntry(FaultKind::CutShort, kProcess, std::nullopt, episodes.front(),
                           std::nullopt,
                           (episodes.size() == 1 ? "episode " + listed(episodes) + " was"
                                                 : "episodes " + listed(episodes) + " were") +
                               " open when " + why +
                               (awaited.empty() ? "" : " (their counts not in: " + awaited + ")"));
-  fault["episodes"] = episodes;
+  fault.episodes = episodes;
   // What ended the run as the fusion center saw it; the launcher, which knows the run's one cause,
   // marks this entry as that cause's consequence (caused_by, fault_causes.hpp).
-  if (cause) fault["ended_by"] = std::string(wordOf(*cause));
+  fault.ended_by = cause;
   // A cause the fusion center records itself is named here: the launcher's death, or the
   // coordinator's abort (gatherStatusEvidence's run_aborted entry).
   if (launcher_gone_) {
-    fault[sensornet::report::kCausedByField] = launcherDeath();
+    fault.caused_by = launcherDeath();
   } else if (cause == FaultKind::RunAborted) {
-    fault[sensornet::report::kCausedByField] = {{"kind", std::string(wordOf(FaultKind::RunAborted))},
-                             {"process", "coordinator"}};
+    fault.caused_by = report::FaultCause{FaultKind::RunAborted, "coordinator"};
   }
-  log(spdlog::level::warn, fault.at("detail").get<std::string>());
+  log(spdlog::level::warn, fault.detail);
   recordFault(std::move(fault));
   for (auto& [number, open] : open_) finishEpisode(number, *open, &why);
   open_.clear();
@@ -938,7 +940,7 @@ report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
 // only by a later life, which a life that ends has none of).
 void FusionCenterCore::noteRestart() { faults_[restart_fault_] = restartFault(); }
 
-json FusionCenterCore::restartFault() const {
+report::FaultRecord FusionCenterCore::restartFault() const {
   const std::set<std::uint32_t>& lost = resumed_->restarted();
   return faultEntry(
       FaultKind::Restarted, kProcess, std::nullopt,
@@ -979,7 +981,7 @@ json FusionCenterCore::finalReport(RunStatus status, const std::string& written_
                       {"covariance_traces", covarianceTraces()},
                       {"arrivals", arrivalsJson(scenario().arrivals)}};
   // per_episode is streamed in from the episode log, never held whole.
-  return report_->toJsonWithoutEpisodes(std::string(wordOf(status)), faults_,
+  return report_->toJsonWithoutEpisodes(std::string(wordOf(status)), report::encode(faults_),
                                         scheduleVersionsJson(book_), extra);
 }
 

@@ -68,7 +68,7 @@ std::string fusionCenterMetrics(const FusionCenterCore& core, const ScheduleBook
                   "Wall time from a measurement's publication to its arrival at the fusion center",
                   bounds, cumulative, latencies.count(), latencies.sum());
     std::map<std::string, std::uint64_t> faults;
-    for (const nlohmann::json& f : core.faults()) ++faults[f.value("kind", "unknown")];
+    for (const report::FaultRecord& f : core.faults()) ++faults[std::string(wordOf(f.kind))];
     for (const auto& [kind, count] : faults) {
       out.counter("sensornet_faults_total", "Faults the fusion center recorded, by kind",
                   {{"kind", kind}}, static_cast<double>(count));

@@ -491,15 +491,17 @@ void RunReport::write(std::ostream& out, const json& doc, int indent) const {
       indent);
 }
 
-json faultEntry(FaultKind kind, const std::string& process, std::optional<int> sensor,
-                std::optional<std::uint32_t> episode, std::optional<double> emulated_time_s,
-                const std::string& detail) {
-  return {{"kind", std::string(wordOf(kind))},
-          {"process", process},
-          {"sensor", sensor ? json(*sensor) : json(nullptr)},
-          {"episode", episode ? json(*episode) : json(nullptr)},
-          {"emulated_time_s", optionalJson(emulated_time_s)},
-          {"detail", detail}};
+report::FaultRecord faultEntry(FaultKind kind, const std::string& process,
+                               std::optional<int> sensor, std::optional<std::uint32_t> episode,
+                               std::optional<double> emulated_time_s, const std::string& detail) {
+  report::FaultRecord fault;
+  fault.kind = kind;
+  fault.process = process;
+  fault.sensor = sensor;
+  fault.episode = episode;
+  if (emulated_time_s && std::isfinite(*emulated_time_s)) fault.emulated_time_s = emulated_time_s;
+  fault.detail = detail;
+  return fault;
 }
 
 ResumedRun::ResumedRun(std::vector<json> log_entries, std::int64_t joined_wall_ns)

@@ -1,6 +1,13 @@
 #include "sensornet/emulator/stop_signal.hpp"
 
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+#include <fstream>
 #include <initializer_list>
+#include <string>
 
 namespace sensornet::emulator {
 namespace {
@@ -25,5 +32,19 @@ void installStopSignals() {
 bool stopRequested() { return g_stop != 0; }
 
 bool launcherDied() { return g_launcher_died != 0; }
+
+pid_t launcherParent() {
+  const pid_t parent = ::getppid();
+  std::ifstream comm("/proc/" + std::to_string(parent) + "/comm");
+  std::string name;
+  std::getline(comm, name);
+  return name == "sensornet" ? parent : 0;
+}
+
+void leaveNow(int code) {
+  spdlog::shutdown();
+  std::fflush(nullptr);
+  ::_exit(code);
+}
 
 }  // namespace sensornet::emulator

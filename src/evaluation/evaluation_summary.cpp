@@ -1,5 +1,6 @@
 #include "sensornet/evaluation/evaluation_summary.hpp"
 
+#include "sensornet/core/input_error.hpp"
 #include "sensornet/io/append_format.hpp"
 
 namespace sensornet::evaluation {
@@ -31,7 +32,11 @@ nlohmann::json timetableJson(const MonteCarloResult& timetable, const MonteCarlo
 
 PlanSurrogate closedLoopSurrogate(const std::string& flag, const std::string& schedule_text) {
   if (!flag.empty()) {
-    if (const auto given = lookUpWord<PlanSurrogate>(flag)) return *given;
+    const auto given = lookUpWord<PlanSurrogate>(flag);
+    if (given != PlanSurrogate::Information && given != PlanSurrogate::Covariance) {
+      throw InputError("--surrogate", "", "info or cov for --replan-every, got '" + flag + "'");
+    }
+    return *given;
   }
   if (!schedule_text.empty()) {
     const nlohmann::json file = nlohmann::json::parse(schedule_text, nullptr, false);

@@ -8,48 +8,37 @@ namespace sensornet::launcher {
 namespace {
 
 using emulator::FaultKind;
-using nlohmann::json;
+using report::FaultRecord;
 
 // The reported entry is of an episode still open at the cause, or later, or of no episode (the
 // run's end). The coordinator keeps at most two episodes outstanding, so the one before the
 // cause's may still have been owed counts when the cause struck.
-bool atOrAfter(const json& entry, const RunPosition& cause) {
-  const json episode = entry.is_object() && entry.contains("episode") ? entry["episode"] : json();
-  if (!episode.is_number_integer() || !cause.episode) return true;
-  return episode.get<std::int64_t>() + 1 >= static_cast<std::int64_t>(*cause.episode);
+bool atOrAfter(const FaultRecord& entry, const RunPosition& cause) {
+  if (!entry.episode || !cause.episode) return true;
+  return *entry.episode + 1 >= *cause.episode;
 }
 
-// A kind word of a reported entry, if it is one.
-std::optional<FaultKind> kindOf(const json& entry) {
-  const json kind = entry.is_object() ? entry.value("kind", json()) : json();
-  return kind.is_string() ? lookUpWord<FaultKind>(kind.get<std::string>()) : std::nullopt;
-}
-
-bool isConsequenceOf(const json& entry, const Fault& cause) {
-  if (!entry.is_object()) return false;
+bool isConsequenceOf(const FaultRecord& entry, const Fault& cause) {
   // The fusion center marks what it saw as the cause (the coordinator's abort); when that
   // followed from the launcher's cause, the launcher names the root instead.
-  if (entry.contains(sensornet::report::kCausedByField)) {
-    const std::optional<FaultKind> marked = kindOf(entry[sensornet::report::kCausedByField]);
-    if (!marked || !followsFromStop(*marked)) return false;
-  }
-  const std::optional<FaultKind> known = kindOf(entry);
-  return known && followsFromStop(*known) && atOrAfter(entry, cause.at);
+  if (entry.caused_by && !followsFromStop(entry.caused_by->kind)) return false;
+  return followsFromStop(entry.kind) && atOrAfter(entry, cause.at);
 }
 
 }  // namespace
 
-json Fault::toJson() const {
-  json entry = {{"kind", std::string(wordOf(kind))},
-                {"process", process},
-                {"sensor", sensors.size() == 1 ? json(sensors.front()) : json()},
-                {"episode", at.episode ? json(*at.episode) : json()},
-                {"emulated_time_s", at.emulated_time_s ? json(*at.emulated_time_s) : json()},
-                {"detail", detail}};
-  if (!sensors.empty()) entry["sensors"] = sensors;
-  entry["survived"] = survived;
-  if (schedule_version) entry["schedule_version"] = *schedule_version;
-  return entry;
+FaultRecord Fault::toRecord() const {
+  FaultRecord record;
+  record.kind = kind;
+  record.process = process;
+  if (sensors.size() == 1) record.sensor = sensors.front();
+  if (!sensors.empty()) record.sensors = sensors;
+  record.episode = at.episode;
+  record.emulated_time_s = at.emulated_time_s;
+  record.detail = detail;
+  record.survived = survived;
+  record.schedule_version = schedule_version;
+  return record;
 }
 
 const Fault* runEndingCause(const std::vector<Fault>& launcher_faults) {
@@ -72,26 +61,23 @@ bool followsFromStop(FaultKind kind) {
   }
 }
 
-json faultList(const std::vector<Fault>& launcher_faults, const json& reported) {
-  json listed = json::array();
-  for (const Fault& fault : launcher_faults) listed.push_back(fault.toJson());
+std::vector<FaultRecord> faultList(const std::vector<Fault>& launcher_faults,
+                                   const std::vector<FaultRecord>& reported) {
+  std::vector<FaultRecord> listed;
+  for (const Fault& fault : launcher_faults) listed.push_back(fault.toRecord());
   const Fault* cause = runEndingCause(launcher_faults);
-  if (!reported.is_array()) return listed;
   std::set<int> accounted;  // sensors whose process's end the launcher saw itself
   for (const Fault& fault : launcher_faults) {
     accounted.insert(fault.sensors.begin(), fault.sensors.end());
   }
-  for (json entry : reported) {
+  for (FaultRecord entry : reported) {
     // The fusion center's sensor_died repeats the coordinator's notice of a death the launcher
     // reported: the launcher's entry says more (the process, how it ended).
-    const json& sensor = entry.value("sensor", json());
-    if (entry.value("kind", "") == wordOf(emulator::FaultKind::SensorDied) && sensor.is_number() &&
-        accounted.contains(sensor.get<int>())) {
+    if (entry.kind == FaultKind::SensorDied && entry.sensor && accounted.contains(*entry.sensor)) {
       continue;
     }
     if (cause != nullptr && isConsequenceOf(entry, *cause)) {
-      entry[sensornet::report::kCausedByField] = {{"kind", std::string(wordOf(cause->kind))},
-                                         {"process", cause->process}};
+      entry.caused_by = report::FaultCause{cause->kind, cause->process};
     }
     listed.push_back(std::move(entry));
   }

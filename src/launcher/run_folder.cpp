@@ -1,5 +1,7 @@
 #include "sensornet/launcher/run_folder.hpp"
 
+#include "sensornet/report/report_files.hpp"
+
 #include <algorithm>
 #include <chrono>
 
@@ -25,7 +27,7 @@ std::optional<long long> countIn(const json& doc, const char* key) {
 
 }  // namespace
 
-json runRecordJson(const RunRecord& record) {
+json launchRecordJson(const LaunchRecord& record) {
   return {{"run_id", record.run_id},
           {"scenario", record.scenario.string()},
           {"episodes", record.episodes},
@@ -72,19 +74,26 @@ RunEntry classifyRun(const RunFolderFacts& facts) {
     return e;
   }
   if (facts.report) {
-    const std::string status = stringIn(*facts.report, "status");
-    if (lookUpWord<emulator::RunStatus>(status)) {
-      e.state = RunState::Finished;
-      e.status = status;
-      e.episodes = countIn(*facts.report, "episodes");
-      if (const auto planned = countIn(*facts.report, "episodes_planned")) {
-        e.episodes_planned = planned;
-      }
-      return e;
+    e.state = RunState::Finished;
+    e.status = std::string(wordOf(facts.report->status));
+    if (facts.report->episodes) e.episodes = static_cast<long long>(*facts.report->episodes);
+    if (const auto planned = facts.report->episodes_planned) {
+      e.episodes_planned = static_cast<long long>(*planned);
     }
+    return e;
   }
   e.status = "unknown";
   return e;
+}
+
+std::optional<report::RunRecord> finishedReportAt(const fs::path& path) {
+  const report::ReportFile file = report::readReport(path, report::EpisodeEntries::Skipped);
+  if (!file.ok()) return std::nullopt;
+  try {
+    return report::decodeRunRecord(file.report);
+  } catch (const report::RecordError&) {
+    return std::nullopt;  // an unknown status, a count that is no number: not a report we read
+  }
 }
 
 void sortRuns(std::vector<RunEntry>& runs) {

@@ -331,11 +331,7 @@ RunOutcome settleRun(const RunEnd& end) {
   if (outcome.amended) {
     run.status = verdict.status;
     // The launcher's causes first: what the other processes saw of them follows, marked.
-    json reported = json::array();
-    for (const FaultRecord& f : run.faults) reported.push_back(report::encode(f));
-    const json listed = faultList(verdict.faults, reported);
-    run.faults.clear();
-    for (const json& f : listed) run.faults.push_back(report::decodeFault(f));
+    run.faults = faultList(verdict.faults, run.faults);
   }
   // The fusion center learns the planned count from the first episode's start: a run that
   // ended before one says 0. What the launch asked for is the plan.
@@ -352,7 +348,7 @@ RunOutcome settleRun(const RunEnd& end) {
     outcome.amended = true;
   }
   if (!end.requirements.empty()) {  // against the settled report: its status and faults
-    outcome.checks = sensornet::report::checkRequirements(end.requirements, report::encode(run));
+    outcome.checks = sensornet::report::checkRequirements(end.requirements, run);
     run.other["requirements"] = sensornet::report::toJson(outcome.checks);
     outcome.exit_code = sensornet::report::gatedExitCode(outcome.exit_code, outcome.checks);
     outcome.amended = true;

@@ -19,10 +19,10 @@ std::string testcase(const std::string& classname, const std::string& name,
 }
 
 // "2 faults: 1 sensor_died, 1 stall" (consequences counted with the rest).
-std::string faultSummary(const nlohmann::json& faults) {
-  if (!faults.is_array() || faults.empty()) return "0 faults";
+std::string faultSummary(const std::vector<FaultRecord>& faults) {
+  if (faults.empty()) return "0 faults";
   std::map<std::string, int> kinds;
-  for (const nlohmann::json& f : faults) ++kinds[f.value("kind", std::string("?"))];
+  for (const FaultRecord& f : faults) ++kinds[std::string(wordOf(f.kind))];
   std::string text = std::to_string(faults.size()) + (faults.size() == 1 ? " fault: " : " faults: ");
   bool first = true;
   for (const auto& [kind, count] : kinds) {
@@ -36,9 +36,10 @@ std::string faultSummary(const nlohmann::json& faults) {
 
 std::string junitXml(const JunitRun& run) {
   const std::string classname = "sensornet." + run.run_id;
-  std::size_t failures = run.status == "completed" ? 0 : 1;
+  const bool completed = run.status == RunStatus::Completed;
+  std::size_t failures = completed ? 0 : 1;
   for (const RequirementCheck& c : run.checks) failures += c.pass ? 0 : 1;
-  const std::string outcome = "status " + run.status + ", exit " +
+  const std::string outcome = "status " + std::string(wordOf(run.status)) + ", exit " +
                               std::to_string(run.exit_code) + ", " + faultSummary(run.faults);
   std::string xml = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n  <testsuite name=\"" +
                     escapeXml("sensornet run " + run.run_id) + "\" tests=\"" +
@@ -46,7 +47,7 @@ std::string junitXml(const JunitRun& run) {
                     std::to_string(failures) + "\" errors=\"0\" time=\"" +
                     formatTick(run.seconds) + "\">\n";
   xml += testcase(classname, "run",
-                  run.status == "completed" ? std::nullopt : std::optional<std::string>(outcome),
+                  completed ? std::nullopt : std::optional<std::string>(outcome),
                   outcome);
   for (const RequirementCheck& c : run.checks) {
     const std::string message = describe(c);

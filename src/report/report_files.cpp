@@ -268,4 +268,10 @@ std::vector<json> readFaultLog(const std::filesystem::path& path) {
 }
 
 
+bool unfinishedRunAt(const std::filesystem::path& report_path) {
+  std::error_code error;
+  return std::filesystem::exists(episodeLogPath(report_path), error) &&
+         !std::filesystem::exists(report_path, error);
+}
+
 }  // namespace sensornet::report

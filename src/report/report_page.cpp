@@ -13,7 +13,6 @@
 
 #include "sensornet/core/bracket_differs.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/report/fault_causes.hpp"
 #include "sensornet/core/student_t.hpp"
 #include "sensornet/report/svg_plot.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -27,6 +26,7 @@ namespace {
 using nlohmann::json;
 
 const double kNan = std::numeric_limits<double>::quiet_NaN();
+const json kNone;  // what a part the record keeps as json reads as when it is absent
 
 // A palette that survives grey-scale printing: its colours differ in lightness, and the lines
 // that share a plot differ in dash pattern too.
@@ -41,6 +41,22 @@ constexpr const char* kGrey = "#8c8c8c";
 const Style kDelivered = Style::line("#8a6d3b", 1.3, "4 3");
 const Style kRealtime = Style::outlined(kGrey, kGrey);
 
+// A value the record may not have, as the plots take it: NaN where there is none (a plot skips
+// a NaN mark, a table prints it as "nan", a CSV cell stays empty).
+double orNan(const std::optional<double>& value) { return value.value_or(kNan); }
+template <class T>
+double orNan(const std::optional<T>& value) {
+  return value ? static_cast<double>(*value) : kNan;
+}
+
+// The plots' axes are doubles: counts, ids and episode numbers as the double they are.
+template <class T>
+double asDouble(T value) {
+  return static_cast<double>(value);
+}
+
+// The json reads below are of what the record keeps as written (RunRecord::other's
+// covariance_traces, LatencyRecord::histogram): numbers where they are numbers, NaN elsewhere.
 double number(const json& j, const char* key) {
   const auto it = j.find(key);
   return it != j.end() && it->is_number() ? it->get<double>() : kNan;
@@ -56,9 +72,14 @@ std::vector<double> numbers(const json& values) {
   return out;
 }
 
-double sumOf(const json& values) {
+// The sum of an episode's per-sensor counts, in sensor order (as the CSV has always summed them).
+template <class T>
+double sumOf(const std::vector<T>& values) {
   double total = 0.0;
-  for (const double v : numbers(values)) total += std::isfinite(v) ? v : 0.0;
+  for (const T v : values) {
+    const auto x = static_cast<double>(v);
+    total += std::isfinite(x) ? x : 0.0;
+  }
   return total;
 }
 
@@ -108,18 +129,18 @@ struct RunningMean {
 
 // The running mean of the complete episodes' costs and its 95% Student-t interval (from the
 // second complete episode on), as the report's summary computes it at the end.
-RunningMean runningMean(const json& per_episode) {
+RunningMean runningMean(const std::vector<EpisodeRecord>& per_episode) {
   RunningMean r;
   double sum = 0.0, squares = 0.0;
   double k = 0.0;
-  for (const json& e : per_episode) {
-    const double cost = number(e, "realized_cost");
-    if (!e.value("complete", false) || !std::isfinite(cost)) continue;
+  for (const EpisodeRecord& e : per_episode) {
+    const double cost = orNan(e.realized_cost);
+    if (!e.complete || !std::isfinite(cost)) continue;
     k += 1.0;
     sum += cost;
     squares += cost * cost;
     const double mean = sum / k;
-    r.episodes.push_back(number(e, "episode"));
+    r.episodes.push_back(asDouble(e.episode));
     r.mean.push_back(mean);
     if (k < 2.0) {
       r.low.push_back(kNan);
@@ -135,12 +156,12 @@ RunningMean runningMean(const json& per_episode) {
 }
 
 // The bracket the schedule delivered, when it is not the planned one (a dead sensor's share, an
-// emulated network's losses and outages); nullopt otherwise.
-std::optional<std::pair<double, double>> deliveredBracketOf(const json& e) {
-  if (!e.contains("bracket") || !e.contains("delivered_bracket")) return std::nullopt;
-  const double info = number(e.at("bracket"), "info"), cov = number(e.at("bracket"), "cov");
-  const double d_info = number(e.at("delivered_bracket"), "info");
-  const double d_cov = number(e.at("delivered_bracket"), "cov");
+// emulated network's losses and outages); nullopt otherwise. A side that is missing is NaN, and
+// NaN never differs (bracketsDiffer): no planned bracket, no delivered one shown.
+std::optional<std::pair<double, double>> deliveredBracketOf(const EpisodeRecord& e) {
+  const double info = orNan(e.bracket.info), cov = orNan(e.bracket.cov);
+  const double d_info = orNan(e.delivered_bracket.info);
+  const double d_cov = orNan(e.delivered_bracket.cov);
   if (!std::isfinite(d_info) || !std::isfinite(d_cov) ||
       !bracketsDiffer(info, cov, d_info, d_cov)) {
     return std::nullopt;
@@ -150,11 +171,9 @@ std::optional<std::pair<double, double>> deliveredBracketOf(const json& e) {
 
 // The real-time cost of a complete episode, when measurements arrived late enough to make it
 // differ from the realized one.
-std::optional<double> realtimeCostOf(const json& e) {
-  const double realized = number(e, "realized_cost"), realtime = number(e, "realtime_cost");
-  if (!e.value("complete", false) || !std::isfinite(realtime) || realtime == realized) {
-    return std::nullopt;
-  }
+std::optional<double> realtimeCostOf(const EpisodeRecord& e) {
+  const double realized = orNan(e.realized_cost), realtime = orNan(e.realtime_cost);
+  if (!e.complete || !std::isfinite(realtime) || realtime == realized) return std::nullopt;
   return realtime;
 }
 
@@ -162,14 +181,12 @@ std::optional<double> realtimeCostOf(const json& e) {
 // from the third complete episode on: with two, Student's t stretches it tenfold). An incomplete
 // episode's cost (cut short, aborted) joins only if it does not stretch the axis past half as
 // much again: one aborted episode must not flatten the rest (it is drawn at the top edge).
-Interval costRange(const json& per_episode, const RunningMean& running) {
+Interval costRange(const std::vector<EpisodeRecord>& per_episode, const RunningMean& running) {
   Extent y;
-  for (const json& e : per_episode) {
-    if (e.value("complete", false)) y.add(number(e, "realized_cost"));
-    if (e.contains("bracket")) {
-      y.add(number(e.at("bracket"), "info"));
-      y.add(number(e.at("bracket"), "cov"));
-    }
+  for (const EpisodeRecord& e : per_episode) {
+    if (e.complete) y.add(orNan(e.realized_cost));
+    y.add(orNan(e.bracket.info));  // Extent skips a missing side
+    y.add(orNan(e.bracket.cov));
     if (const auto delivered = deliveredBracketOf(e)) {
       y.add(delivered->first);
       y.add(delivered->second);
@@ -180,47 +197,47 @@ Interval costRange(const json& per_episode, const RunningMean& running) {
     y.add(running.low[i]);
     y.add(running.high[i]);
   }
-  for (const json& e : per_episode) {
-    const double cost = number(e, "realized_cost");
-    if (y.empty() || (!e.value("complete", false) && cost <= 1.5 * y.hi)) y.add(cost);
+  for (const EpisodeRecord& e : per_episode) {
+    const double cost = orNan(e.realized_cost);
+    if (y.empty() || (!e.complete && cost <= 1.5 * y.hi)) y.add(cost);
   }
   if (y.empty()) return {kNan, kNan};
   return niceRange({std::min(0.0, y.lo), y.hi}, 5);
 }
 
-std::string costPlot(const json& report) {
-  const json& per_episode = report.at("per_episode");
+std::string costPlot(const std::vector<EpisodeRecord>& per_episode,
+                     const std::vector<ScheduleVersionRecord>& versions) {
   if (per_episode.empty()) return note("Realized cost per episode", "The run fused no episode.");
   const RunningMean running = runningMean(per_episode);
   Extent x;
-  for (const json& e : per_episode) x.add(number(e, "episode"));
+  for (const EpisodeRecord& e : per_episode) x.add(asDouble(e.episode));
   const Interval y_range = costRange(per_episode, running);
   if (!std::isfinite(y_range.lo)) {
     return note("Realized cost per episode", "No episode has a finite cost.");
   }
-  const bool any_delivered = std::any_of(per_episode.begin(), per_episode.end(), [](const json& e) {
-    return deliveredBracketOf(e).has_value();
-  });
-  const bool any_realtime = std::any_of(per_episode.begin(), per_episode.end(), [](const json& e) {
-    return realtimeCostOf(e).has_value();
-  });
+  const bool any_delivered =
+      std::any_of(per_episode.begin(), per_episode.end(),
+                  [](const EpisodeRecord& e) { return deliveredBracketOf(e).has_value(); });
+  const bool any_realtime =
+      std::any_of(per_episode.begin(), per_episode.end(),
+                  [](const EpisodeRecord& e) { return realtimeCostOf(e).has_value(); });
   SvgPlot::Frame frame;
   if (any_delivered || any_realtime) frame.top += kLegendRow;  // the legend takes two rows
   SvgPlot plot(frame, episodeAxis(x.lo, x.hi, "episode"), Axis{y_range, "cost J (state units²)"});
-  for (const json& e : per_episode) {
-    const double k = number(e, "episode");
-    if (!e.contains("bracket")) continue;
-    const double info = number(e.at("bracket"), "info");
-    const double cov = number(e.at("bracket"), "cov");
+  for (const EpisodeRecord& e : per_episode) {
+    // A missing side is NaN, and rect() draws no box with a NaN edge: no bracket, no box.
+    const double k = asDouble(e.episode);
+    const double info = orNan(e.bracket.info);
+    const double cov = orNan(e.bracket.cov);
     plot.rect(k - 0.5, k + 0.5, info, cov, Style::area(kSand),
               "episode " + formatTick(k) + ": bracket [" + formatTick(info) + ", " +
                   formatTick(cov) + "]");
   }
   // What the schedule delivered, beside what it planned: a dashed box.
-  for (const json& e : per_episode) {
+  for (const EpisodeRecord& e : per_episode) {
     const auto delivered = deliveredBracketOf(e);
     if (!delivered) continue;
-    const double k = number(e, "episode");
+    const double k = asDouble(e.episode);
     plot.rect(k - 0.4, k + 0.4, std::min(delivered->first, y_range.hi),
               std::min(delivered->second, y_range.hi), kDelivered,
               "episode " + formatTick(k) + ": delivered bracket [" +
@@ -229,27 +246,27 @@ std::string costPlot(const json& report) {
   Style interval = Style::area(kMid, 0.45);
   plot.band(running.episodes, running.low, running.high, interval, "95% interval of the mean");
   plot.polyline(running.episodes, running.mean, Style::line(kInk, 2.0), "running mean");
-  for (const json& v : report.value("schedule_versions", json::array())) {
-    if (number(v, "version") == 0.0 || number(v, "effective_episode") <= x.lo) continue;
-    plot.vline(number(v, "effective_episode") - 0.5, Style::line(kGrey, 1.2, "5 3"),
-               "v" + formatTick(number(v, "version")));
+  for (const ScheduleVersionRecord& v : versions) {
+    const double effective = asDouble(v.effective_episode);
+    if (v.version == 0 || effective <= x.lo) continue;
+    plot.vline(effective - 0.5, Style::line(kGrey, 1.2, "5 3"),
+               "v" + formatTick(asDouble(v.version)));
   }
   bool off_scale = false;
-  for (const json& e : per_episode) {
-    const bool complete = e.value("complete", false);
-    const double k = number(e, "episode");
-    const double cost = number(e, "realized_cost");
+  for (const EpisodeRecord& e : per_episode) {
+    const double k = asDouble(e.episode);
+    const double cost = orNan(e.realized_cost);
     const bool above = cost > y_range.hi;
     off_scale = off_scale || above;
     plot.circle(k, above ? y_range.hi : cost, 3.5,
-                complete ? Style::outlined(kInk, kInk) : Style::outlined("white", kAccent),
+                e.complete ? Style::outlined(kInk, kInk) : Style::outlined("white", kAccent),
                 "episode " + formatTick(k) + ": " + formatTick(cost) +
-                    (complete ? "" : " (incomplete)") + (above ? ", off the scale" : ""));
+                    (e.complete ? "" : " (incomplete)") + (above ? ", off the scale" : ""));
   }
-  for (const json& e : per_episode) {
+  for (const EpisodeRecord& e : per_episode) {
     const auto realtime = realtimeCostOf(e);
     if (!realtime) continue;
-    const double k = number(e, "episode");
+    const double k = asDouble(e.episode);
     plot.circle(k, std::min(*realtime, y_range.hi), 2.5, kRealtime,
                 "episode " + formatTick(k) + ": real-time cost " + formatTick(*realtime));
   }
@@ -307,14 +324,12 @@ struct PageVersion {
   std::vector<std::vector<double>> rates;  // [interval][sensor]
 };
 
-std::vector<PageVersion> pageVersions(const json& versions) {
+std::vector<PageVersion> pageVersions(const std::vector<ScheduleVersionRecord>& versions) {
   std::vector<PageVersion> out;
-  for (const json& v : versions) {
-    if (!v.contains("rates") || !v.at("rates").is_array() || v.at("rates").empty()) continue;
-    PageVersion p{number(v, "version"), number(v, "effective_episode"),
-                  number(v, "effective_time_s"), {}};
-    for (const json& row : v.at("rates")) p.rates.push_back(numbers(row));
-    out.push_back(std::move(p));
+  for (const ScheduleVersionRecord& v : versions) {
+    if (v.rates.empty()) continue;  // a version without rates is in the table, not the map
+    out.push_back({asDouble(v.version), asDouble(v.effective_episode), v.effective_time_s,
+                   v.rates});
   }
   return out;
 }
@@ -442,36 +457,35 @@ void drawBlockMap(SvgPlot& plot, const std::vector<PageVersion>& versions, const
   }
 }
 
-std::string versionTable(const json& versions) {
+std::string versionTable(const std::vector<ScheduleVersionRecord>& versions) {
   std::string t = "<table class=\"versions\"><tr><th>version</th><th>surrogate</th>"
                   "<th>in force from</th><th>bracket [info, cov]</th></tr>\n";
-  for (const json& v : versions) {
-    const json bracket = v.value("bracket", json::object());
-    t += "<tr><td>v" + formatTick(number(v, "version")) + "</td><td>" +
-         escapeXml(v.value("surrogate", std::string("?"))) + "</td><td>episode " +
-         formatTick(number(v, "effective_episode")) + ", t = " +
-         formatTick(number(v, "effective_time_s")) + " s</td><td>[" +
-         formatTick(number(bracket, "info")) + ", " + formatTick(number(bracket, "cov")) +
-         "]</td></tr>\n";
+  for (const ScheduleVersionRecord& v : versions) {
+    // No surrogate recorded: "?" (every writer records one).
+    t += "<tr><td>v" + formatTick(asDouble(v.version)) + "</td><td>" +
+         escapeXml(v.surrogate.empty() ? std::string("?") : v.surrogate) + "</td><td>episode " +
+         formatTick(asDouble(v.effective_episode)) + ", t = " + formatTick(v.effective_time_s) +
+         " s</td><td>[" + formatTick(orNan(v.bracket.info)) + ", " +
+         formatTick(orNan(v.bracket.cov)) + "]</td></tr>\n";
   }
   return t + "</table>\n";
 }
 
-std::string schedulePlots(const json& report) {
-  const json versions_json = report.value("schedule_versions", json::array());
+std::string schedulePlots(const std::vector<ScheduleVersionRecord>& published,
+                          const std::vector<EpisodeRecord>& per_episode) {
   const std::string heading = "Schedule in force (rates per sensor over the run)";
-  const std::vector<PageVersion> versions = pageVersions(versions_json);
+  const std::vector<PageVersion> versions = pageVersions(published);
   if (versions.empty()) return note(heading, "The report carries no schedule rates.");
   MapShape m;
   m.intervals = versions.front().rates.size();
   for (const PageVersion& v : versions) {
     for (const auto& row : v.rates) m.sensors = std::max(m.sensors, row.size());
   }
-  for (const json& v : versions_json) {
-    if (number(v, "horizon_s") > 0.0) m.horizon = number(v, "horizon_s");
+  for (const ScheduleVersionRecord& v : published) {
+    if (v.horizon_s > 0.0) m.horizon = v.horizon_s;
   }
   Extent episodes;
-  for (const json& e : report.at("per_episode")) episodes.add(number(e, "episode"));
+  for (const EpisodeRecord& e : per_episode) episodes.add(asDouble(e.episode));
   for (const PageVersion& v : versions) episodes.add(v.episode);
   m.first = std::max(0.0, episodes.lo);
   m.last = std::max(m.first, episodes.hi);
@@ -511,7 +525,7 @@ std::string schedulePlots(const json& report) {
                {formatTick(0.5 * largest) + " Hz", Style::area(rampColour(0.5))},
                {formatTick(largest) + " Hz", Style::area(rampColour(1.0))},
                {"a new version takes effect", Style::line(kAccent, 1.6, "6 3")}});
-  return figure("schedule", heading, plot.svg("plot-schedule", heading) + versionTable(versions_json),
+  return figure("schedule", heading, plot.svg("plot-schedule", heading) + versionTable(published),
                 std::string("Rows are sensors, time runs left to right through the episodes; "
                             "darker is a higher rate λ<sub>j</sub>(t) of the version in force. ") +
                     (detailed ? "Each cell is one interval of the schedule in one episode."
@@ -522,28 +536,33 @@ std::string schedulePlots(const json& report) {
 
 // ---- 3. per-sensor counts ---------------------------------------------------------------------
 
-std::string sensorPlot(const json& report) {
-  const json& sensors = report.at("sensors");
+std::string sensorPlot(const std::vector<SensorRecord>& sensors) {
   if (sensors.empty()) return note("Measurements per sensor", "The report lists no sensor.");
   struct Series {
-    const char* key;
+    double (*value)(const SensorRecord&);
     const char* label;
     Style style;
   };
-  std::vector<Series> series = {{"expected", "expected", Style::outlined(kPale, kGrey)},
-                                {"sent", "sent", Style::area(kInk)},
-                                {"received", "received", Style::area(kMid)},
-                                {"lost", "lost", Style::area(kAccent)}};
+  const auto dropped_by_network = [](const SensorRecord& s) {
+    return asDouble(s.dropped_by_network);
+  };
+  std::vector<Series> series = {
+      {[](const SensorRecord& s) { return s.expected; }, "expected",
+       Style::outlined(kPale, kGrey)},
+      {[](const SensorRecord& s) { return asDouble(s.sent); }, "sent", Style::area(kInk)},
+      {[](const SensorRecord& s) { return asDouble(s.received); }, "received", Style::area(kMid)},
+      {[](const SensorRecord& s) { return asDouble(s.lost); }, "lost", Style::area(kAccent)}};
   Extent y;
   bool dropped = false;
-  for (const json& s : sensors) {
-    for (const Series& one : series) y.add(number(s, one.key));
-    dropped = dropped || number(s, "dropped_by_network") > 0.0;
+  for (const SensorRecord& s : sensors) {
+    for (const Series& one : series) y.add(one.value(s));
+    dropped = dropped || s.dropped_by_network > 0;
   }
   if (dropped) {
-    series.push_back({"dropped_by_network", "dropped by the network", Style::outlined("#ffffff", kInk)});
+    series.push_back({dropped_by_network, "dropped by the network",
+                      Style::outlined("#ffffff", kInk)});
     series.back().style.dash = "3 2";
-    for (const json& s : sensors) y.add(number(s, "dropped_by_network"));
+    for (const SensorRecord& s : sensors) y.add(dropped_by_network(s));
   }
   const auto count = static_cast<double>(sensors.size());
   Axis x{{-0.5, count - 0.5}, "sensor"};
@@ -556,7 +575,7 @@ std::string sensorPlot(const json& report) {
     legend.push_back({series[i].label, series[i].style});
     for (std::size_t j = 0; j < sensors.size(); ++j) {
       const double left = static_cast<double>(j) - 0.42 + width * static_cast<double>(i);
-      const double value = number(sensors[j], series[i].key);
+      const double value = series[i].value(sensors[j]);
       plot.rect(left, left + width, 0.0, value, series[i].style,
                 "sensor " + std::to_string(j) + ": " + formatTick(value) + " " + series[i].label);
     }
@@ -578,14 +597,15 @@ std::string formatDuration(double seconds) {
   return formatTick(seconds * 1e9) + " ns";
 }
 
-std::string latencyPlot(const json& report) {
+std::string latencyPlot(const std::optional<LatencyRecord>& latency) {
   const std::string heading = "Publish-to-fusion latency";
-  const json latency = report.value("latency_s", json::object());
-  const json histogram = latency.value("histogram", json());
+  const double median = latency ? orNan(latency->median) : kNan;
+  const double p99 = latency ? orNan(latency->p99) : kNan;
+  // The record keeps the histogram as written (LatencyRecord::histogram): read here as json.
+  const json& histogram = latency ? latency->histogram : kNone;
   if (!histogram.is_object()) {
     return note(heading, "The report carries no latency histogram (median " +
-                             formatDuration(number(latency, "median")) + ", p99 " +
-                             formatDuration(number(latency, "p99")) + ").");
+                             formatDuration(median) + ", p99 " + formatDuration(p99) + ").");
   }
   const std::vector<double> edges = numbers(histogram.value("edges_s", json::array()));
   const std::vector<double> counts = numbers(histogram.value("counts", json::array()));
@@ -602,8 +622,6 @@ std::string latencyPlot(const json& report) {
               formatDuration(edges[i]) + " to " + formatDuration(edges[i + 1]) + ": " +
                   formatTick(counts[i]));
   }
-  const double median = number(latency, "median");
-  const double p99 = number(latency, "p99");
   if (median > 0.0) plot.vline(median, Style::line(kInk, 2.0), "median " + formatDuration(median));
   if (p99 > 0.0) plot.vline(p99, Style::line(kAccent, 2.0, "6 3"), "p99 " + formatDuration(p99));
   plot.legend({{"measurements per bin", Style::outlined(kMid, "#ffffff")},
@@ -616,9 +634,11 @@ std::string latencyPlot(const json& report) {
 
 // ---- 5. covariance traces ---------------------------------------------------------------------
 
-std::string tracePlot(const json& report) {
+std::string tracePlot(const RunRecord& run) {
   const std::string heading = "Weighted covariance over time";
-  const json traces = report.value("covariance_traces", json());
+  // The record keeps covariance_traces as written (RunRecord::other): read here as json.
+  const auto found = run.other.find("covariance_traces");
+  const json& traces = found != run.other.end() ? *found : kNone;
   if (!traces.is_object() || traces.value("episodes", json::array()).empty()) {
     return note(heading, "The report carries no covariance traces.");
   }
@@ -673,23 +693,28 @@ std::string tracePlot(const json& report) {
 // ---- 6. faults --------------------------------------------------------------------------------
 
 // "consequence of interrupted in sensornet: " for an entry that followed from another.
-std::string consequenceNote(const json& fault) {
-  const json cause = fault.value(kCausedByField, json());
-  if (!cause.is_object()) return "";
-  return escapeXml("consequence of " + cause.value("kind", std::string("?")) + " in " +
-                   cause.value("process", std::string("?")) + ": ");
+std::string consequenceNote(const FaultRecord& fault) {
+  if (!fault.caused_by) return "";
+  return escapeXml("consequence of " + std::string(wordOf(fault.caused_by->kind)) + " in " +
+                   fault.caused_by->process + ": ");
 }
 
-std::string faultPlot(const json& report) {
-  const json faults = report.value("faults", json::array());
-  if (!faults.is_array() || faults.empty()) return "";
-  const double episodes = std::max(1.0, number(report, "episodes"));
+// A cell of the faults table: "–" for what the fault does not say.
+template <class T>
+std::string faultCell(const std::optional<T>& value) {
+  return value ? escapeXml(formatTick(asDouble(*value))) : std::string("–");
+}
+
+std::string faultPlot(const RunRecord& run) {
+  if (run.faults.empty()) return "";
+  // The report's `episodes` (not finishedEpisodes()): the axis the page has always drawn.
+  const double episodes = std::max(1.0, orNan(run.episodes));
   double horizon = 1.0;
-  for (const json& v : report.value("schedule_versions", json::array())) {
-    if (number(v, "horizon_s") > 0.0) horizon = number(v, "horizon_s");
+  for (const ScheduleVersionRecord& v : run.schedule_versions) {
+    if (v.horizon_s > 0.0) horizon = v.horizon_s;
   }
   std::map<std::string, double> rows;
-  for (const json& f : faults) rows.emplace(f.value("kind", std::string("?")), 0.0);
+  for (const FaultRecord& f : run.faults) rows.emplace(wordOf(f.kind), 0.0);
   double row = 0.0;
   for (auto& [kind, at] : rows) at = row++;
   SvgPlot::Frame frame;
@@ -706,27 +731,20 @@ std::string faultPlot(const json& report) {
   SvgPlot plot(frame, episodeAxis(0.0, episodes - 1.0, "episode (and emulated time within it)"), y);
   std::string table = "<table class=\"faults\"><tr><th>kind</th><th>process</th><th>sensor</th>"
                       "<th>episode</th><th>t (s)</th><th>detail</th></tr>\n";
-  for (const json& f : faults) {
-    const double episode = number(f, "episode");
-    const double t = number(f, "emulated_time_s");
-    const double at = std::isfinite(episode)
-                          ? episode - 0.5 + (std::isfinite(t) ? std::clamp(t / horizon, 0.0, 1.0) : 0.5)
-                          : episodes - 0.5;
-    const std::string kind = f.value("kind", std::string("?"));
-    plot.circle(at, rows[kind], 5.0, Style::outlined(kAccent, kInk),
-                kind + ": " + f.value("detail", std::string()));
-    const auto cell = [](const json& v) {
-      if (v.is_null()) return std::string("–");
-      if (v.is_number()) return escapeXml(formatTick(v.get<double>()));
-      return escapeXml(v.is_string() ? v.get<std::string>() : v.dump());
-    };
-    table += "<tr><td>" + escapeXml(kind) + "</td><td>" + cell(f.value("process", json())) +
-             "</td><td>" + cell(f.value("sensor", json())) + "</td><td>" +
-             cell(f.value("episode", json())) + "</td><td>" +
-             cell(f.value("emulated_time_s", json())) + "</td><td>" +
-             consequenceNote(f) + cell(f.value("detail", json())) + "</td></tr>\n";
+  for (const FaultRecord& f : run.faults) {
+    const double episode = orNan(f.episode);
+    const double t = orNan(f.emulated_time_s);
+    const double within = std::isfinite(t) ? std::clamp(t / horizon, 0.0, 1.0) : 0.5;
+    const double at = std::isfinite(episode) ? episode - 0.5 + within : episodes - 0.5;
+    const std::string kind(wordOf(f.kind));
+    plot.circle(at, rows[kind], 5.0, Style::outlined(kAccent, kInk), kind + ": " + f.detail);
+    table += "<tr><td>" + escapeXml(kind) + "</td><td>" + escapeXml(f.process) + "</td><td>" +
+             faultCell(f.sensor) + "</td><td>" + faultCell(f.episode) + "</td><td>" +
+             faultCell(f.emulated_time_s) + "</td><td>" + consequenceNote(f) +
+             escapeXml(f.detail) + "</td></tr>\n";
   }
-  plot.legend({{"fault (a fault of no episode sits at the run's end)", Style::outlined(kAccent, kInk)}});
+  plot.legend({{"fault (a fault of no episode sits at the run's end)",
+                Style::outlined(kAccent, kInk)}});
   return figure("faults", "Faults", plot.svg("plot-faults", "Faults") + table + "</table>\n",
                 "Each mark is one entry of the report's faults list, at its episode and, when "
                 "known, its emulated time within the episode.");
@@ -734,69 +752,66 @@ std::string faultPlot(const json& report) {
 
 // ---- the page ---------------------------------------------------------------------------------
 
-std::string summaryTable(const json& report) {
-  const json s = report.at("summary");
-  const json bracket = s.value("bracket", json::object());
+std::string summaryTable(const RunRecord& run) {
+  const SummaryRecord& s = run.summary;
   const auto row = [](const std::string& name, const std::string& value) {
     return "<tr><th>" + escapeXml(name) + "</th><td>" + escapeXml(value) + "</td></tr>\n";
   };
-  const json meets = s.value("meets_bracket", json());
+  const auto yesNo = [](const std::optional<bool>& meets) {
+    return meets ? (*meets ? "yes" : "no") : "undetermined (fewer than 2 complete episodes)";
+  };
   std::string t = "<table class=\"summary\">\n";
-  t += row("status", report.value("status", std::string("?")));
-  t += row("episodes (complete)", formatTick(number(s, "episodes")) + " (" +
-                                      formatTick(number(s, "episodes_complete")) + ")");
+  t += row("status", std::string(wordOf(run.status)));
+  t += row("episodes (complete)", formatTick(asDouble(s.episodes)) + " (" +
+                                      formatTick(asDouble(s.episodes_complete)) + ")");
   // Nothing that was not measured is printed as a number: no mean without a complete episode,
   // no interval without two.
-  const double complete = number(s, "episodes_complete");
-  const double mean = number(s, "mean");
+  const double complete = asDouble(s.episodes_complete);
+  const double mean = orNan(s.mean);
   std::string cost = "not measured (no complete episode)";
   if (complete >= 1.0 && std::isfinite(mean)) {
     cost = formatTick(mean);
-    const double low = number(s, "ci95_low");
-    const double high = number(s, "ci95_high");
+    const double low = orNan(s.ci95_low);
+    const double high = orNan(s.ci95_high);
     cost += complete >= 2.0 && std::isfinite(low) && std::isfinite(high)
                 ? ", 95% interval [" + formatTick(low) + ", " + formatTick(high) + "]"
                 : ", no 95% interval (one complete episode)";
   }
   t += row("mean realized cost", cost);
-  const double info = number(bracket, "info");
-  const double cov = number(bracket, "cov");
+  const BracketRecord bracket = s.bracket.value_or(BracketRecord{});
+  const double info = orNan(bracket.info);
+  const double cov = orNan(bracket.cov);
   t += row("mean bracket", complete >= 1.0 && std::isfinite(info) && std::isfinite(cov)
                                ? "[" + formatTick(info) + ", " + formatTick(cov) + "]"
                                : "not measured (no complete episode)");
-  t += row("meets the bracket", meets.is_boolean() ? (meets.get<bool>() ? "yes" : "no")
-                                                   : "undetermined (fewer than 2 complete episodes)");
+  t += row("meets the bracket", yesNo(s.meets_bracket));
   // What the schedule delivered and the real-time cost, where they are not the planned bracket
   // and the realized cost (as the launcher's closing lines say).
-  const json delivered = s.value("delivered_bracket", json::object());
-  const double d_info = number(delivered, "info"), d_cov = number(delivered, "cov");
+  const BracketRecord delivered = s.delivered_bracket.value_or(BracketRecord{});
+  const double d_info = orNan(delivered.info), d_cov = orNan(delivered.cov);
   if (complete >= 1.0 && std::isfinite(d_info) && std::isfinite(d_cov) && std::isfinite(info) &&
       std::isfinite(cov) && bracketsDiffer(info, cov, d_info, d_cov)) {
-    const json meets_delivered = s.value("meets_delivered_bracket", json());
     t += row("mean bracket delivered (dead sensors, network losses)",
              "[" + formatTick(d_info) + ", " + formatTick(d_cov) + "]");
-    t += row("meets the delivered bracket",
-             meets_delivered.is_boolean() ? (meets_delivered.get<bool>() ? "yes" : "no")
-                                          : "undetermined (fewer than 2 complete episodes)");
+    t += row("meets the delivered bracket", yesNo(s.meets_delivered_bracket));
   }
-  const double realtime = number(s, "realtime_mean");
+  const double realtime = orNan(s.realtime_mean);
   if (complete >= 1.0 && std::isfinite(realtime) && std::isfinite(mean) && realtime != mean) {
     t += row("mean real-time cost (what had arrived by each instant)", formatTick(realtime));
   }
-  const double dropped = number(s, "dropped_by_network");
-  if (std::isfinite(dropped) && dropped > 0.0) {
+  const std::string sent = formatTick(asDouble(s.sent));
+  const std::string received = formatTick(asDouble(s.received));
+  const std::string lost = formatTick(asDouble(s.lost));
+  if (s.dropped_by_network > 0) {
     t += row("sent / received / dropped by the emulated network / lost",
-             formatTick(number(s, "sent")) + " / " + formatTick(number(s, "received")) + " / " +
-                 formatTick(dropped) + " / " + formatTick(number(s, "lost")));
+             sent + " / " + received + " / " + formatTick(asDouble(s.dropped_by_network)) +
+                 " / " + lost);
   } else {
-    t += row("sent / received / lost", formatTick(number(s, "sent")) + " / " +
-                                           formatTick(number(s, "received")) + " / " +
-                                           formatTick(number(s, "lost")));
+    t += row("sent / received / lost", sent + " / " + received + " / " + lost);
   }
   // Causes: an entry that followed from another (caused_by) is counted with it.
-  const json faults = report.value("faults", json::array());
-  const std::size_t causes = causeCount(faults);
-  const std::size_t listed = faults.is_array() ? faults.size() : 0;
+  const std::size_t causes = run.causeCount();
+  const std::size_t listed = run.faults.size();
   t += row("faults", std::to_string(causes) +
                          (listed > causes ? " (and " + std::to_string(listed - causes) +
                                                 " consequences)"
@@ -846,32 +861,34 @@ std::string formatCsv(double value) { return std::isfinite(value) ? formatNumber
 
 }  // namespace
 
-void checkReport(const json& report, const std::string& source) {
+RunRecord decodeReport(const json& report, const std::string& source) {
+  // What every report has, checked first to name it in the reader's words (the codec's are
+  // terser: "a string"); the rest is the codec's, its field and expectation as the error's.
   if (!report.is_object()) throw InputError(source, "", "a JSON object (a run report)");
-  const auto require = [&](const char* key, json::value_t type, const char* what) {
+  const auto require = [&](const char* key, json::value_t type, const std::string& what) {
     const auto it = report.find(key);
     if (it == report.end() || it->type() != type) throw InputError(source, key, what);
   };
   require("run_id", json::value_t::string, "a string (the run id)");
+  require("status", json::value_t::string, "the run's status: " + wordChoices<RunStatus>());
   require("per_episode", json::value_t::array, "an array of episode entries");
   require("sensors", json::value_t::array, "an array of per-sensor counts");
   require("summary", json::value_t::object, "an object (the run's summary)");
-  const json& episodes = report.at("per_episode");
-  for (std::size_t i = 0; i < episodes.size(); ++i) {
-    const json& e = episodes[i];
-    if (!e.is_object() || !e.contains("episode") || !e.at("episode").is_number()) {
-      throw InputError(source, "per_episode[" + std::to_string(i) + "].episode", "a number");
-    }
-  }
-  const json& sensors = report.at("sensors");
-  for (std::size_t j = 0; j < sensors.size(); ++j) {
-    if (!sensors[j].is_object()) {
-      throw InputError(source, "sensors[" + std::to_string(j) + "]", "an object of counts");
-    }
+  try {
+    return decodeRunRecord(report);
+  } catch (const RecordError& e) {
+    throw InputError(source, e.field(), e.expected());
   }
 }
 
-json readReportFile(const std::filesystem::path& path) {
+void checkReport(const json& report, const std::string& source) {
+  (void)decodeReport(report, source);
+}
+
+namespace {
+
+// The report file's document, or the InputError saying why it is none.
+json readReportDocument(const std::filesystem::path& path) {
   ReportFile file = readReport(path);
   switch (file.problem) {
     case ReportFile::Problem::None: break;
@@ -882,73 +899,90 @@ json readReportFile(const std::filesystem::path& path) {
     case ReportFile::Problem::NotAReport:
       throw InputError(path.string(), file.field, file.expected);
   }
-  checkReport(file.report, path.string());
   return std::move(file.report);
 }
 
-std::string reportPage(const json& report, const std::string& source) {
-  checkReport(report, source);
-  const std::string run_id = report.at("run_id").get<std::string>();
-  const json scenario = report.value("scenario", json::object());
-  const std::string digest = scenario.value("digest", std::string());
-  const std::string written = report.value("written_at", std::string("unknown date"));
+}  // namespace
+
+json readReportFile(const std::filesystem::path& path) {
+  json report = readReportDocument(path);
+  checkReport(report, path.string());
+  return report;
+}
+
+namespace {
+
+// The episode entries the page and the tables draw: a record read without them
+// (EpisodeEntries::Skipped) has none to draw, which is not a run that fused no episode.
+const std::vector<EpisodeRecord>& episodeEntries(const RunRecord& run, const std::string& source) {
+  if (!run.per_episode) throw InputError(source, "per_episode", "an array of episode entries");
+  return *run.per_episode;
+}
+
+}  // namespace
+
+std::string reportPage(const RunRecord& run, const std::string& source) {
+  const std::vector<EpisodeRecord>& per_episode = episodeEntries(run, source);
+  const std::string digest = run.scenario ? run.scenario->digest : std::string();
+  const std::string written = run.written_at.value_or("unknown date");
   std::string page = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-                     "<title>sensornet run " + escapeXml(run_id) + "</title>\n<style>" + kStyle +
-                     "</style>\n</head>\n<body>\n";
-  page += "<h1>sensornet run " + escapeXml(run_id) + "</h1>\n<div class=\"meta\">scenario " +
+                     "<title>sensornet run " + escapeXml(run.run_id) + "</title>\n<style>" +
+                     kStyle + "</style>\n</head>\n<body>\n";
+  page += "<h1>sensornet run " + escapeXml(run.run_id) + "</h1>\n<div class=\"meta\">scenario " +
           escapeXml(digest.empty() ? "(digest unknown)" : digest) + " · " +
-          formatTick(number(scenario, "sensors")) + " sensors, " +
-          formatTick(number(scenario, "states")) + " states · written " + escapeXml(written) +
-          "</div>\n";
-  page += summaryTable(report);
-  page += costPlot(report);
-  page += schedulePlots(report);
-  page += sensorPlot(report);
-  page += latencyPlot(report);
-  page += tracePlot(report);
-  page += faultPlot(report);
+          formatTick(run.scenario ? asDouble(run.scenario->sensors) : kNan) + " sensors, " +
+          formatTick(run.scenario ? asDouble(run.scenario->states) : kNan) + " states · written " +
+          escapeXml(written) + "</div>\n";
+  page += summaryTable(run);
+  page += costPlot(per_episode, run.schedule_versions);
+  page += schedulePlots(run.schedule_versions, per_episode);
+  page += sensorPlot(run.sensors);
+  page += latencyPlot(run.latency_s);
+  page += tracePlot(run);
+  page += faultPlot(run);
   page += std::string("<script>") + kScript + "</script>\n</body>\n</html>\n";
   return page;
 }
 
-ReportTables reportTables(const json& report, const std::string& source) {
-  checkReport(report, source);
+std::string reportPage(const json& report, const std::string& source) {
+  return reportPage(decodeReport(report, source), source);
+}
+
+ReportTables reportTables(const RunRecord& run, const std::string& source) {
   ReportTables tables;
   std::ostringstream e;
   e << "episode,complete,realized_cost,realtime_cost,bracket_info,bracket_cov,"
        "delivered_bracket_info,delivered_bracket_cov,nees,schedule_version,switch_time_s,sent,"
        "received,lost,dropped_by_network,late,expected,latency_median_s,latency_p99_s\n";
-  for (const json& r : report.at("per_episode")) {
-    const json bracket = r.value("bracket", json::object());
-    const json delivered = r.value("delivered_bracket", json::object());
-    const std::vector<double> versions = numbers(r.value("schedule_versions", json::array()));
-    e << formatCsv(number(r, "episode")) << ',' << (r.value("complete", false) ? 1 : 0) << ','
-      << formatCsv(number(r, "realized_cost")) << ',' << formatCsv(number(r, "realtime_cost"))
-      << ',' << formatCsv(number(bracket, "info")) << ',' << formatCsv(number(bracket, "cov"))
-      << ',' << formatCsv(number(delivered, "info")) << ','
-      << formatCsv(number(delivered, "cov")) << ',' << formatCsv(number(r, "nees")) << ','
-      << (versions.empty() ? "" : formatCsv(versions.back())) << ','
-      << formatCsv(number(r, "switch_time_s"));
-    for (const char* key : {"sent", "received", "lost", "dropped_by_network", "late", "expected"}) {
-      e << ',' << formatCsv(sumOf(r.value(key, json::array())));
+  for (const EpisodeRecord& r : episodeEntries(run, source)) {
+    e << formatCsv(asDouble(r.episode)) << ',' << (r.complete ? 1 : 0) << ','
+      << formatCsv(orNan(r.realized_cost)) << ',' << formatCsv(orNan(r.realtime_cost)) << ','
+      << formatCsv(orNan(r.bracket.info)) << ',' << formatCsv(orNan(r.bracket.cov)) << ','
+      << formatCsv(orNan(r.delivered_bracket.info)) << ','
+      << formatCsv(orNan(r.delivered_bracket.cov)) << ',' << formatCsv(orNan(r.nees)) << ','
+      << (r.schedule_versions.empty() ? "" : formatCsv(asDouble(r.schedule_versions.back())))
+      << ',' << formatCsv(r.switch_time_s);
+    for (const double sum : {sumOf(r.sent), sumOf(r.received), sumOf(r.lost),
+                             sumOf(r.dropped_by_network), sumOf(r.late), sumOf(r.expected)}) {
+      e << ',' << formatCsv(sum);
     }
-    e << ',' << formatCsv(number(r, "latency_median_s")) << ','
-      << formatCsv(number(r, "latency_p99_s")) << '\n';
+    e << ',' << formatCsv(r.latency_median_s) << ',' << formatCsv(r.latency_p99_s) << '\n';
   }
   tables.episodes = e.str();
   std::ostringstream s;
-  const char* keys[] = {"sensor_id", "sent", "received", "lost", "dropped_by_network",
-                        "late", "expected", "wrong_version"};
-  for (std::size_t i = 0; i < std::size(keys); ++i) s << (i ? "," : "") << keys[i];
-  s << '\n';
-  for (const json& row : report.at("sensors")) {
-    for (std::size_t i = 0; i < std::size(keys); ++i) {
-      s << (i ? "," : "") << formatCsv(number(row, keys[i]));
-    }
-    s << '\n';
+  s << "sensor_id,sent,received,lost,dropped_by_network,late,expected,wrong_version\n";
+  for (const SensorRecord& row : run.sensors) {
+    s << formatCsv(asDouble(row.sensor_id)) << ',' << formatCsv(asDouble(row.sent)) << ','
+      << formatCsv(asDouble(row.received)) << ',' << formatCsv(asDouble(row.lost)) << ','
+      << formatCsv(asDouble(row.dropped_by_network)) << ',' << formatCsv(asDouble(row.late))
+      << ',' << formatCsv(row.expected) << ',' << formatCsv(asDouble(row.wrong_version)) << '\n';
   }
   tables.sensors = s.str();
   return tables;
+}
+
+ReportTables reportTables(const json& report, const std::string& source) {
+  return reportTables(decodeReport(report, source), source);
 }
 
 std::filesystem::path pagePathBeside(const std::filesystem::path& report_path) {
@@ -960,8 +994,10 @@ std::filesystem::path pagePathBeside(const std::filesystem::path& report_path) {
 std::optional<std::string> writePageBeside(const std::filesystem::path& report_path) {
   const std::filesystem::path page = pagePathBeside(report_path);
   try {
-    const nlohmann::json report = readReportFile(report_path);
-    const std::string html = reportPage(report, report_path.string());
+    // Decoded once: the page of the record, not readReportFile's check and then the page's.
+    const std::string source = report_path.string();
+    const std::string html = reportPage(decodeReport(readReportDocument(report_path), source),
+                                        source);
     writeJsonFile(page.string(), "report page", [&](std::ostream& out) { out << html; });
     return std::nullopt;
   } catch (const std::exception& e) {

@@ -50,8 +50,11 @@ void decodeScalar(const json& value, const std::string& path, T& out) {
     out = value.get<int>();
   } else {
     static_assert(std::is_unsigned_v<T>);
-    if (!value.is_number_unsigned() ||
-        value.get<std::uint64_t>() > std::numeric_limits<T>::max()) {
+    // Parsed text gives a count as unsigned; a document built in code (json{{"episodes", 4}})
+    // gives it as a signed integer: both are the same count when it is not negative.
+    const bool count = value.is_number_unsigned() ||
+                       (value.is_number_integer() && value.get<std::int64_t>() >= 0);
+    if (!count || value.get<std::uint64_t>() > std::numeric_limits<T>::max()) {
       throw RecordError(path, expectedText<T>());
     }
     out = value.get<T>();

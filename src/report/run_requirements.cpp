@@ -7,7 +7,6 @@
 #include <system_error>
 
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/report/fault_causes.hpp"
 
 namespace sensornet::report {
 namespace {
@@ -27,97 +26,96 @@ struct Reading {
 Reading present(double value) { return {value, {}}; }
 Reading absent(std::string why) { return {std::nullopt, std::move(why)}; }
 
-// report[path...] as a number, absent when a key is missing or the value is not a number.
-Reading numberAt(const json& report, std::initializer_list<const char*> path) {
-  const json* node = &report;
-  std::string where;
-  for (const char* key : path) {
-    where += where.empty() ? key : std::string(".") + key;
-    if (!node->is_object() || !node->contains(key)) return absent(where + " missing");
-    node = &(*node)[key];
-  }
-  if (node->is_boolean()) return present(node->get<bool>() ? 1.0 : 0.0);
-  if (!node->is_number()) return absent(where + " is " + (node->is_null() ? "null" : "not a number"));
-  return present(node->get<double>());
+// A value of the record, or why there is none: `where` names it as the report's keys do.
+Reading valueOf(const std::optional<double>& value, const char* where) {
+  return value ? present(*value) : absent(std::string(where) + " is null");
 }
+Reading valueOf(const std::optional<bool>& value, const char* where) {
+  return value ? present(*value ? 1.0 : 0.0) : absent(std::string(where) + " is null");
+}
+Reading count(std::uint64_t value) { return present(static_cast<double>(value)); }
 
 Reading yesNo(bool holds) { return present(holds ? 1.0 : 0.0); }
 
-Reading episodesComplete(const json& r) {
-  const Reading planned = numberAt(r, {"episodes_planned"});
-  const Reading complete = numberAt(r, {"summary", "episodes_complete"});
-  if (!planned.value) return planned;
-  if (!complete.value) return complete;
-  return yesNo(*complete.value == *planned.value);
+Reading latency(const RunRecord& r, std::optional<double> LatencyRecord::*member,
+                const char* where) {
+  if (!r.latency_s) return absent("latency_s missing");
+  return valueOf((*r.latency_s).*member, where);
 }
 
-Reading lossFraction(const json& r) {
-  const Reading sent = numberAt(r, {"summary", "sent"});
-  const Reading lost = numberAt(r, {"summary", "lost"});
-  if (!sent.value) return sent;
-  if (!lost.value) return lost;
-  return present(*sent.value > 0.0 ? *lost.value / *sent.value : 0.0);
+Reading episodesComplete(const RunRecord& r) {
+  if (!r.episodes_planned) return absent("episodes_planned missing");
+  return yesNo(r.summary.episodes_complete == *r.episodes_planned);
+}
+
+Reading lossFraction(const RunRecord& r) {
+  const SummaryRecord& s = r.summary;
+  return present(s.sent > 0 ? static_cast<double>(s.lost) / static_cast<double>(s.sent) : 0.0);
+}
+
+Reading fusionAgreement(const RunRecord& r) {
+  const auto reference = r.other.find("reference_fusion");
+  if (reference == r.other.end() || !reference->is_object()) {
+    return absent("reference_fusion missing");
+  }
+  const auto largest = reference->find("max_relative_difference");
+  if (largest == reference->end() || !largest->is_number()) {
+    return absent("reference_fusion.max_relative_difference is null");
+  }
+  return present(largest->get<double>());
 }
 
 struct Property {
   const char* name;
   Kind kind;
   const char* meaning;
-  std::function<Reading(const json&)> read;
+  std::function<Reading(const RunRecord&)> read;
 };
 
 const std::vector<Property>& properties() {
+  using R = const RunRecord&;
   static const std::vector<Property> table = {
       {"completed", Kind::YesNo, "the run's status is completed (exit 0 without --require)",
-       [](const json& r) { return yesNo(r.value("status", "") == "completed"); }},
+       [](R r) { return yesNo(r.status == RunStatus::Completed); }},
       {"episodes-complete", Kind::YesNo, "every planned episode ran and is complete",
        episodesComplete},
       {"meets-bracket", Kind::YesNo,
        "the 95% interval of the mean realized cost meets the bracket [info, cov]",
-       [](const json& r) { return numberAt(r, {"summary", "meets_bracket"}); }},
+       [](R r) { return valueOf(r.summary.meets_bracket, "summary.meets_bracket"); }},
       {"meets-delivered-bracket", Kind::YesNo,
        "the same against the bracket of what the emulated network delivered",
-       [](const json& r) { return numberAt(r, {"summary", "meets_delivered_bracket"}); }},
+       [](R r) {
+         return valueOf(r.summary.meets_delivered_bracket, "summary.meets_delivered_bracket");
+       }},
       {"no-loss", Kind::YesNo, "no measurement lost (dropped by the emulated network is not lost)",
-       [](const json& r) {
-         const Reading lost = numberAt(r, {"summary", "lost"});
-         return lost.value ? yesNo(*lost.value == 0.0) : lost;
-       }},
+       [](R r) { return yesNo(r.summary.lost == 0); }},
       {"no-rejects", Kind::YesNo, "no sample refused on the wire",
-       [](const json& r) {
-         const Reading rejected = numberAt(r, {"summary", "rejected"});
-         return rejected.value ? yesNo(*rejected.value == 0.0) : rejected;
-       }},
+       [](R r) { return yesNo(r.summary.rejected == 0); }},
       {"no-faults", Kind::YesNo, "the report lists no fault (its consequences count with it)",
-       [](const json& r) {
-         const json faults = r.value("faults", json::array());
-         return yesNo(faults.is_array() && causeCount(faults) == 0);
-       }},
+       [](R r) { return yesNo(r.causeCount() == 0); }},
       {"latency-median", Kind::Duration, "median publish-to-fusion latency",
-       [](const json& r) { return numberAt(r, {"latency_s", "median"}); }},
+       [](R r) { return latency(r, &LatencyRecord::median, "latency_s.median"); }},
       {"latency-p99", Kind::Duration, "99th percentile of the publish-to-fusion latency",
-       [](const json& r) { return numberAt(r, {"latency_s", "p99"}); }},
+       [](R r) { return latency(r, &LatencyRecord::p99, "latency_s.p99"); }},
       {"mean", Kind::Number, "mean realized cost over the complete episodes",
-       [](const json& r) { return numberAt(r, {"summary", "mean"}); }},
+       [](R r) { return valueOf(r.summary.mean, "summary.mean"); }},
       {"realtime-mean", Kind::Number, "mean real-time cost (what had arrived by each instant)",
-       [](const json& r) { return numberAt(r, {"summary", "realtime_mean"}); }},
+       [](R r) { return valueOf(r.summary.realtime_mean, "summary.realtime_mean"); }},
       {"ci95", Kind::Number, "95% half-width of the mean realized cost",
-       [](const json& r) { return numberAt(r, {"summary", "ci95"}); }},
-      {"episodes", Kind::Count, "episodes that ran",
-       [](const json& r) { return numberAt(r, {"summary", "episodes"}); }},
+       [](R r) { return valueOf(r.summary.ci95, "summary.ci95"); }},
+      {"episodes", Kind::Count, "episodes that ran", [](R r) { return count(r.summary.episodes); }},
       {"episodes-incomplete", Kind::Count, "episodes closed incomplete",
-       [](const json& r) { return numberAt(r, {"summary", "episodes_incomplete"}); }},
-      {"lost", Kind::Count, "measurements lost",
-       [](const json& r) { return numberAt(r, {"summary", "lost"}); }},
+       [](R r) { return count(r.summary.episodes_incomplete); }},
+      {"lost", Kind::Count, "measurements lost", [](R r) { return count(r.summary.lost); }},
       {"loss-fraction", Kind::Number, "lost / sent", lossFraction},
       {"rejected", Kind::Count, "samples refused on the wire",
-       [](const json& r) { return numberAt(r, {"summary", "rejected"}); }},
+       [](R r) { return count(r.summary.rejected); }},
       {"late", Kind::Count, "measurements that arrived after a later one (re-fused in order)",
-       [](const json& r) { return numberAt(r, {"summary", "late"}); }},
+       [](R r) { return count(r.summary.late); }},
       {"fusion-agreement", Kind::Number,
        "largest relative difference of an external fusion center's realized cost from the "
        "reference's, over the episodes both fused (--reference-fusion)",
-       [](const json& r) { return numberAt(r, {"reference_fusion", "max_relative_difference"}); }},
+       fusionAgreement},
   };
   return table;
 }
@@ -284,7 +282,7 @@ std::vector<Requirement> parseRequirements(std::string_view spec) {
 }
 
 std::vector<RequirementCheck> checkRequirements(const std::vector<Requirement>& requirements,
-                                                const nlohmann::json& report) {
+                                                const RunRecord& report) {
   std::vector<RequirementCheck> checks;
   for (const Requirement& r : requirements) {
     const Property* property = findProperty(r.name);
@@ -300,6 +298,21 @@ std::vector<RequirementCheck> checkRequirements(const std::vector<Requirement>& 
     checks.push_back(std::move(check));
   }
   return checks;
+}
+
+std::vector<RequirementCheck> checkRequirements(const std::vector<Requirement>& requirements,
+                                                const nlohmann::json& report) {
+  try {
+    return checkRequirements(requirements, decodeRunRecord(report));
+  } catch (const RecordError& e) {
+    // Not a report this version reads: every criterion fails, saying where.
+    std::vector<RequirementCheck> checks;
+    for (const Requirement& r : requirements) {
+      checks.push_back({r, false, "not in the report (" + e.field() + ": expected " +
+                                      e.expected() + ")"});
+    }
+    return checks;
+  }
 }
 
 std::string describe(const RequirementCheck& check) {

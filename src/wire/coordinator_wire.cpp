@@ -1,6 +1,13 @@
 #include "sensornet/wire/coordinator_wire.hpp"
 
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <thread>
+
+#include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/dds/wire.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
 
 namespace sensornet::wire {
 
@@ -61,6 +68,79 @@ ReportEvent reportOf(const sensornet_Report& r) {
 FusionStateEvent fusionStateOf(const sensornet_FusionState& s) {
   const auto values = dds::viewSequence(s.covariance);
   return {s.episode, s.emulated_time_s, s.state_dim, {values.begin(), values.end()}};
+}
+
+std::optional<emulator::SensorStatusEvent> sensorStatusOf(
+    const sensornet_SensorStatus& s, const std::function<bool(int)>& speaks) {
+  const auto state = sensorStateOf(s.state);
+  if (!state) {
+    spdlog::warn("ignored a status of sensor {} with state {}", s.sensor_id,
+                 static_cast<int>(s.state));
+    return std::nullopt;
+  }
+  const int sensor = static_cast<int>(s.sensor_id);
+  return emulator::SensorStatusEvent{sensor, *state, s.schedule_version,
+                                     std::string(dds::viewString(s.detail)), speaks(sensor)};
+}
+
+sensornet_CommandReply wireReply(const std::string& run_id, std::uint64_t command_id,
+                                 const emulator::AnsweredCommand& answer) {
+  sensornet_CommandReply reply{};
+  reply.run_id = dds::borrowString(run_id);
+  reply.command_id = command_id;
+  reply.accepted = answer.accepted;
+  reply.schedule_version = answer.schedule_version;
+  reply.reason = dds::borrowString(answer.reason);
+  return reply;
+}
+
+bool FusionCenterPresence::present(std::int64_t now_ns) {
+  const std::array<std::uint32_t, 3> counts{control_.matchedReaders(), report_.matchedWriters(),
+                                            state_.matchedWriters()};
+  if (counts != counts_ || now_ns >= recheck_ns_) {
+    counts_ = counts;
+    recheck_ns_ = now_ns + 500'000'000;
+    present_ = counts[1] > 0 && counts[2] > 0 &&
+               dds::sharesParticipant({dds::participantsOfMatchedReaders(control_),
+                                       dds::participantsOfMatchedWriters(report_),
+                                       dds::participantsOfMatchedWriters(state_)});
+  }
+  return present_;
+}
+
+void awaitScenarioReaders(const dds::detail::WriterCore& scenario_writer,
+                          const dds::detail::WriterCore& control_writer,
+                          std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  const auto missing = [&] {
+    const auto scenario = dds::participantsOfMatchedReaders(scenario_writer);
+    for (const dds::ParticipantKey& p : dds::participantsOfMatchedReaders(control_writer)) {
+      if (std::find(scenario.begin(), scenario.end(), p) == scenario.end()) return true;
+    }
+    return false;
+  };
+  while (missing() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+CoordinatorEndpoints::CoordinatorEndpoints(const dds::DomainConfig& config)
+    : domain(config),
+      participant(domain),
+      launcher_commands(participant, command_topic,
+                        dds::endpointQosIn<sensornet_Command>(emulator::commandPartition(
+                            participant.partition(), emulator::CommandSender::Launcher))),
+      operator_commands(participant, command_topic,
+                        dds::endpointQosIn<sensornet_Command>(emulator::commandPartition(
+                            participant.partition(), emulator::CommandSender::Operator))),
+      status_reader(participant, status_topic,
+                    dds::readerQosMatching<sensornet_SensorStatus>(
+                        emulator::sensorPartitionPattern(participant.partition()))),
+      speakers(participant.partition()) {
+  waitset.attach(launcher_command_ready, 1);
+  waitset.attach(status_ready, 2);
+  waitset.attach(report_ready, 3);
+  waitset.attach(operator_command_ready, 4);
 }
 
 }  // namespace sensornet::wire

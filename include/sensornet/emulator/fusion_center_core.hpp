@@ -150,7 +150,7 @@ struct AppendEpisodeLog {
   nlohmann::json entry;
 };
 struct RecordFault {
-  nlohmann::json fault;  // faultEntry(...), also kept for the final report
+  report::FaultRecord fault;  // faultEntry(...), also kept for the final report
 };
 struct WriteFinalReport {
   RunStatus status = RunStatus::Completed;
@@ -194,7 +194,7 @@ class FusionCenterCore {
   [[nodiscard]] bool hasScenario() const { return announced_.has_value(); }
   [[nodiscard]] bool hasReport() const { return report_.has_value(); }
   [[nodiscard]] const RunReport& report() const { return *report_; }
-  [[nodiscard]] const nlohmann::json& faults() const { return faults_; }
+  [[nodiscard]] const std::vector<report::FaultRecord>& faults() const { return faults_; }
   [[nodiscard]] const nlohmann::json& stalls() const { return stalls_; }
   // Live sensor processes whose Measurement writer this process does not hold (by identity).
   [[nodiscard]] std::vector<int> sensorsLackingWriters() const;
@@ -214,7 +214,7 @@ class FusionCenterCore {
     actions_.emplace_back(std::in_place_type<Action>, std::forward<Args>(args)...);
   }
   void log(spdlog::level::level_enum level, std::string text);
-  void recordFault(nlohmann::json fault);
+  void recordFault(report::FaultRecord fault);
   void countOutside(RejectionReason reason, std::uint64_t count = 1);
 
   void startEpisode(const EpisodeStart& start, std::int64_t now);
@@ -257,7 +257,7 @@ class FusionCenterCore {
       const std::optional<RunEnd>& end,
       const std::map<std::string, std::uint64_t>& rejected_by_inputs);
   void noteRestart();
-  [[nodiscard]] nlohmann::json restartFault() const;
+  [[nodiscard]] report::FaultRecord restartFault() const;
   [[nodiscard]] nlohmann::json finalReport(RunStatus status, const std::string& written_at);
 
   FusionCenterConfig config_;
@@ -297,7 +297,7 @@ class FusionCenterCore {
   // Which writer speaks for each sensor, per topic (first live writer wins).
   WriterClaims measurement_claims_, tally_claims_, status_claims_;
   std::set<std::uint64_t> refused_commands_;  // commands refused by right, recorded once each
-  nlohmann::json faults_ = nlohmann::json::array();
+  std::vector<report::FaultRecord> faults_;
   nlohmann::json traced_episodes_ = nlohmann::json::array();  // the first episodes' curves
   std::set<std::uint32_t> traced_versions_;  // ... and the versions in force at their start
   nlohmann::json stalls_ = nlohmann::json::array();  // stalls absorbed, for the report

@@ -45,6 +45,8 @@
 #include "sensornet/emulator/schedule_book.hpp"
 #include "sensornet/report/report_files.hpp"
 
+#include "sensornet/report/run_record.hpp"
+
 namespace sensornet::emulator {
 
 // Many latencies in fixed memory: counts in fine log-spaced bins (kFineBinsPerDecade a decade
@@ -210,8 +212,8 @@ inline constexpr double kLatencyHistogramCeilingS = 1e4;
 inline constexpr double kLatencyQuantileRelativeError = 5.76e-4;  // 10^(1/4000) - 1, rounded up
 [[nodiscard]] nlohmann::json latencyHistogram(const std::vector<double>& latencies_s);
 
-// One fault of a run, as the report lists it. Optional parts are null when unknown.
-[[nodiscard]] nlohmann::json faultEntry(FaultKind kind, const std::string& process,
+// One fault of a run, as the report lists it. Optional parts are none (null) when unknown.
+[[nodiscard]] report::FaultRecord faultEntry(FaultKind kind, const std::string& process,
                                         std::optional<int> sensor, std::optional<std::uint32_t> episode,
                                         std::optional<double> emulated_time_s,
                                         const std::string& detail);

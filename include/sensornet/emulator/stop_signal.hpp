@@ -6,6 +6,8 @@
 //   while (!stopRequested()) { ...; waitset.wait(20ms); }
 //   if (launcherDied()) ...  // stopped by the launcher's death, not asked by it
 
+#include <sys/types.h>
+
 #include <csignal>
 
 namespace sensornet::emulator {
@@ -22,5 +24,16 @@ void installStopSignals();
 [[nodiscard]] bool stopRequested();
 // True when the stop came from kLauncherDeathSignal.
 [[nodiscard]] bool launcherDied();
+
+// The launcher's pid when `sensornet launch` started this process (the parent's name is
+// sensornet), else 0. Read it at start, while the parent lives: the launcher arms
+// kLauncherDeathSignal in it, so that signal (or this parent gone) is the launcher's death.
+[[nodiscard]] pid_t launcherParent();
+
+// Ends this process at once with `code`, after flushing the log and standard streams, without
+// deleting DDS entities: for when everything owed is written (the report, the episode log) and
+// Cyclone would let a reliable writer linger for acknowledgements that readers killed with the
+// launcher never send.
+[[noreturn]] void leaveNow(int code);
 
 }  // namespace sensornet::emulator

@@ -26,6 +26,7 @@ namespace sensornet::evaluation {
 // The closed loop's surrogate: `flag` (--surrogate) when given, else the schedule file's
 // "surrogate" when it is one the closed loop plans with (info, cov), else cov (the run's
 // default). `schedule_text` is the schedule file's text (empty: no file; unparsable: ignored).
+// Throws InputError naming --surrogate when `flag` is neither info nor cov.
 [[nodiscard]] PlanSurrogate closedLoopSurrogate(const std::string& flag,
                                                 const std::string& schedule_text);
 

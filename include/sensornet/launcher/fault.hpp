@@ -7,16 +7,15 @@
 // fault of its own (docs/guide/faults.md, "Faults in the report").
 //
 //   Fault killed{FaultKind::ProcessKilled, "sensor_agent-0-2", {0, 1, 2}, at, "killed by ..."};
-//   json faults = faultList({killed}, report["faults"]);  // stalls after it: caused_by killed
-//   sensornet::report::causeCount(faults);                           // 1 (report/fault_causes.hpp)
+//   run.faults = faultList({killed}, run.faults);   // stalls after it: caused_by killed
+//   run.causeCount();                               // 1 (report/run_record.hpp)
 
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "sensornet/report/fault_causes.hpp"
+#include "sensornet/report/run_record.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 
 namespace sensornet::launcher {
@@ -47,9 +46,9 @@ struct Fault {
   bool survived = false;     // the run went on (restarted, or a sensor lost and the policy
                              // applied): it degrades the run instead of failing it
   std::optional<std::uint32_t> schedule_version;  // the version the failure policy published
-  // {"kind", "process", "sensor" (its one sensor, else null), "sensors" (when it hosted any),
-  //  "episode", "emulated_time_s", "detail", "survived", "schedule_version" when one followed}
-  [[nodiscard]] nlohmann::json toJson() const;
+  // As the report lists it: `sensor` its one sensor, `sensors` when it hosted any, `survived`
+  // always, `schedule_version` when one followed.
+  [[nodiscard]] report::FaultRecord toRecord() const;
 };
 
 // The cause whose consequences the other processes' entries are: the first fault that did not
@@ -68,7 +67,7 @@ struct Fault {
 // follows from a stop (its run_aborted: the coordinator's abort came from the launcher's cause).
 // The other processes record their entries without wall time, so "after the cause" is judged by
 // episode.
-[[nodiscard]] nlohmann::json faultList(const std::vector<Fault>& launcher_faults,
-                                       const nlohmann::json& reported);
+[[nodiscard]] std::vector<report::FaultRecord> faultList(
+    const std::vector<Fault>& launcher_faults, const std::vector<report::FaultRecord>& reported);
 
 }  // namespace sensornet::launcher

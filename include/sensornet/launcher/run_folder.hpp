@@ -28,15 +28,17 @@
 
 #include "sensornet/core/words.hpp"
 
+#include "sensornet/report/run_record.hpp"
+
 namespace sensornet::launcher {
 
 enum class RunState { Live, Finished, Unknown };
 
-// The run record the launcher leaves in the log folder when it starts a run.
-inline constexpr const char* kRunRecordName = "run.json";
+// The launch record the launcher leaves in the log folder when it starts a run.
+inline constexpr const char* kLaunchRecordName = "run.json";
 
 // What the launcher records of a run when it starts it (<log dir>/run.json).
-struct RunRecord {
+struct LaunchRecord {
   std::string run_id;
   std::filesystem::path scenario;  // absolute
   int episodes = 0;                // planned
@@ -45,7 +47,7 @@ struct RunRecord {
   std::string started_at;  // UTC, "2026-12-01T23:40:02Z" (io/utc_time.hpp)
 };
 
-[[nodiscard]] nlohmann::json runRecordJson(const RunRecord& record);
+[[nodiscard]] nlohmann::json launchRecordJson(const LaunchRecord& record);
 
 // What was found in a run folder.
 struct RunFolderFacts {
@@ -57,9 +59,9 @@ struct RunFolderFacts {
     std::optional<std::time_t> modified;
   } lock;
   bool launcher_alive = false;  // the process run.json's launcher_pid names is alive
-  // Read only when the run is not live (see isLive): the report's top-level object when it
-  // reads as a report, and when live the finished episodes (lines of its episode log).
-  std::optional<nlohmann::json> report;
+  // Read only when the run is not live (see isLive): the report, without its episodes, when it
+  // is one (finishedReportAt), and when live the finished episodes (lines of its episode log).
+  std::optional<report::RunRecord> report;
   std::optional<long long> episodes_logged;
 };
 
@@ -85,6 +87,9 @@ struct RunEntry {
 [[nodiscard]] bool isLive(const RunFolderFacts& facts);
 
 [[nodiscard]] RunEntry classifyRun(const RunFolderFacts& facts);
+// The report at `path` read without its per_episode entries (a report of millions of episodes
+// is never held), or nullopt when there is none or it is not a report this version reads.
+[[nodiscard]] std::optional<report::RunRecord> finishedReportAt(const std::filesystem::path& path);
 
 // Oldest start first, runs of unknown start last, then by run id.
 void sortRuns(std::vector<RunEntry>& runs);

@@ -5,21 +5,21 @@
 // <testcase> per --require criterion, passing or failing as the launcher judged it, with the
 // value measured in its message.
 //
-//   const std::string xml = junitXml({run_id, "degraded", 3, faults, checks, 12.5});
+//   const std::string xml = junitXml({run_id, RunStatus::Degraded, 3, run.faults, checks, 12.5});
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "sensornet/report/run_record.hpp"
 #include "sensornet/report/run_requirements.hpp"
 
 namespace sensornet::report {
 
 struct JunitRun {
   std::string run_id;
-  std::string status;  // the report's status word
+  RunStatus status = RunStatus::Failed;
   int exit_code = 1;
-  nlohmann::json faults = nlohmann::json::array();  // the report's faults
+  std::vector<FaultRecord> faults;  // the report's
   std::vector<RequirementCheck> checks;
   double seconds = 0.0;  // wall time of the launch
 };

@@ -102,4 +102,8 @@ using EpisodeSource = std::function<void(const std::function<void(const nlohmann
 void writeReportWith(std::ostream& out, const nlohmann::json& doc, const EpisodeSource& for_each,
                      int indent);
 
+// A run whose fusion center died: the episode log beside `report_path` exists and the final
+// report does not (what `fusion_center serve --resume-unfinished` resumes).
+[[nodiscard]] bool unfinishedRunAt(const std::filesystem::path& report_path);
+
 }  // namespace sensornet::report

@@ -8,6 +8,10 @@
 //   const ReportTables tables = reportTables(report, "runs/a/report.json");
 //   // tables.episodes: "episode,complete,realized_cost,..." one row per episode
 //
+// Both read the run's typed record (run_record.hpp), decoded once by the one codec; a caller that
+// holds the record already passes it (reportPage(run, source)), one with the document has it
+// decoded (decodeReport).
+//
 // The plots (each drawn only when the report carries what it needs; a note says what is missing):
 //   1. realized cost per episode, the bracket in force as a band, the running mean of the complete
 //      episodes with its 95% Student-t interval, schedule switches as rules;
@@ -24,16 +28,26 @@
 #include <optional>
 #include <string>
 
+#include "sensornet/report/run_record.hpp"
+
 namespace sensornet::report {
 
 // Reads a run report: InputError("<path>", ...) when the file cannot be read, is not JSON, or
-// lacks what a report has (run_id, per_episode, sensors, summary).
+// lacks what a report has (run_id, status, per_episode, sensors, summary) or does not decode
+// (checkReport).
 [[nodiscard]] nlohmann::json readReportFile(const std::filesystem::path& path);
 
-// Checks the parts of a report the page and the tables read; InputError(source, field, ...).
+// The record the page and the tables read: the report decoded (decodeRunRecord), its
+// run_id, status, per_episode, sensors and summary required; InputError(source, field,
+// expected) naming the first field that is missing or of the wrong type
+// ("per_episode[2].complete").
+[[nodiscard]] RunRecord decodeReport(const nlohmann::json& report, const std::string& source);
+// The same check, the record dropped.
 void checkReport(const nlohmann::json& report, const std::string& source);
 
-// The HTML page. `source` names the report in errors.
+// The HTML page. `source` names the report in errors; a record without its episode entries
+// (read with EpisodeEntries::Skipped) is InputError(source, "per_episode", ...).
+[[nodiscard]] std::string reportPage(const RunRecord& run, const std::string& source);
 [[nodiscard]] std::string reportPage(const nlohmann::json& report, const std::string& source);
 
 // The page's path beside a report: report.json -> report.html (any other name gets ".html"
@@ -56,6 +70,7 @@ struct ReportTables {
   std::string episodes;
   std::string sensors;
 };
+[[nodiscard]] ReportTables reportTables(const RunRecord& run, const std::string& source);
 [[nodiscard]] ReportTables reportTables(const nlohmann::json& report, const std::string& source);
 
 }  // namespace sensornet::report

@@ -20,6 +20,8 @@
 #include <string_view>
 #include <vector>
 
+#include "sensornet/report/run_record.hpp"
+
 namespace sensornet::report {
 
 // Exit code of a launch whose run ended (completed or degraded) but failed a --require
@@ -46,8 +48,12 @@ struct RequirementCheck {
   std::string measured;  // "1.84 ms", "yes", "0", or "not in the report (why)"
 };
 
-// Checks every requirement against a final report (run_report.hpp's JSON). A value the report
-// does not have (no latency measured, a bracket not judged) fails its criterion.
+// Checks every requirement against a run's final record. A value the report does not have (no
+// latency measured, a bracket not judged) fails its criterion.
+[[nodiscard]] std::vector<RequirementCheck> checkRequirements(
+    const std::vector<Requirement>& requirements, const RunRecord& report);
+// The same of a report document, read through the record's codec; a document that does not
+// decode fails every criterion, naming the field.
 [[nodiscard]] std::vector<RequirementCheck> checkRequirements(
     const std::vector<Requirement>& requirements, const nlohmann::json& report);
 

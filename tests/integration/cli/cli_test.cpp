@@ -10,36 +10,18 @@
 #include <unistd.h>
 
 #include "support/process.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
 
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
+using sensornet::testing::ScratchDir;
 
 const std::string kCoordinator = SENSORNET_COORDINATOR;
 const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
 const std::string kDefaultScenario = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml";
-
-// A scratch directory removed at the end of the test.
-class ScratchDir {
- public:
-  ScratchDir() {
-    path_ = std::filesystem::temp_directory_path() /
-            ("sensornet-cli-" + std::to_string(::getpid()) + "-" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() { std::filesystem::remove_all(path_); }
-  std::string write(const std::string& name, const std::string& text) const {
-    const auto file = path_ / name;
-    std::ofstream(file) << text;
-    return file.string();
-  }
-
- private:
-  std::filesystem::path path_;
-};
 
 void expectOneLineError(const ProcessResult& r, const std::string& must_contain) {
   EXPECT_NE(r.exit_code, 0) << r.out;

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "support/process.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
@@ -20,17 +21,12 @@ using sensornet::testing::runProcess;
 const std::string kCoordinator = SENSORNET_COORDINATOR;
 const std::string kDefaultScenario = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml";
 
-std::string scratchFile(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("sensornet-mc-cli-" + std::to_string(::getpid()) + "-" + name))
-      .string();
-}
-
 // The planned E[J] with its half-width sits in the schedule's own bracket (Corollary 1 of the
 // first paper: J(P_info) <= E[J] <= J(P_cov), computed by the surrogate rollouts, independently
 // of the Monte Carlo), and the file records objective, half-width and episodes.
 TEST(CoordinatorPlanMc, ReportsMeanHalfWidthAndEpisodesInsideTheBracket) {
-  const std::string out = scratchFile("plan.json");
+  const sensornet::testing::ScratchDir dir;
+  const std::string out = dir.file("plan.json");
   const ProcessResult r =
       runProcess({kCoordinator, "plan", "--scenario", kDefaultScenario, "--surrogate", "mc",
                   "--max-seconds", "8", "--out", out, "--json"});
@@ -53,7 +49,8 @@ TEST(CoordinatorPlanMc, ReportsMeanHalfWidthAndEpisodesInsideTheBracket) {
 }
 
 TEST(CoordinatorPlanMc, BadValuesGiveOneLineAndNonZeroExit) {
-  const std::string out = scratchFile("bad.json");
+  const sensornet::testing::ScratchDir dir;
+  const std::string out = dir.file("bad.json");
   for (const auto& args : {std::vector<std::string>{"--surrogate", "montecarlo"},
                            std::vector<std::string>{"--surrogate", "mc", "--max-seconds", "0"}}) {
     std::vector<std::string> command = {kCoordinator, "plan", "--scenario", kDefaultScenario,

@@ -14,36 +14,18 @@
 #include <utility>
 
 #include "support/process.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
 
 using sensornet::testing::ProcessResult;
 using sensornet::testing::runProcess;
+using sensornet::testing::ScratchDir;
 
 const std::string kCoordinator = SENSORNET_COORDINATOR;
 const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
 const std::string kDefaultScenario = std::string(SENSORNET_SOURCE_DIR) + "/scenarios/default.yaml";
-
-// A scratch directory removed at the end of the test.
-class NumericScratch {
- public:
-  NumericScratch() {
-    path_ = std::filesystem::temp_directory_path() /
-            ("sensornet-numeric-" + std::to_string(::getpid()) + "-" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::create_directories(path_);
-  }
-  ~NumericScratch() { std::filesystem::remove_all(path_); }
-  [[nodiscard]] std::string write(const std::string& name, const std::string& text) const {
-    const auto file = path_ / name;
-    std::ofstream(file) << text;
-    return file.string();
-  }
-
- private:
-  std::filesystem::path path_;
-};
 
 std::string defaultScenarioText() {
   std::ifstream in(kDefaultScenario);
@@ -75,14 +57,14 @@ void expectBadInput(const ProcessResult& r, std::initializer_list<std::string> p
   }
 }
 
-ProcessResult planWith(const NumericScratch& dir, const std::string& scenario_text) {
+ProcessResult planWith(const ScratchDir& dir, const std::string& scenario_text) {
   const std::string scenario = dir.write("scenario.yaml", scenario_text);
   return runProcess({kCoordinator, "plan", "--scenario", scenario, "--surrogate", "info", "--out",
                      dir.write("plan.json", "")});
 }
 
 TEST(NumericCli, PlanRefusesAnHWhoseInformationOverflows) {
-  const NumericScratch dir;
+  const ScratchDir dir;
   // The first sensor (x-radar): H = [1e308, 0, 0, 0], so H' R^-1 H holds 1e616.
   const auto [text, line] = mutatedDefault("H: [[1, 0, 0, 0]]", "H: [[1e308, 0, 0, 0]]");
   const ProcessResult r = planWith(dir, text);
@@ -91,7 +73,7 @@ TEST(NumericCli, PlanRefusesAnHWhoseInformationOverflows) {
 }
 
 TEST(NumericCli, PlanRefusesAnAWithHugeEntries) {
-  const NumericScratch dir;
+  const ScratchDir dir;
   const auto [text, line] = mutatedDefault("[0, 0, -0.5, 0],", "[0, 0, 1e308, 0],");
   const ProcessResult r = planWith(dir, text);
   // The field's line is the line where A starts, two lines above the changed row.
@@ -100,7 +82,7 @@ TEST(NumericCli, PlanRefusesAnAWithHugeEntries) {
 }
 
 TEST(NumericCli, PlanRefusesAnOverflowingYamlNumber) {
-  const NumericScratch dir;
+  const ScratchDir dir;
   const auto [text, line] = mutatedDefault("b: [12, 6]", "b: [12, 1e309]");
   const ProcessResult r = planWith(dir, text);
   expectBadInput(r, {"scenario.yaml:" + std::to_string(line) + ": constraints.b[1]: expected",
@@ -108,7 +90,7 @@ TEST(NumericCli, PlanRefusesAnOverflowingYamlNumber) {
 }
 
 TEST(NumericCli, PlanRefusesAnOverflowingJsonWarmStart) {
-  const NumericScratch dir;
+  const ScratchDir dir;
   const std::string warm = dir.write(
       "warm.json", "{\"horizon\": 3, \"intervals\": 1,\n \"rates\": [[1, 1, 1, 1, 1, 1e309]]}\n");
   const ProcessResult r = runProcess({kCoordinator, "plan", "--scenario", kDefaultScenario,
@@ -117,7 +99,7 @@ TEST(NumericCli, PlanRefusesAnOverflowingJsonWarmStart) {
 }
 
 TEST(NumericCli, EvaluateRefusesAnOverflowingJsonSchedule) {
-  const NumericScratch dir;
+  const ScratchDir dir;
   const std::string schedule =
       dir.write("s.json", "{\"horizon\": 3,\n \"intervals\": 1e999, \"rates\": []}\n");
   const ProcessResult r = runProcess({kFusionCenter, "evaluate", "--scenario", kDefaultScenario,

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "support/process.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
@@ -35,15 +36,6 @@ const std::string kDefaultScenario = std::string(SENSORNET_SOURCE_DIR) + "/scena
 
 class UserCli : public ::testing::Test {
  protected:
-  UserCli()
-      : dir_(fs::temp_directory_path() /
-             ("sensornet-user-cli-" + std::to_string(::getpid()) + "-" +
-              ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    fs::permissions(dir_, fs::perms::owner_all);
-  }
-  ~UserCli() override { fs::remove_all(dir_); }
 
   static std::string readText(const fs::path& path) {
     std::ifstream in(path);
@@ -52,7 +44,8 @@ class UserCli : public ::testing::Test {
     return text.str();
   }
 
-  fs::path dir_;
+  sensornet::testing::ScratchDir scratch_;
+  const fs::path dir_ = scratch_.path();
 };
 
 void expectOneLine(const ProcessResult& r, const std::string& line) {

@@ -29,6 +29,7 @@
 #include "sensornet/io/scenario_file.hpp"
 #include "support/background_process.hpp"
 #include "support/process.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace {
 
@@ -211,9 +212,8 @@ TEST(ComposeTopology, SwarmSensorTasksCoverEverySensorOnce) {
     script.erase(at, 1);  // compose's escape of a literal $
   }
 
-  char pattern[] = "/tmp/sensornet-swarm-test-XXXXXX";
-  ASSERT_NE(::mkdtemp(pattern), nullptr);
-  const fs::path dir = pattern;
+  const sensornet::testing::ScratchDir scratch;
+  const fs::path dir = scratch.path();
   const fs::path stand_in = dir / "sensor_agent";
   std::ofstream(stand_in) << "#!/bin/sh\necho \"$@\"\n";
   fs::permissions(stand_in, fs::perms::owner_all);
@@ -239,8 +239,6 @@ TEST(ComposeTopology, SwarmSensorTasksCoverEverySensorOnce) {
   std::multiset<int> expected;
   for (int j = 0; j < model.sensorCount(); ++j) expected.insert(j);
   EXPECT_EQ(hosted, expected);
-  std::error_code ignored;
-  fs::remove_all(dir, ignored);
 }
 
 // Each service's command as a local process of this host.
@@ -270,9 +268,8 @@ std::vector<std::string> localCommand(const Service& service, const std::string&
 }
 
 TEST(ComposeTopology, RunsAsLocalProcesses) {
-  char pattern[] = "/tmp/sensornet-compose-test-XXXXXX";
-  ASSERT_NE(::mkdtemp(pattern), nullptr);
-  const fs::path dir = pattern;
+  const sensornet::testing::ScratchDir scratch;
+  const fs::path dir = scratch.path();
   const std::string run_id = "compose-" + std::to_string(::getpid());
   ::unsetenv("SENSORNET_CYCLONE_CONFIG");  // loopback, never the container configuration
 
@@ -309,8 +306,6 @@ TEST(ComposeTopology, RunsAsLocalProcesses) {
   EXPECT_EQ(report["status"], "completed");
   EXPECT_TRUE(fs::exists(dir / "report.html")) << "the fusion center's --page";
   EXPECT_TRUE(processesMentioning(run_id).empty());
-  std::error_code ignored;
-  fs::remove_all(dir, ignored);
 }
 
 }  // namespace

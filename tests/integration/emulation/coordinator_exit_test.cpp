@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "launch_fixture.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet::testing {
 namespace {
@@ -37,9 +38,10 @@ std::vector<json> coordinatorFaults(const json& report) {
 TEST(CoordinatorExit, ASignalWhileWaitingForPeersEndsTheRunAndExitsZero) {
   const std::string id = uniqueRunId("coord-exit-signal");
   const LeftoverGuard guard(id);
+  const sensornet::testing::ScratchDir dir;
   BackgroundProcess coordinator({kCoordinator, "serve", "--run-id", id, "--scenario",
                                  kDefaultScenario, "--surrogate", "uniform"},
-                                (fs::temp_directory_path() / (id + ".log")).string());
+                                dir.file("coordinator.log"));
   ASSERT_TRUE(waitUntil([&] { return coordinator.log().find("waiting for") != std::string::npos; },
                         30s))
       << coordinator.log();
@@ -54,10 +56,11 @@ TEST(CoordinatorExit, ASignalWhileWaitingForPeersEndsTheRunAndExitsZero) {
 TEST(CoordinatorExit, PeersThatNeverComeAreItsOwnFailure) {
   const std::string id = uniqueRunId("coord-exit-alone");
   const LeftoverGuard guard(id);
+  const sensornet::testing::ScratchDir dir;
   BackgroundProcess coordinator({kCoordinator, "serve", "--run-id", id, "--scenario",
                                  kDefaultScenario, "--surrogate", "uniform", "--ready-timeout",
                                  "1"},
-                                (fs::temp_directory_path() / (id + ".log")).string());
+                                dir.file("coordinator.log"));
   const std::optional<int> code = coordinator.waitForExit(30s);
   ASSERT_TRUE(code.has_value()) << coordinator.log();
   EXPECT_EQ(*code, 1) << coordinator.log();

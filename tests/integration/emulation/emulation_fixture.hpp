@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "support/background_process.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet::testing {
 
@@ -48,13 +49,10 @@ inline std::string uniqueRunId(const std::string& what) {
 // One run's processes, their logs in a scratch directory, all stopped by the destructor.
 class Emulation {
  public:
-  explicit Emulation(std::string run_id) : run_id_(std::move(run_id)) {
-    dir_ = std::filesystem::temp_directory_path() / ("sensornet-" + run_id_);
-    std::filesystem::create_directories(dir_);
-  }
+  explicit Emulation(std::string run_id)
+      : run_id_(std::move(run_id)), scratch_(run_id_), dir_(scratch_.path()) {}
   ~Emulation() {
-    processes_.clear();  // stops whatever still runs
-    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(dir_);
+    processes_.clear();  // stops whatever still runs, before the folder goes
   }
 
   std::string reportPath() const { return (dir_ / "report.json").string(); }
@@ -115,6 +113,7 @@ class Emulation {
   }
 
   std::string run_id_;
+  sensornet::testing::ScratchDir scratch_;  // kept when the test failed
   std::filesystem::path dir_;
   std::vector<std::pair<std::string, BackgroundProcess>> processes_;
 };

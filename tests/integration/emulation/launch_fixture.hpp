@@ -32,6 +32,7 @@
 #include "support/background_process.hpp"
 #include "support/process.hpp"
 #include "support/sanitizer.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet::testing {
 
@@ -107,9 +108,6 @@ bool waitUntil(Done done, std::chrono::milliseconds limit) {
 class LaunchTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char pattern[] = "/tmp/sensornet-launch-test-XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
     ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
     ::setenv("SENSORNET_SCRATCH_DIR", (dir_ / "scratch").c_str(), 1);
     ::unsetenv("SENSORNET_CYCLONE_CONFIG");
@@ -121,7 +119,6 @@ class LaunchTest : public ::testing::Test {
     std::error_code ignored;
     // Undo what a test made unremovable or another user's before removing the folder.
     std::filesystem::permissions(dir_, std::filesystem::perms::owner_all, ignored);
-    if (!HasFailure()) std::filesystem::remove_all(dir_, ignored);
   }
 
   // A launch of `scenario` with this test's run id; logs in dir_/logs unless `log_dir` is empty
@@ -142,7 +139,8 @@ class LaunchTest : public ::testing::Test {
     return launchArgs(episodes, time_scale, dir_ / "report.json", dir_ / "logs");
   }
 
-  std::filesystem::path dir_;
+  sensornet::testing::ScratchDir scratch_;  // removed unless the test failed
+  std::filesystem::path dir_ = scratch_.path();
   std::string run_id_;
 };
 

@@ -33,6 +33,7 @@
 #include "support/occurrences.hpp"
 #include "support/process.hpp"
 #include "support/sanitizer.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace {
 
@@ -86,19 +87,12 @@ bool isAliveWith(pid_t pid, const std::string& token) {
 class Launcher : public ::testing::Test {
  protected:
   void SetUp() override {
-    char pattern[] = "/tmp/sensornet-launcher-test-XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
     // Keep the current-run record of these tests away from the user's.
     ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
     ::unsetenv("SENSORNET_CYCLONE_CONFIG");
     ::unsetenv("SENSORNET_BIN_DIR");
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     run_id_ = "lt-" + std::to_string(::getpid()) + "-" + std::string(info->name()).substr(0, 24);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
   }
 
   [[nodiscard]] std::vector<std::string> launchArgs(int episodes, double time_scale) const {
@@ -143,7 +137,8 @@ class Launcher : public ::testing::Test {
     return std::nullopt;
   }
 
-  fs::path dir_;
+  sensornet::testing::ScratchDir scratch_;
+  fs::path dir_ = scratch_.path();
   std::string run_id_;
 };
 

@@ -149,7 +149,11 @@ TEST_F(ReportPage, BadInputIsOneLineNamingTheFileAndExitsTwo) {
   EXPECT_NE(r.err.find("per_episode: expected an array"), std::string::npos) << r.err;
 
   const fs::path good = dir_ / "good.json";
-  { std::ofstream(good) << R"({"run_id": "x", "per_episode": [], "sensors": [], "summary": {}})"; }
+  // The smallest report the page draws: what the record requires (run_id, status, summary).
+  {
+    std::ofstream(good) << R"({"run_id": "x", "status": "completed", "per_episode": [],)"
+                           R"( "sensors": [], "summary": {}})";
+  }
   r = report({good.string(), "--html", "/proc/sensornet-page.html"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("/proc/sensornet-page.html"), std::string::npos) << r.err;

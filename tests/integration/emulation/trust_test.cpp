@@ -38,6 +38,7 @@
 #include "sensornet/io/scenario_file.hpp"
 #include "support/in_order_cost.hpp"
 #include "support/sanitizer.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
@@ -121,13 +122,7 @@ std::vector<std::vector<std::uint64_t>> timelineCounts(const std::string& scenar
 class Trust : public ::testing::Test {
  protected:
   void SetUp() override {
-    char pattern[] = "/tmp/sensornet-trust-test-XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
     schedule_ = writeFile(dir_ / "varying.json", varyingSchedule().dump());
-  }
-  void TearDown() override {
-    if (!HasFailure()) std::filesystem::remove_all(dir_);
   }
 
   // Starts a run of the default scenario under the varying schedule: fusion center, sensor
@@ -209,7 +204,8 @@ class Trust : public ::testing::Test {
     EXPECT_TRUE(faults.empty()) << report.at("faults").dump();
   }
 
-  std::filesystem::path dir_;
+  sensornet::testing::ScratchDir scratch_;
+  std::filesystem::path dir_ = scratch_.path();
   std::string schedule_;
 };
 

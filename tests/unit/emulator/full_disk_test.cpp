@@ -18,6 +18,7 @@
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/report/report_files.hpp"
 #include "support/file_size_limit.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -31,12 +32,6 @@ using sensornet::testing::FileSizeLimit;
 
 class FullDisk : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/sensornet-full-disk-XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   static std::string readAll(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
@@ -45,7 +40,8 @@ class FullDisk : public ::testing::Test {
     return text.str();
   }
 
-  fs::path dir_;
+  sensornet::testing::ScratchDir scratch_;
+  fs::path dir_ = scratch_.path();
 };
 
 json entryOf(int episode) {

@@ -172,7 +172,7 @@ class FusionCenterCoreTest : public ::testing::Test {
       if (auto* r = std::get_if<PublishReport>(&a)) reports_.push_back(*r);
       if (auto* f = std::get_if<WriteFinalReport>(&a)) final_ = f->doc;
       if (std::holds_alternative<AppendEpisodeLog>(a)) ++logged_;
-      if (auto* f = std::get_if<RecordFault>(&a)) fault_log_.push_back(f->fault);
+      if (auto* f = std::get_if<RecordFault>(&a)) fault_log_.push_back(report::encode(f->fault));
     }
   }
   RunStatus finish(std::optional<RunEnd> end) {
@@ -182,9 +182,11 @@ class FusionCenterCoreTest : public ::testing::Test {
   }
   [[nodiscard]] std::vector<std::string> faultKinds() const {
     std::vector<std::string> kinds;
-    for (const json& f : core_->faults()) kinds.push_back(f.at("kind"));
+    for (const report::FaultRecord& f : core_->faults()) kinds.emplace_back(wordOf(f.kind));
     return kinds;
   }
+  // The faults as the report lists them (through the record's codec).
+  [[nodiscard]] json faultsJson() const { return report::encode(core_->faults()); }
   // One whole clean episode: every measurement on time, every tally at the end.
   void cleanEpisode(std::uint32_t e) {
     start(e);
@@ -225,7 +227,7 @@ TEST_F(FusionCenterCoreTest, ClosesAnEpisodeOnlyWhenEveryCountIsIn) {
   for (int j = 0; j < 4; ++j) EXPECT_EQ(r.sensors[j].received, sentBy(all)[j]);
   EXPECT_EQ(logged_, 1);
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed);
-  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+  EXPECT_TRUE(faultsJson().empty()) << faultsJson().dump();
 }
 
 TEST_F(FusionCenterCoreTest, TallyBeforeItsMeasurementsWaitsForThem) {
@@ -275,7 +277,7 @@ TEST_F(FusionCenterCoreTest, ASilentSensorIsAwaitedForTheStallLimitThenAStall) {
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_FALSE(reports_[0].result.complete);
   ASSERT_EQ(faultKinds(), std::vector<std::string>{"stall"});
-  EXPECT_EQ(core_->faults()[0].at("sensor"), 2);
+  EXPECT_EQ(faultsJson()[0].at("sensor"), 2);
   // Its tally after the close is named as late.
   core_->onTally(tally(2, 0, sent[2], now_), now_);
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"stall", "late_tally"}));
@@ -296,11 +298,11 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   ASSERT_EQ(reports_.size(), 1u) << "waited for a dead sensor";
   EXPECT_FALSE(reports_[0].result.complete);
   // The notice is the report's account of the death (no launcher may add its own).
-  ASSERT_EQ(core_->faults().size(), 1u) << core_->faults().dump();
-  EXPECT_EQ(core_->faults()[0].at("kind"), "sensor_died");
-  EXPECT_EQ(core_->faults()[0].at("sensor"), 1);
-  EXPECT_EQ(core_->faults()[0].at("episode"), 0);
-  EXPECT_DOUBLE_EQ(core_->faults()[0].at("emulated_time_s").get<double>(), 1.0);
+  ASSERT_EQ(faultsJson().size(), 1u) << faultsJson().dump();
+  EXPECT_EQ(faultsJson()[0].at("kind"), "sensor_died");
+  EXPECT_EQ(faultsJson()[0].at("sensor"), 1);
+  EXPECT_EQ(faultsJson()[0].at("episode"), 0);
+  EXPECT_DOUBLE_EQ(faultsJson()[0].at("emulated_time_s").get<double>(), 1.0);
   // The next episode starts with it dead: it is complete without it.
   start(1);
   auto next = measurements(1);
@@ -398,7 +400,7 @@ TEST_F(FusionCenterCoreTest, WaitingForADeathNoticeIsNoOverload) {
   EXPECT_FALSE(reports_[0].result.complete);
   EXPECT_LT(reports_[0].result.drain_s, 0.1);
   const std::vector<std::string> kinds = faultKinds();
-  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "overload"), 0) << core_->faults().dump();
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "overload"), 0) << faultsJson().dump();
 }
 
 // Defect (a): a link cut for 3 s mid-episode delays two sensors' measurements and tallies; the
@@ -434,7 +436,7 @@ TEST_F(FusionCenterCoreTest, ACutLinkIsAStallNotAnOverload) {
   EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
   EXPECT_LT(reports_[0].result.drain_s, 0.1);
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed);
-  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+  EXPECT_TRUE(faultsJson().empty()) << faultsJson().dump();
   ASSERT_EQ(core_->stalls().size(), 1u) << core_->stalls().dump();
   const json& stall = core_->stalls()[0];
   EXPECT_EQ(stall.at("episode"), 0);
@@ -581,7 +583,7 @@ TEST_F(FusionCenterCoreTest, AWriterSpeaksOnlyForTheSensorsOfItsIdentityWhatever
   }
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"wrong_identity", "wrong_identity"}))
       << "named once per writer";
-  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("speaks for sensors 1"),
+  EXPECT_NE(faultsJson()[0].at("detail").get<std::string>().find("speaks for sensors 1"),
             std::string::npos);
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
   EXPECT_EQ(final_.at("summary").at("rejected_by_reason").at("wrong_identity"), 3);
@@ -602,7 +604,7 @@ TEST_F(FusionCenterCoreTest, AWriterOfNoSensorBlockSpeaksForNobody) {
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_EQ(reports_[0].result.realized_cost, inOrderCost(all));
   ASSERT_EQ(faultKinds(), std::vector<std::string>{"wrong_identity"});
-  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("speaks for no sensor"),
+  EXPECT_NE(faultsJson()[0].at("detail").get<std::string>().find("speaks for no sensor"),
             std::string::npos);
 }
 
@@ -615,7 +617,7 @@ TEST_F(FusionCenterCoreTest, ACommandRefusedByRightIsAFaultOnce) {
   core_->onCommandRefused(42, "only the launcher may report sensors failed", now_);
   closeEpisode0(all);
   EXPECT_EQ(faultKinds(), std::vector<std::string>{"command_refused"});
-  EXPECT_EQ(core_->faults()[0].at("process"), "coordinator");
+  EXPECT_EQ(faultsJson()[0].at("process"), "coordinator");
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
 }
 
@@ -634,7 +636,7 @@ TEST_F(FusionCenterCoreTest, ANewWriterTakesOverWhenTheFirstIsGone) {
   closeEpisode0(all);
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_TRUE(reports_[0].result.complete);
-  EXPECT_TRUE(core_->faults().empty()) << core_->faults().dump();
+  EXPECT_TRUE(faultsJson().empty()) << faultsJson().dump();
 }
 
 TEST_F(FusionCenterCoreTest, StatusFollowsFromTheFaults) {
@@ -655,7 +657,7 @@ TEST_F(FusionCenterCoreTest, StatusFollowsFromTheFaults) {
   announce();
   cleanEpisode(0);
   EXPECT_EQ(finish(std::nullopt), RunStatus::Interrupted);
-  EXPECT_TRUE(core_->faults().empty());
+  EXPECT_TRUE(faultsJson().empty());
 }
 
 // Defect (b): a signal with two episodes open: one fault names the cause, the episodes and the
@@ -676,13 +678,13 @@ TEST_F(FusionCenterCoreTest, ARunStoppedWithEpisodesOpenNamesItsCauseOnce) {
   EXPECT_NE(reports_[0].result.incomplete_reason.find("cut short"), std::string::npos)
       << reports_[0].result.incomplete_reason;
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"lost", "cut_short"}));
-  const json& cut = core_->faults()[1];
+  const json cut = faultsJson()[1];
   EXPECT_EQ(cut.at("ended_by"), "interrupted");
   EXPECT_FALSE(cut.contains("caused_by")) << "the launcher, which knows the cause, marks it";
   EXPECT_EQ(cut.at("episodes"), json::array({0, 1}));
   EXPECT_NE(cut.at("detail").get<std::string>().find("episode 0: sensors 1, 2"), std::string::npos)
       << cut.at("detail");
-  EXPECT_EQ(core_->faults()[0].at("sensor"), 3);
+  EXPECT_EQ(faultsJson()[0].at("sensor"), 3);
 }
 
 // Issue 31: the launcher killed with -9 mid-episode; its parent-death signal stops the fusion
@@ -695,7 +697,7 @@ TEST_F(FusionCenterCoreTest, ALauncherThatDiedIsTheCauseOfTheInterruptedRun) {
   deliver(all);
   core_->onLauncherGone("the launcher (pid 42) that started this fusion center died", now_);
   EXPECT_EQ(finish(std::nullopt), RunStatus::Interrupted);
-  const json& faults = core_->faults();
+  const json faults = faultsJson();
   ASSERT_EQ(faults.size(), 2u) << faults.dump();
   EXPECT_EQ(faults[0].at("kind"), "interrupted");
   EXPECT_EQ(faults[0].at("process"), "sensornet");
@@ -715,7 +717,7 @@ TEST_F(FusionCenterCoreTest, EachFailedSensorIsRecordedOnceAtItsFirstNotice) {
   core_->onSensorFailure({0, 2.5, {1, 3}, "the SensorStatus writer lost its liveliness"}, now_);
   core_->onSensorFailure({1, 0.0, {1, 3}, "again"}, now_);
   std::vector<std::pair<int, double>> died;
-  for (const json& f : core_->faults()) {
+  for (const json& f : faultsJson()) {
     if (f.at("kind") == "sensor_died") died.emplace_back(f.at("sensor"), f.at("emulated_time_s"));
   }
   EXPECT_EQ(died, (std::vector<std::pair<int, double>>{{1, 1.0}, {3, 2.5}}));
@@ -731,12 +733,12 @@ TEST_F(FusionCenterCoreTest, AnAbortedRunWithAnEpisodeOpenCountsOneCutShort) {
   EXPECT_EQ(finish(RunEnd{1, true, "sensor 1 failed (--on-sensor-failure stop)"}),
             RunStatus::Failed);
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"sensor_died", "cut_short", "run_aborted"}));
-  const json& cut = core_->faults()[1];
+  const json cut = faultsJson()[1];
   EXPECT_EQ(cut.at("ended_by"), "run_aborted");
   // The abort, recorded here too, is the cause of the cut (the launcher names the death as the
   // abort's cause when it supervises; without one the death stands beside the abort).
   EXPECT_EQ(cut.at(sensornet::report::kCausedByField), (json{{"kind", "run_aborted"}, {"process", "coordinator"}}));
-  EXPECT_EQ(sensornet::report::causeCount(core_->faults()), 2u) << core_->faults().dump();
+  EXPECT_EQ(sensornet::report::causeCount(faultsJson()), 2u) << faultsJson().dump();
   EXPECT_EQ(cut.at("detail").get<std::string>().rfind("episode 0 was open when", 0), 0u)
       << cut.dump();
 }
@@ -804,7 +806,8 @@ TEST_F(FusionCenterCoreTest, AFusionCenterKilledTwiceKeepsWhatEachLifeRecorded) 
   EXPECT_EQ(fault_log_[0].at("kind"), "restarted");
   EXPECT_NE(fault_log_[0].at("detail").get<std::string>().find("stopped again"), std::string::npos);
   std::vector<json> first_life = fault_log_;
-  first_life.push_back(faultEntry(FaultKind::Stall, "fusion_center", 2, 3, 1.5, "a stall"));
+  first_life.push_back(
+      report::encode(faultEntry(FaultKind::Stall, "fusion_center", 2, 3, 1.5, "a stall")));
   fault_log_.clear();
   make(loggedEpisodes(4), startOf(4) + 1 * kS, first_life);  // killed, started again
   announce();
@@ -814,8 +817,8 @@ TEST_F(FusionCenterCoreTest, AFusionCenterKilledTwiceKeepsWhatEachLifeRecorded) 
   runUntil(endOf(4) + 500 * kMs);
   EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"restarted", "stall", "restarted"}));
-  EXPECT_EQ(core_->faults().at(0), first_life[0]);
-  const std::string second = core_->faults().at(2).at("detail");
+  EXPECT_EQ(faultsJson().at(0), first_life[0]);
+  const std::string second = faultsJson().at(2).at("detail");
   EXPECT_NE(second.find("resumed from 4 logged episodes"), std::string::npos) << second;
   EXPECT_NE(second.find("episode 4"), std::string::npos) << "what it could not fuse: " << second;
   EXPECT_EQ(final_.at("faults").size(), 3u);
@@ -837,7 +840,7 @@ TEST_F(FusionCenterCoreTest, AResumedCenterNamesTheSensorsWhoseWritersItLacks) {
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_EQ(reports_[0].lacking_writers, (std::vector<int>{2, 3}));
   EXPECT_EQ(finish(RunEnd{5, false, ""}), RunStatus::Degraded);
-  const std::string restarted = core_->faults().at(0).at("detail");
+  const std::string restarted = faultsJson().at(0).at("detail");
   EXPECT_NE(restarted.find("without the measurement writers of sensors 2, 3"), std::string::npos)
       << restarted;
 }
@@ -869,7 +872,7 @@ TEST_F(FusionCenterCoreTest, AnEpisodeThatBeginsBeforeTheWritersAreHeldIsNotFuse
   EXPECT_TRUE(reports_[2].result.complete);
   EXPECT_EQ(finish(RunEnd{7, false, ""}), RunStatus::Degraded);
   EXPECT_EQ(faultKinds(), std::vector<std::string>{"restarted"}) << "no lost, no stall";
-  EXPECT_NE(core_->faults()[0].at("detail").get<std::string>().find("episode 5 began before"),
+  EXPECT_NE(faultsJson()[0].at("detail").get<std::string>().find("episode 5 began before"),
             std::string::npos);
 }
 
@@ -918,7 +921,7 @@ TEST_F(FusionCenterCoreTest, ItsOwnStallDoesNotCountAgainstASilentSensor) {
   runUntil(endOf(0) + 2 * kS);
   now_ += 11 * kS;  // stopped (SIGSTOP) for 11 s: no tick
   runUntil(now_ + 2 * kS);  // 2 + 2 s of silence awake: within the 12 s limit
-  EXPECT_TRUE(reports_.empty()) << core_->faults().dump();
+  EXPECT_TRUE(reports_.empty()) << faultsJson().dump();
   ASSERT_FALSE(core_->stalls().empty());
   EXPECT_EQ(core_->stalls()[0].at("process"), "fusion_center");
   deliverTallies(sent, 0, {3});

@@ -16,6 +16,7 @@
 #include "sensornet/emulator/schedule_book.hpp"
 
 #include "emulator_test_support.hpp"
+#include "../../support/scratch_dir.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -87,16 +88,10 @@ void expectSameJournal(const CoordinatorJournal& a, const CoordinatorJournal& b)
 
 class JournalFile : public ::testing::Test {
  protected:
-  JournalFile()
-      : dir_(std::filesystem::temp_directory_path() /
-             ("sensornet-journal-" + std::to_string(::getpid()) + "-" +
-              ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    std::filesystem::create_directories(dir_);
-  }
-  ~JournalFile() override { std::filesystem::remove_all(dir_); }
-  std::string path(const char* name) const { return (dir_ / name).string(); }
+  std::string path(const char* name) const { return scratch_.file(name); }
 
-  std::filesystem::path dir_;
+  sensornet::testing::ScratchDir scratch_;
+  const std::filesystem::path dir_ = scratch_.path();
   Scenario scenario_ = smallScenario();
 };
 

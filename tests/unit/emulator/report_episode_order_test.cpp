@@ -14,6 +14,7 @@
 
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/report/report_files.hpp"
+#include "../../support/scratch_dir.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -46,14 +47,8 @@ std::vector<std::pair<std::uint32_t, double>> episodesOf(const json& report) {
 
 class ReportEpisodeOrder : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("sensornet-episode-order-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  sensornet::testing::ScratchDir scratch_;
+  const fs::path dir_ = scratch_.path();
 };
 
 const std::vector<std::pair<std::uint32_t, double>> kInEpisodeOrder{{0, 10.0}, {1, 11.0}, {2, 12.0}};

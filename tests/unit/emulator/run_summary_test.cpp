@@ -20,6 +20,7 @@
 #include "sensornet/emulator/episode_set.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/report/report_files.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet::emulator {
 namespace {
@@ -153,17 +154,12 @@ TEST(LatencyHistogram, QuantilesStayWithinTheStatedRelativeErrorAcrossDecades) {
   EXPECT_TRUE(LatencyHistogram().toJson().is_null());
 }
 
-std::filesystem::path scratchDir() {
-  char pattern[] = "/tmp/sensornet-summary-test-XXXXXX";
-  if (::mkdtemp(pattern) == nullptr) return {};
-  return pattern;
-}
-
 // A report that holds no entry writes, from its episode log, the very text of the whole
 // document (pretty and on one line): each episode once (a repeated line and a torn one are
 // left out), in log order, with keys before and after per_episode.
 TEST(RunReport, WritesPerEpisodeFromItsLogAsTheWholeDocumentWouldRead) {
-  const std::filesystem::path dir = scratchDir();
+  const sensornet::testing::ScratchDir scratch;
+  const std::filesystem::path dir = scratch.path();
   ASSERT_FALSE(dir.empty());
   const std::filesystem::path log_path = dir / "report.jsonl";
   std::mt19937_64 rng(3);
@@ -183,7 +179,7 @@ TEST(RunReport, WritesPerEpisodeFromItsLogAsTheWholeDocumentWouldRead) {
     }
   }
   std::ofstream(log_path, std::ios::app) << "{\"episode\": 40, \"realiz";  // torn
-  const json faults = json::array({faultEntry(FaultKind::Stall, "fusion_center", 1, 3, 0.5, "x")});
+  const json faults = json::array({report::encode(faultEntry(FaultKind::Stall, "fusion_center", 1, 3, 0.5, "x"))});
   const json extra = {{"written_at", "2026-11-30T21:00:00Z"}, {"arrivals", {{"mode", "poisson"}}}};
   const json whole = held.toJson("degraded", faults, json::array(), extra);
   const json head = streamed.toJsonWithoutEpisodes("degraded", faults, json::array(), extra);
@@ -200,13 +196,13 @@ TEST(RunReport, WritesPerEpisodeFromItsLogAsTheWholeDocumentWouldRead) {
   empty.write(out, empty.toJsonWithoutEpisodes("completed", json::array(), json::array()), 2);
   EXPECT_EQ(json::parse(out.str()), empty.toJson("completed", json::array(), json::array()));
   EXPECT_EQ(json::parse(out.str()).at("per_episode"), json::array());
-  std::filesystem::remove_all(dir);
 }
 
 // The one reader of report files: a written report reads back whole, or without its
 // per_episode (then nothing there is even looked at); anything else is one named problem.
 TEST(ReportFile, ReadsAWrittenReportAndNamesWhatIsWrongWithAnythingElse) {
-  const std::filesystem::path dir = scratchDir();
+  const sensornet::testing::ScratchDir scratch;
+  const std::filesystem::path dir = scratch.path();
   ASSERT_FALSE(dir.empty());
   std::mt19937_64 rng(5);
   RunReport report("r", "d", 3, 4);
@@ -247,7 +243,6 @@ TEST(ReportFile, ReadsAWrittenReportAndNamesWhatIsWrongWithAnythingElse) {
   std::ofstream(dir / "odd.json") << odd.dump();
   EXPECT_TRUE(readReport(dir / "odd.json", EpisodeEntries::Skipped).ok());
   EXPECT_EQ(readReport(dir / "odd.json").field, "per_episode");
-  std::filesystem::remove_all(dir);
 }
 
 // Random inserts (mostly in order, with gaps and repeats) against std::set.

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "sensornet/core/input_error.hpp"
+
 #include <string>
 
 #include "sensornet/io/scenario_file.hpp"
@@ -43,6 +45,8 @@ TEST(EvaluationSummary, TheClosedLoopPlansWithTheFlagElseTheFilesInfoOrCovElseCo
   EXPECT_EQ(closedLoopSurrogate("info", R"({"surrogate": "cov"})"), PlanSurrogate::Information);
   EXPECT_EQ(closedLoopSurrogate("", R"({"surrogate": "info"})"), PlanSurrogate::Information);
   EXPECT_EQ(closedLoopSurrogate("", R"({"surrogate": "uniform"})"), PlanSurrogate::Covariance);
+  EXPECT_THROW((void)closedLoopSurrogate("uniform", ""), InputError);  // the loop cannot plan it
+  EXPECT_THROW((void)closedLoopSurrogate("nonsense", ""), InputError);
   EXPECT_EQ(closedLoopSurrogate("", R"({"surrogate": "file"})"), PlanSurrogate::Covariance);
   EXPECT_EQ(closedLoopSurrogate("", "not json"), PlanSurrogate::Covariance);
   EXPECT_EQ(closedLoopSurrogate("", ""), PlanSurrogate::Covariance);

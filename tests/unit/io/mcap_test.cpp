@@ -21,17 +21,12 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/io/mcap.hpp"
 #include "support/file_size_limit.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("mcap-test-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
 
 std::vector<unsigned char> bytesOf(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -65,7 +60,8 @@ struct Written {
 };
 
 TEST(Mcap, WhatIsWrittenIsReadBackInOrderAcrossChunksWithItsSummary) {
-  const fs::path path = scratch("round.mcap");
+  const sensornet::testing::ScratchDir dir;
+  const fs::path path = dir.file("round.mcap");
   std::mt19937_64 rng(20261202);
   std::vector<Written> written;
   {
@@ -135,7 +131,8 @@ TEST(Mcap, WhatIsWrittenIsReadBackInOrderAcrossChunksWithItsSummary) {
 }
 
 TEST(Mcap, ADamagedFileIsRefusedNamingWhatIsWrong) {
-  const fs::path path = scratch("damaged.mcap");
+  const sensornet::testing::ScratchDir dir;
+  const fs::path path = dir.file("damaged.mcap");
   {
     McapWriter out(path, "sensornet");
     const auto schema = out.addSchema("s", "omgidl", "x");
@@ -146,7 +143,7 @@ TEST(Mcap, ADamagedFileIsRefusedNamingWhatIsWrong) {
   }
   auto bytes = bytesOf(path);
   const auto expectRefused = [&](const std::vector<unsigned char>& damaged, const std::string& field) {
-    const fs::path bad = scratch("bad.mcap");
+    const fs::path bad = dir.file("bad.mcap");
     writeBytes(bad, damaged);
     try {
       (void)McapReader(bad);
@@ -183,7 +180,8 @@ void writeSome(McapWriter& out) {
 // byte, the metadata, summary and footer still go in, the file reads back whole, and the room
 // left over (less than the metadata allowance) is cut off.
 TEST(Mcap, AfterReserveEndTheFileClosesWithoutGrowing) {
-  const fs::path path = scratch("reserved.mcap");
+  const sensornet::testing::ScratchDir dir;
+  const fs::path path = dir.file("reserved.mcap");
   constexpr std::size_t kMetadataRoom = 512;
   std::uintmax_t reserved = 0;
   {
@@ -207,13 +205,14 @@ TEST(Mcap, AfterReserveEndTheFileClosesWithoutGrowing) {
 // A disk too full for the file's end: reserveEnd says so, naming the file and why, and the file
 // ends where its data ends (a prefix of the same content closed without a limit), not in zeros.
 TEST(Mcap, ReserveEndOnAFullDiskNamesTheFileAndLeavesTheDataAsWritten) {
-  const fs::path whole = scratch("whole.mcap");
+  const sensornet::testing::ScratchDir dir;
+  const fs::path whole = dir.file("whole.mcap");
   {
     McapWriter out(whole, "sensornet", 1024);
     writeSome(out);
   }
   const auto complete = bytesOf(whole);
-  const fs::path path = scratch("full.mcap");
+  const fs::path path = dir.file("full.mcap");
   {
     McapWriter out(path, "sensornet", 1024);
     const FileSizeLimit limit(complete.size() - 1);  // the data fits, its end does not

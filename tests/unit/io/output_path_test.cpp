@@ -12,6 +12,7 @@
 #include <string>
 
 #include "sensornet/core/input_error.hpp"
+#include "../../support/scratch_dir.hpp"
 
 namespace sensornet {
 namespace {
@@ -20,16 +21,6 @@ namespace fs = std::filesystem;
 
 class OutputPath : public ::testing::Test {
  protected:
-  OutputPath()
-      : root_(fs::temp_directory_path() /
-              ("sensornet-output-path-" + std::to_string(::getpid()) + "-" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-    fs::permissions(root_, fs::perms::owner_all);
-  }
-  ~OutputPath() override { fs::remove_all(root_); }
-
   // The error message of `f`, or "" when it did not throw InputError.
   template <class F>
   static std::string refusal(F f) {
@@ -41,7 +32,8 @@ class OutputPath : public ::testing::Test {
     return "";
   }
 
-  fs::path root_;
+  sensornet::testing::ScratchDir scratch_;
+  const fs::path root_ = scratch_.path();
 };
 
 mode_t modeOf(const fs::path& p) {

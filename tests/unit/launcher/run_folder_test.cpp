@@ -5,10 +5,23 @@
 
 #include <gtest/gtest.h>
 
+#include "../../support/scratch_dir.hpp"
+
 namespace sensornet::launcher {
 namespace {
 
 using nlohmann::json;
+
+// A finished run's report as `sensornet runs` reads it.
+report::RunRecord reportOf(report::RunStatus status, std::uint64_t episodes,
+                           std::optional<std::uint64_t> planned = std::nullopt) {
+  report::RunRecord run;
+  run.run_id = "run-1";
+  run.status = status;
+  run.episodes = episodes;
+  run.episodes_planned = planned;
+  return run;
+}
 
 RunFolderFacts folder(const std::string& id) {
   RunFolderFacts facts;
@@ -25,7 +38,7 @@ TEST(RunFolder, AHeldLockIsALiveRunWhateverItsReportSays) {
   facts.record = kRecord;
   facts.lock = {true, true, std::nullopt};
   facts.episodes_logged = 3;
-  facts.report = json{{"status", "completed"}, {"episodes", 20}};  // a stale report of an earlier run
+  facts.report = reportOf(report::RunStatus::Completed, 20);  // a stale report of an earlier run
   const RunEntry e = classifyRun(facts);
   EXPECT_EQ(e.state, RunState::Live);
   EXPECT_EQ(e.status, "live");
@@ -48,7 +61,7 @@ TEST(RunFolder, AReportWithAKnownStatusIsAFinishedRun) {
   RunFolderFacts facts = folder("run-1");
   facts.record = kRecord;
   facts.lock.exists = true;
-  facts.report = json{{"status", "degraded"}, {"episodes", 17}, {"episodes_planned", 18}};
+  facts.report = reportOf(report::RunStatus::Degraded, 17, 18);
   const RunEntry e = classifyRun(facts);
   EXPECT_EQ(e.state, RunState::Finished);
   EXPECT_EQ(e.status, "degraded");
@@ -63,10 +76,22 @@ TEST(RunFolder, AReportWithoutAKnownStatusOrNoReportIsUnknown) {
   RunFolderFacts facts = folder("run-2");
   EXPECT_EQ(classifyRun(facts).state, RunState::Unknown);
   EXPECT_EQ(classifyRun(facts).status, "unknown");
-  facts.report = json{{"status", "splendid"}};
-  EXPECT_EQ(classifyRun(facts).state, RunState::Unknown);
-  facts.report = json{{"status", 3}};
-  EXPECT_EQ(classifyRun(facts).state, RunState::Unknown);
+  // A report of a status this version does not know is no report it reads: unknown.
+  testing::ScratchDir dir;
+  const json base = {{"run_id", "run-2"}, {"summary", json::object()}, {"episodes", 4}};
+  for (const json& status : {json("splendid"), json(3)}) {
+    json doc = base;
+    doc["status"] = status;
+    facts.report = finishedReportAt(dir.write("report.json", doc.dump()));
+    EXPECT_FALSE(facts.report.has_value()) << doc.dump();
+    EXPECT_EQ(classifyRun(facts).state, RunState::Unknown);
+  }
+  json known = base;
+  known["status"] = "failed";
+  const auto read = finishedReportAt(dir.write("report.json", known.dump()));
+  ASSERT_TRUE(read.has_value());
+  EXPECT_EQ(read->status, report::RunStatus::Failed);
+  EXPECT_EQ(read->episodes, 4U);
 }
 
 TEST(RunFolder, WithoutARecordTheFolderNamesTheRunAndItsReport) {
@@ -118,9 +143,9 @@ TEST(RunFolder, TheTableLinesUpItsColumns) {
 }
 
 TEST(RunFolder, TheRecordReadsBackAsTheLauncherWroteIt) {
-  const RunRecord record{"run-5", "/s/x.yaml", 7, "/r/report.json", 99, "2026-12-05T12:00:00Z"};
+  const LaunchRecord record{"run-5", "/s/x.yaml", 7, "/r/report.json", 99, "2026-12-05T12:00:00Z"};
   RunFolderFacts facts = folder("run-5");
-  facts.record = runRecordJson(record);
+  facts.record = launchRecordJson(record);
   facts.lock.exists = true;
   const RunEntry e = classifyRun(facts);
   EXPECT_EQ(e.scenario, "/s/x.yaml");

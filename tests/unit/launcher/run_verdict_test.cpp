@@ -120,14 +120,24 @@ TEST(RunVerdict, CompletedWithEpisodesMissingFails) {
 // stays 1.
 TEST(RunVerdict, FailedRequirementExitsFourUnlessTheRunFailed) {
   const auto checks =
-      sensornet::report::checkRequirements(sensornet::report::parseRequirements("no-faults"),
-                                  json{{"faults", json::array({{{"kind", "lost"}}})}});
+      sensornet::report::checkRequirements(
+          sensornet::report::parseRequirements("no-faults"),
+          json{{"run_id", "r"}, {"status", "degraded"}, {"summary", json::object()},
+               {"faults", json::array({{{"kind", "lost"}}})}});
   ASSERT_EQ(checks.size(), 1u);
   EXPECT_FALSE(checks[0].pass);
   EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Completed), checks), 4);
   EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Degraded), checks), 4);
   EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Failed), checks), 1);
   EXPECT_EQ(sensornet::report::gatedExitCode(exitCodeOf(RunStatus::Interrupted), checks), 1);
+}
+
+// faultList over the report's entries as JSON, as they are written and read: through the one
+// codec both ways.
+json faultList(const std::vector<Fault>& launcher_faults, const json& reported) {
+  std::vector<sensornet::report::FaultRecord> records;
+  for (const json& entry : reported) records.push_back(sensornet::report::decodeFault(entry));
+  return sensornet::report::encode(launcher::faultList(launcher_faults, records));
 }
 
 json entry(const std::string& kind, json episode, json sensor = nullptr) {
@@ -204,7 +214,10 @@ TEST(FaultList, SurvivedFaultsLeaveTheOthersCausesOfTheirOwn) {
 
 TEST(FaultList, NoFaultsCriterionCountsCauses) {
   const Fault signal{FaultKind::Interrupted, kLauncherProcess, {}, {}, "interrupted by SIGINT"};
-  const json report = {{"faults", faultList({signal}, json::array({entry("stall", 1, 0)}))}};
+  const json report = {{"run_id", "r"},
+                       {"status", "failed"},
+                       {"summary", json::object()},
+                       {"faults", faultList({signal}, json::array({entry("stall", 1, 0)}))}};
   EXPECT_EQ(sensornet::report::causeCount(report["faults"]), 1u);
   const auto checks = sensornet::report::checkRequirements(sensornet::report::parseRequirements("no-faults"), report);
   EXPECT_FALSE(checks.at(0).pass);

@@ -23,10 +23,12 @@ RequirementCheck check(const std::string& text, bool pass, const std::string& me
 TEST(JunitReport, ADegradedRunAndAFailedCriterionAreFailuresWithTheirReasons) {
   JunitRun run;
   run.run_id = "r<1>";
-  run.status = "degraded";
+  run.status = RunStatus::Degraded;
   run.exit_code = 3;
-  run.faults = nlohmann::json::array({{{"kind", "stall"}}, {{"kind", "stall"}},
-                                      {{"kind", "sensor_died"}}});
+  run.faults.resize(3);
+  run.faults[0].kind = FaultKind::Stall;
+  run.faults[1].kind = FaultKind::Stall;
+  run.faults[2].kind = FaultKind::SensorDied;
   run.checks = {check("no-loss", true, "0"), check("latency-p99<=5ms", false, "7.2 ms")};
   run.seconds = 12.5;
   const std::string xml = junitXml(run);
@@ -49,7 +51,7 @@ TEST(JunitReport, ADegradedRunAndAFailedCriterionAreFailuresWithTheirReasons) {
 TEST(JunitReport, ACompletedRunWithoutCriteriaIsOnePassingCase) {
   JunitRun run;
   run.run_id = "clean";
-  run.status = "completed";
+  run.status = RunStatus::Completed;
   run.exit_code = 0;
   const std::string xml = junitXml(run);
   EXPECT_EQ(occurrences(xml, "<testcase "), 1u);

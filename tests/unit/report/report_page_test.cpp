@@ -144,7 +144,7 @@ json sampleReport() {
   json faults = json::array({{{"kind", "sensor_died"},
                               {"process", "sensor_agent"},
                               {"sensor", 1},
-                              {"episode", 1},
+                              {"episode", 1u},
                               {"emulated_time_s", 0.5},
                               {"detail", "killed <9>"}}});
   return report.toJson("degraded", faults, json::array());
@@ -220,17 +220,66 @@ TEST(ReportPage, RefusesAReportWithoutWhatItReadsNamingTheField) {
   EXPECT_THROW((void)reportPage(json::array(), "bad.json"), InputError);
 }
 
+// The page reads the record the one codec decodes: what does not decode is one line naming the
+// report, the field and what was expected there.
+TEST(ReportPage, NamesTheFieldThatDoesNotDecode) {
+  const auto messageOf = [](const json& report) {
+    try {
+      (void)reportPage(report, "bad.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  json report = sampleReport();
+  report.erase("status");
+  EXPECT_EQ(messageOf(report), "bad.json: status: expected the run's status: completed, "
+                               "degraded, failed or interrupted");
+  report = sampleReport();
+  report["per_episode"][1].erase("complete");
+  EXPECT_EQ(messageOf(report), "bad.json: per_episode[1].complete: expected true or false");
+  report = sampleReport();
+  report["faults"][0]["kind"] = "sensor_fainted";
+  const std::string kind = messageOf(report);
+  EXPECT_EQ(kind.rfind("bad.json: faults[0].kind: expected ", 0), 0u) << kind;
+  EXPECT_EQ(kind.find('\n'), std::string::npos) << kind;
+  report = sampleReport();
+  report["sensors"][0]["sent"] = -1;
+  EXPECT_EQ(messageOf(report), "bad.json: sensors[0].sent: expected a whole number >= 0");
+}
+
+TEST(ReportPage, TheRecordGivesThePageAndTablesOfItsDocument) {
+  const json report = sampleReport();
+  RunRecord run = decodeRunRecord(report);
+  EXPECT_EQ(reportPage(run, "r.json"), reportPage(report, "r.json"));
+  const ReportTables from_record = reportTables(run, "r.json");
+  const ReportTables from_document = reportTables(report, "r.json");
+  EXPECT_EQ(from_record.episodes, from_document.episodes);
+  EXPECT_EQ(from_record.sensors, from_document.sensors);
+  // Read without its episode entries (EpisodeEntries::Skipped), a record has none to draw:
+  // that is said, not drawn as a run that fused no episode.
+  run.per_episode.reset();
+  try {
+    (void)reportPage(run, "r.json");
+    FAIL() << "drew a record without its episode entries";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "per_episode");
+  }
+  EXPECT_THROW((void)reportTables(run, "r.json"), InputError);
+}
+
 // A report with `versions` schedule versions switching mid-episode, one after the other in
 // consecutive episodes (v2 in episode 1 at t = 1.5 s, v3 in episode 2 ...), as live re-plans make
 // them; sensor j's rate in version v is v + j in every interval.
-json reportWithVersions(int versions, int episodes) {
+json reportWithVersions(unsigned versions, unsigned episodes) {
   json report = sampleReport();
+  // Numbers and counts unsigned, as a report read from its file has them (the record's types).
   json list = json::array();
-  for (int v = 1; v <= versions; ++v) {
+  for (unsigned v = 1; v <= versions; ++v) {
     json rates = json::array();
     for (int k = 0; k < 3; ++k) rates.push_back({v + 0.0, v + 1.0});
     list.push_back({{"version", v},
-                    {"effective_episode", v == 1 ? 0 : v - 1},
+                    {"effective_episode", v == 1 ? 0u : v - 1},
                     {"effective_time_s", v == 1 ? 0.0 : 1.5},
                     {"surrogate", "cov"},
                     {"bracket", {{"info", 1.0}, {"cov", 2.0}}},
@@ -239,7 +288,7 @@ json reportWithVersions(int versions, int episodes) {
   }
   report["schedule_versions"] = list;
   json per_episode = json::array();
-  for (int e = 0; e < episodes; ++e) {
+  for (unsigned e = 0; e < episodes; ++e) {
     json entry = report.at("per_episode").at(0);
     entry["episode"] = e;
     per_episode.push_back(entry);
@@ -309,14 +358,14 @@ TEST(ReportPage, AnAbortedEpisodesCostDoesNotFlattenTheCostAxis) {
 
 TEST(ReportPage, PrintsNoIntervalWithOneCompleteEpisodeAndNoMeanWithNone) {
   json report = sampleReport();
-  report["summary"]["episodes_complete"] = 1;
+  report["summary"]["episodes_complete"] = 1u;
   report["summary"]["mean"] = 19.59;
   report["summary"]["ci95_low"] = 19.59;
   report["summary"]["ci95_high"] = 19.59;
   std::string page = reportPage(report, "r.json");
   EXPECT_NE(page.find("19.59, no 95% interval (one complete episode)"), std::string::npos);
   EXPECT_EQ(page.find("[19.59, 19.59]"), std::string::npos);
-  report["summary"]["episodes_complete"] = 0;
+  report["summary"]["episodes_complete"] = 0u;
   report["summary"]["mean"] = 0.0;
   page = reportPage(report, "r.json");
   EXPECT_NE(page.find("<th>mean realized cost</th><td>not measured (no complete episode)"),
@@ -359,7 +408,7 @@ TEST(ReportPage, ShowsTheDeliveredBracketAndTheRealtimeCostWhereTheyDiffer) {
   }
   report["summary"]["delivered_bracket"] = report["summary"]["bracket"];
   report["summary"]["realtime_mean"] = report["summary"]["mean"];
-  report["summary"]["dropped_by_network"] = 0;
+  report["summary"]["dropped_by_network"] = 0u;
   page = reportPage(report, "r.json");
   EXPECT_EQ(page.find("delivered"), std::string::npos);
   EXPECT_EQ(page.find("real-time"), std::string::npos);

@@ -177,6 +177,13 @@ TEST(RunRecord, AWrongReportIsRefusedNamingTheKeyAndWhatWasExpected) {
             "summary.rejected_by_reason.cosmic_rays | a r");
   EXPECT_EQ(refusal([](json& d) { d["faults"][0]["caused_by"] = {{"kind", "crash"}}; }),
             "faults[0].caused_by.process | a string");
+  EXPECT_EQ(refusal([](json& d) { d["summary"]["lost"] = 2.5; }),
+            "summary.lost | a whole number >= 0");
+  // A count built in code is a signed integer; it is the same count as the parsed one.
+  EXPECT_EQ(refusal([](json& d) { d["summary"]["lost"] = std::int64_t{3}; }), "accepted");
+  json built = handWrittenReport();
+  built["summary"]["lost"] = std::int64_t{3};
+  EXPECT_EQ(decodeRunRecord(built).summary.lost, 3U);
 }
 
 }  // namespace

@@ -13,7 +13,8 @@ using nlohmann::json;
 
 // A degraded run of 4 planned episodes, 3 complete, 2 of 1000 measurements lost, p99 1.5 ms.
 json sampleReport() {
-  return {{"status", "degraded"},
+  return {{"run_id", "sample"},
+          {"status", "degraded"},
           {"episodes_planned", 4},
           {"faults", json::array({{{"kind", "lost"}}})},
           {"latency_s", {{"median", 0.0004}, {"p99", 0.0015}}},
@@ -130,6 +131,11 @@ TEST(RunRequirements, AValueTheReportLacksFailsAndSaysWhy) {
   json no_latency = sampleReport();
   no_latency.erase("latency_s");
   EXPECT_FALSE(passes("latency-p99<=1s", no_latency));
+  json not_a_report = sampleReport();
+  not_a_report.erase("run_id");
+  const auto refused = checkRequirements(parseRequirements("no-faults"), not_a_report);
+  EXPECT_FALSE(refused.at(0).pass);
+  EXPECT_NE(refused.at(0).measured.find("run_id"), std::string::npos) << refused.at(0).measured;
 }
 
 TEST(RunRequirements, DescribesEachCheckWithTheMeasuredValue) {

@@ -1,0 +1,127 @@
+#pragma once
+// What `fusion_center serve` holds of DDS, without the loop that carries it: its endpoints,
+// each topic with its QoS and partition; the WriterFacts the core asks about (who speaks for
+// which sensor, whose writers still live), answered from the readers; the Report instances kept
+// registered; the FusionState sample.
+//
+//   FusionCenterEndpoints dds(run.domainConfig(), /*reference=*/false);
+//   FusionCenterCore core(config, dds.facts, now);
+//   dds.report_instances.written(episode);   // after each Report: unregisters the oldest
+//   dds.state_writer.write(fusionStateSample(run_id, action, values, now));
+
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sensornet/dds/domain.hpp"
+#include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
+#include "sensornet/dds/topics.hpp"
+#include "sensornet/dds/waitset.hpp"
+#include "sensornet/dds/writer.hpp"
+#include "sensornet/emulator/fusion_center_core.hpp"
+#include "sensornet/wire/run_inputs.hpp"
+#include "sensornet/wire/sensor_speakers.hpp"
+
+namespace sensornet::wire {
+
+// What the core asks of DDS, answered from the Measurement, EpisodeTally and SensorStatus
+// readers. Who speaks for a sensor is looked up in the main loop, the first time a writer's
+// sample comes to the core, never in Cyclone's receive thread (sensor_speakers.hpp). A writer
+// gone before its first sample reaches the core (a process killed within milliseconds of
+// writing) speaks for no sensor: its samples are refused, never taken on trust.
+class ReaderFacts final : public emulator::WriterFacts {
+ public:
+  ReaderFacts(const dds::detail::ReaderCore& measurements, const dds::detail::ReaderCore& tallies,
+              const dds::detail::ReaderCore& statuses, std::string run_partition)
+      : measurements_(measurements),
+        tallies_(tallies),
+        statuses_(statuses),
+        speakers_(std::move(run_partition)) {}
+
+  [[nodiscard]] const std::vector<int>& sensorsOf(emulator::SensorTopic topic,
+                                                  emulator::WriterId w) const override;
+  [[nodiscard]] bool live(emulator::SensorTopic topic, emulator::WriterId w) const override;
+  [[nodiscard]] std::uint32_t matchedMeasurementWriters() const override;
+  // Whether a Measurement writer of the process (participant) of `status_writer` is matched.
+  [[nodiscard]] bool measurementWriterMatchedWith(emulator::WriterId status_writer) const override;
+
+ private:
+  [[nodiscard]] const dds::detail::ReaderCore& readerOf(emulator::SensorTopic topic) const;
+
+  const dds::detail::ReaderCore& measurements_;
+  const dds::detail::ReaderCore& tallies_;
+  const dds::detail::ReaderCore& statuses_;
+  mutable SensorSpeakers speakers_;  // main thread only
+};
+
+// The Report topic keeps the last report of each episode for late joiners: an instance per
+// episode, held by the writer and by every reader until it is unregistered. Only the latest
+// `kept` stay registered (a restarted coordinator needs the last one), so that memory does not
+// grow with the number of episodes (with Cyclone 0.10 only if the unregistration also gives
+// back the key Cyclone keeps of every instance written: unregisterWrittenInstance).
+class ReportInstances {
+ public:
+  static constexpr std::size_t kKept = 64;
+  ReportInstances(dds::Writer<sensornet_Report>& writer, std::string run_id)
+      : writer_(writer), run_id_(std::move(run_id)) {}
+  // After the Report of `episode` was written.
+  void written(std::uint32_t episode);
+
+ private:
+  dds::Writer<sensornet_Report>& writer_;
+  std::string run_id_;
+  std::deque<std::uint32_t> registered_;
+};
+
+// The DDS entities of `fusion_center serve`: the run's inputs (Scenario, Schedule,
+// EpisodeControl); the Measurement, EpisodeTally and SensorStatus readers over every sensor
+// process's partition (run_partitions.hpp: the partition a sample came in names the sensors its
+// writer speaks for), created in this order and so announced to the sensors in it (the
+// Measurement reader before the status reader: FusionCenterCore::sensorsLackingWriters relies on
+// it); the CommandReply reader; the Report and FusionState writers, in the run's partition or,
+// as the reference (`reference`), in P/reference, where neither the coordinator nor the
+// launcher reads them. The waitset wakes on the inputs, tallies and statuses.
+struct FusionCenterEndpoints {
+  FusionCenterEndpoints(const dds::DomainConfig& config, bool reference);
+  FusionCenterEndpoints(const FusionCenterEndpoints&) = delete;
+  FusionCenterEndpoints& operator=(const FusionCenterEndpoints&) = delete;
+
+  dds::Domain domain;
+  dds::Participant participant;
+  RunInputs inputs{participant};
+  dds::Topic<sensornet_Measurement> measurement_topic{participant};
+  dds::Topic<sensornet_EpisodeTally> tally_topic{participant};
+  dds::Topic<sensornet_SensorStatus> status_topic{participant};
+  dds::Topic<sensornet_Report> report_topic{participant};
+  dds::Topic<sensornet_FusionState> state_topic{participant};
+  dds::Reader<sensornet_Measurement> measurement_reader;
+  dds::Reader<sensornet_EpisodeTally> tally_reader;
+  dds::Reader<sensornet_SensorStatus> status_reader;
+  dds::Topic<sensornet_CommandReply> reply_topic{participant};
+  dds::Reader<sensornet_CommandReply> reply_reader{participant, reply_topic};
+  dds::Writer<sensornet_Report> report_writer;
+  dds::Writer<sensornet_FusionState> state_writer;
+  dds::WaitSet waitset{participant};
+  dds::ReadCondition tally_ready{tally_reader};
+  dds::ReadCondition status_ready{status_reader};
+  ReaderFacts facts{measurement_reader, tally_reader, status_reader, participant.partition()};
+};
+
+// Takes every Measurement the reader holds (in batches: a small one keeps the loan and its info
+// array small) into `arrivals`, stamped with the wall clock now (one thread hop after the wire,
+// as in ddsperf); logs a sensor whose writers are all gone. Returns how many were taken. Called
+// in Cyclone's receive thread, from the reader's listener.
+std::size_t takeArrivals(dds::Reader<sensornet_Measurement>& reader, std::string_view own_run,
+                         std::vector<emulator::MeasurementArrival>& arrivals);
+
+// The FusionState sample of `state` (its covariance's entries in `values`, which it borrows, as
+// it borrows `run_id`), stamped `wall_time_ns`.
+[[nodiscard]] sensornet_FusionState fusionStateSample(const std::string& run_id,
+                                                      const emulator::PublishState& state,
+                                                      std::vector<double>& values,
+                                                      std::int64_t wall_time_ns);
+
+}  // namespace sensornet::wire

@@ -1,0 +1,148 @@
+#include "sensornet/wire/fusion_center_wire.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <iterator>
+#include <optional>
+
+#include "sensornet/dds/wire.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+#include "sensornet/emulator/episode_controls.hpp"  // wallNowNs
+#include "sensornet/wire/fusion_center_events.hpp"
+
+namespace sensornet::wire {
+namespace {
+
+// The participant (process) of a writer the reader has matched; nullopt when it has not.
+std::optional<dds_guid_t> participantOf(const dds::detail::ReaderCore& reader,
+                                        dds_instance_handle_t writer) {
+  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader.handle(), writer);
+  if (endpoint == nullptr) return std::nullopt;
+  const dds_guid_t participant = endpoint->participant_key;
+  dds_builtintopic_free_endpoint(endpoint);
+  return participant;
+}
+
+bool sameGuid(const dds_guid_t& a, const dds_guid_t& b) {
+  return std::equal(std::begin(a.v), std::end(a.v), std::begin(b.v));
+}
+
+}  // namespace
+
+const std::vector<int>& ReaderFacts::sensorsOf(emulator::SensorTopic topic,
+                                               emulator::WriterId w) const {
+  return speakers_.of(readerOf(topic), w);
+}
+
+bool ReaderFacts::live(emulator::SensorTopic topic, emulator::WriterId w) const {
+  return readerOf(topic).matchesWriter(w);
+}
+
+const dds::detail::ReaderCore& ReaderFacts::readerOf(emulator::SensorTopic topic) const {
+  switch (topic) {
+    case emulator::SensorTopic::Measurement: return measurements_;
+    case emulator::SensorTopic::Tally: return tallies_;
+    case emulator::SensorTopic::Status: return statuses_;
+  }
+  return measurements_;
+}
+
+std::uint32_t ReaderFacts::matchedMeasurementWriters() const {
+  return measurements_.matchedWriters();
+}
+
+bool ReaderFacts::measurementWriterMatchedWith(emulator::WriterId status_writer) const {
+  const std::optional<dds_guid_t> process = participantOf(statuses_, status_writer);
+  if (!process) return false;
+  std::vector<dds_instance_handle_t> writers(measurements_.matchedWriters() + 8);
+  const dds_return_t n =
+      dds_get_matched_publications(measurements_.handle(), writers.data(), writers.size());
+  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, static_cast<dds_return_t>(writers.size()));
+       ++i) {
+    const auto writer = participantOf(measurements_, writers[static_cast<std::size_t>(i)]);
+    if (writer && sameGuid(*writer, *process)) return true;
+  }
+  return false;
+}
+
+void ReportInstances::written(std::uint32_t episode) {
+  registered_.push_back(episode);
+  if (registered_.size() <= kKept) return;
+  sensornet_Report key{};
+  key.run_id = dds::borrowString(run_id_);
+  key.episode = registered_.front();
+  registered_.pop_front();
+  (void)writer_.unregisterWrittenInstance(key);  // a timeout keeps the report longer
+}
+
+namespace {
+
+// The Report and FusionState writers' QoS: in the run's partition, or in P/reference.
+dds::Qos outputQos(dds::Qos qos, const dds::Participant& participant, bool reference) {
+  if (reference) qos.partition(emulator::referencePartition(participant.partition()));
+  return qos;
+}
+
+}  // namespace
+
+FusionCenterEndpoints::FusionCenterEndpoints(const dds::DomainConfig& config, bool reference)
+    : domain(config),
+      participant(domain),
+      measurement_reader(participant, measurement_topic,
+                         dds::readerQosMatching<sensornet_Measurement>(
+                             emulator::sensorPartitionPattern(participant.partition()))),
+      tally_reader(participant, tally_topic,
+                   dds::readerQosMatching<sensornet_EpisodeTally>(
+                       emulator::sensorPartitionPattern(participant.partition()))),
+      status_reader(participant, status_topic,
+                    dds::readerQosMatching<sensornet_SensorStatus>(
+                        emulator::sensorPartitionPattern(participant.partition()))),
+      report_writer(participant, report_topic,
+                    outputQos(dds::reportWriterQos(), participant, reference)),
+      state_writer(participant, state_topic,
+                   outputQos(dds::defaultEndpointQos<sensornet_FusionState>(), participant,
+                             reference)) {
+  inputs.attachTo(waitset);
+  waitset.attach(tally_ready, 1);
+  waitset.attach(status_ready, 2);
+}
+
+sensornet_FusionState fusionStateSample(const std::string& run_id,
+                                        const emulator::PublishState& state,
+                                        std::vector<double>& values, std::int64_t wall_time_ns) {
+  const Eigen::MatrixXd& P = state.covariance;
+  values.assign(P.data(), P.data() + P.size());  // symmetric: order is moot
+  sensornet_FusionState s{};
+  s.run_id = dds::borrowString(run_id);
+  s.episode = state.episode;
+  s.emulated_time_s = state.emulated_time_s;
+  s.state_dim = static_cast<std::uint32_t>(P.rows());
+  dds::borrowSequence(s.covariance, values);
+  s.schedule_version = state.schedule_version;
+  s.wall_time_ns = wall_time_ns;
+  return s;
+}
+
+std::size_t takeArrivals(dds::Reader<sensornet_Measurement>& reader, std::string_view own_run,
+                         std::vector<emulator::MeasurementArrival>& arrivals) {
+  constexpr std::size_t kBatch = 16;  // usually one sample a call
+  std::size_t total = 0;
+  for (;;) {
+    const std::int64_t received_ns = emulator::wallNowNs();
+    const std::size_t count = reader.takeEach(
+        kBatch,
+        [&](const sensornet_Measurement& m, const dds::SampleInfo& info) {
+          arrivals.push_back(arrivalOfSample(m, received_ns, info.publication, own_run));
+        },
+        [](const sensornet_Measurement& key, const dds::SampleInfo& info) {
+          if (info.instance_state == dds::InstanceState::NoWriters) {
+            spdlog::info("sensor {} has no live writer at the moment", key.sensor_id);
+          }
+        });
+    total += count;
+    if (count < kBatch) return total;
+  }
+}
+
+}  // namespace sensornet::wire
