@@ -50,6 +50,7 @@
 #include "sensornet/io/utc_time.hpp"
 #include "sensornet/io/word_option.hpp"
 #include "sensornet/launcher/launch_plan.hpp"
+#include "sensornet/launcher/outside_roles.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -136,6 +137,7 @@ void writeLauncherConfig(const LaunchPlan& plan, const dds::DomainConfig& domain
   out << domain.cyclone_config << "\n";
   if (!out) spdlog::warn("cannot write {}", path.string());
 }
+
 
 // The report and the episode log beside it must be able to take the run's results.
 void checkReportPaths(const LaunchPlan& plan) {
@@ -404,33 +406,29 @@ int runLaunch(CommandOptions options) {
   }
 
   // The flags a tool on this host needs to reach the run (--hosts: the launcher's config).
-  const std::string reach = " --run-id " + plan.run_id +
-                            (placement ? " --cyclone-config " +
-                                             (plan.log_dir / "cyclone-launcher.xml").string()
-                                       : std::string()) +
-                            (options.run.security_dir.empty()
-                                 ? std::string()
-                                 : " --security " + options.run.security_dir);
+  wire::RunOptions run = options.run;
+  run.run_id = plan.run_id;
+  const std::string reach =
+      " " + shellLine(run.reachFlags(
+                placement ? (plan.log_dir / "cyclone-launcher.xml").string() : std::string()));
   std::fprintf(stderr,
                "run id: %s; change it live with: sensornet replan%s --surrogate info (or "
                "--exclude, --include, --budget, --schedule); see it with: sensornet status%s\n",
                plan.run_id.c_str(), reach.c_str(), reach.c_str());
-  if (!external.empty()) {
-    std::fprintf(stderr,
-                 "sensornet: sensors %s are external: the run waits (up to the coordinator's "
-                 "ready timeout) for a participant on DDS domain %d that writes for them in "
-                 "partition %s/sensors/<their ids> (docs/wire-protocol.md, \"Sensor\")\n",
-                 emulator::formatSensorIds(external).c_str(), static_cast<int>(domain.domain_id),
-                 domain.partition.c_str());
-  }
-  if (options.external_fusion_center) {
-    std::fprintf(stderr,
-                 "sensornet: the fusion center is external: the run waits (up to the "
-                 "coordinator's ready timeout) for a participant on DDS domain %d that reads the "
-                 "run in partition %s and writes Report and FusionState there "
-                 "(docs/wire-protocol.md, \"Fusion center\")%s\n",
-                 static_cast<int>(domain.domain_id), domain.partition.c_str(),
-                 options.reference_fusion ? "; ours runs beside it as the reference" : "");
+  const OutsideRoles outside{external, options.external_fusion_center, options.reference_fusion};
+  if (outside.any()) {
+    const OutsideReach where{static_cast<int>(domain.domain_id), domain.partition,
+                             outsideConfigFile(plan.log_dir, options.run, placement.has_value()),
+                             run.reachFlags()};
+    std::fputs(outsideRolesAnnouncement(outside, where).c_str(), stderr);
+    progress.adviseAfter(kOutsideAdviceDelay, [&progress, outside, where, &scenario] {
+      std::vector<int> silent;
+      for (const int j : outside.sensors) {
+        if (!progress.heardFrom(j)) silent.push_back(j);
+      }
+      return outsideRolesAdvice(outside, where, scenario, silent,
+                                outside.fusion_center && !progress.reportWriterSeen());
+    });
   }
   const CurrentRunRecord record(plan.run_id, options.run.domain_id);
   try {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sensornet/launcher/command_client.hpp"
+#include "sensornet/launcher/host_placement.hpp"
 #include "sensornet/launcher/run_files.hpp"
 #include "sensornet/planning/planner.hpp"
 #include "sensornet/wire/messages.hpp"
@@ -91,8 +92,8 @@ int runReplan(ReplanOptions options) {
   if (!reply) {
     std::fprintf(stderr,
                  "sensornet replan: no answer within %g s: %s (is the run still going? see "
-                 "`sensornet status --run-id %s`)\n",
-                 options.timeout_s, why.c_str(), run_id.c_str());
+                 "`sensornet status %s`)\n",
+                 options.timeout_s, why.c_str(), shellLine(options.run.reachFlags()).c_str());
     if (options.json) {
       printJson({{"run_id", run_id},
                  {"command_id", command_id},

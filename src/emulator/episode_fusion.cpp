@@ -232,6 +232,7 @@ EpisodeFusion::EpisodeFusion(const Scenario& scenario, const EmulatedPlant& plan
       failed_silent_(tallies_.size(), false) {
   filter_.cacheSteps(stepSlots(scenario));
   seen_.resize(tallies_.size());
+  refused_seqs_.resize(tallies_.size());
   scheduleChanged();
 }
 
@@ -283,6 +284,15 @@ bool EpisodeFusion::SeenSeqs::insert(std::uint64_t seq) {
 std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   if (auto rejection = malformedMeasurement(scenario_, m)) {
     ++rejected_[rejection->reason];
+    // A sent sample of a sensor of the scenario: accounted for once, however many copies come.
+    // A well-formed copy of the seq that comes later is received instead.
+    if (m.sensor >= 0 && m.sensor < scenario_.sensorCount()) {
+      const auto j = static_cast<std::size_t>(m.sensor);
+      if (!seen_[j].has(m.seq) && refused_seqs_[j].insert(m.seq).second) {
+        ++tallies_[j].refused;
+        sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
+      }
+    }
     return rejection;
   }
   const std::string who = "sensor " + std::to_string(m.sensor);
@@ -295,6 +305,7 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
     return Rejection{reasonText(RejectionReason::Duplicate),
                      who + ": duplicate seq " + std::to_string(m.seq)};
   }
+  if (refused_seqs_[j].erase(m.seq) > 0) --tally.refused;
   ++tally.received;
   sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
   const std::size_t index = all_.size();
@@ -358,7 +369,7 @@ bool EpisodeFusion::failed(int sensor) const {
 bool EpisodeFusion::settled(int sensor) const {
   if (failed(sensor)) return true;
   const SensorTally& t = tallies_[static_cast<std::size_t>(sensor)];
-  return t.tallied && t.received + t.dropped_by_network >= t.sent;
+  return t.tallied && t.received + t.dropped_by_network + t.refused >= t.sent;
 }
 
 bool EpisodeFusion::allSettled() const { return unsettled().empty(); }
@@ -443,6 +454,12 @@ std::string EpisodeFusion::incompleteReason() const {
         (!during           ? " failed after the episode's end, before its count arrived"
          : failed_silent_[j] ? " failed after " + std::string(at) + " s (last heard then)"
                              : " failed at " + std::string(at) + " s"));
+  }
+  for (std::size_t j = 0; j < tallies_.size(); ++j) {
+    const std::uint64_t refused = tallies_[j].refused;
+    if (refused == 0) continue;
+    add("sensor " + std::to_string(j) + ": " + std::to_string(refused) +
+        (refused == 1 ? " sample" : " samples") + " refused (malformed)");
   }
   for (const int j : unsettled()) {
     const SensorTally& t = tallies_[static_cast<std::size_t>(j)];
@@ -576,7 +593,7 @@ EpisodeResult EpisodeFusion::finish() {
   for (std::size_t j = 0; j < tallies.size(); ++j) {
     SensorTally tally = tallies[j];
     if (!tally.tallied) tally.sent = sent_at_least_[j];
-    const std::uint64_t accounted = tally.received + tally.dropped_by_network;
+    const std::uint64_t accounted = tally.received + tally.dropped_by_network + tally.refused;
     tally.lost = tally.sent > accounted ? tally.sent - accounted : 0;
     const std::uint64_t by_network = std::min(tally.duplicates, tally.duplicated_by_network);
     if (by_network > 0) result.rejected[kNetworkDuplicate] += by_network;

@@ -396,6 +396,10 @@ void FusionCenterCore::route(OpenEpisode& open, FusedMeasurement m, WriterId wri
                            : spdlog::level::warn;
     log(level, "rejected a measurement of episode " + std::to_string(open.fusion->episode()) +
                    ": " + rejection->detail);
+    if (rejection->reason == wordOf(RejectionReason::Malformed)) {
+      Refusals& refusals = refusals_[{sensor, open.fusion->episode()}];
+      if (refusals.samples++ == 0) refusals.first_detail = rejection->detail;
+    }
     return;
   }
   measurement_claims_.claim(sensor, writer);  // accepted: well-formed, of this run
@@ -919,12 +923,24 @@ report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
                            "the coordinator ran " + std::to_string(end->episodes_run) +
                                " episodes, " + std::to_string(s.episodes) + " were fused"));
   }
-  if (faultyRejections(s.rejected) > 0) {
-    std::string reasons;
-    for (const auto& [reason, count] : s.rejected) {
-      if (reason == kNetworkDuplicate) continue;  // scripted, not a fault
-      reasons += (reasons.empty() ? "" : ", ") + std::to_string(count) + " " + reason;
-    }
+  // Malformed samples of a sensor in an episode: a fault naming both, with the first reason;
+  // the rest of the rejections (of no one episode or sensor) in one fault.
+  std::uint64_t named = 0;
+  for (const auto& [where, refusals] : refusals_) {
+    named += refusals.samples;
+    recordFault(faultEntry(FaultKind::Rejected, kProcess, where.first, where.second, std::nullopt,
+                           std::to_string(refusals.samples) +
+                               (refusals.samples == 1 ? " sample" : " samples") +
+                               " refused as malformed (" + refusals.first_detail + ")"));
+  }
+  std::string reasons;
+  for (const auto& [reason, count] : s.rejected) {
+    if (reason == kNetworkDuplicate) continue;  // scripted, not a fault
+    const std::uint64_t rest =
+        reason == wordOf(RejectionReason::Malformed) ? count - std::min(count, named) : count;
+    if (rest > 0) reasons += (reasons.empty() ? "" : ", ") + std::to_string(rest) + " " + reason;
+  }
+  if (!reasons.empty()) {
     recordFault(faultEntry(FaultKind::Rejected, kProcess, std::nullopt, std::nullopt, std::nullopt,
                            "samples refused on the wire: " + reasons));
   }

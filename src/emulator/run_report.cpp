@@ -119,6 +119,7 @@ json episodeEntry(const EpisodeResult& r) {
           {"dropped_by_network",
            perSensor(r, [](const SensorTally& t) { return t.dropped_by_network; })},
           {"late", perSensor(r, [](const SensorTally& t) { return t.late; })},
+          {"refused", perSensor(r, [](const SensorTally& t) { return t.refused; })},
           {"expected", perSensor(r, [](const SensorTally& t) { return t.expected; })},
           {"wrong_version", perSensor(r, [](const SensorTally& t) { return t.wrong_version; })},
           {"rejected", r.rejected},
@@ -170,6 +171,7 @@ void RunReport::add(const json& e) {
   addPerSensor(sensor_totals_, e.value("dropped_by_network", none),
                &SensorTotals::dropped_by_network);
   addPerSensor(sensor_totals_, e.value("late", none), &SensorTotals::late);
+  addPerSensor(sensor_totals_, e.value("refused", none), &SensorTotals::refused);
   addPerSensor(sensor_totals_, e.value("wrong_version", none), &SensorTotals::wrong_version);
   addPerSensor(sensor_totals_, e.value("expected", none), &SensorTotals::expected);
   summed_.sent += sumOf(e.at("sent"));
@@ -177,6 +179,7 @@ void RunReport::add(const json& e) {
   summed_.lost += sumOf(e.at("lost"));
   summed_.dropped_by_network += sumOf(e.value("dropped_by_network", none));
   summed_.late += sumOf(e.value("late", none));
+  summed_.refused += sumOf(e.value("refused", none));
   for (const json& x : e.value("expected", none)) summed_.expected += x.get<double>();
   if (const auto rejected = e.find("rejected"); rejected != e.end() && rejected->is_object()) {
     for (const auto& [reason, count] : rejected->items()) {
@@ -233,6 +236,10 @@ RunSummary RunReport::summary() const {
     s.delivered_bracket_mean = {delivered_bracket_sum_.info / k, delivered_bracket_sum_.cov / k};
     s.nees_mean = nees_count_ > 0 ? nees_sum_ / static_cast<double>(nees_count_)
                                   : std::numeric_limits<double>::quiet_NaN();
+    if (nees_count_ > 0 && state_dim_ > 0 && std::isfinite(s.nees_mean)) {
+      s.nees_band = neesBand(state_dim_, nees_count_, kNeesConfidence);
+      s.nees_consistent = s.nees_band->holds(s.nees_mean);
+    }
     s.ci95_low = s.ci95_high = s.mean;
   }
   if (complete_count_ >= 2) {
@@ -408,6 +415,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
                           {"lost", t.lost},
                           {"dropped_by_network", t.dropped_by_network},
                           {"late", t.late},
+                          {"refused", t.refused},
                           {"expected", t.expected},
                           {"wrong_version", t.wrong_version}});
   }
@@ -442,12 +450,17 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
          s.episodes_complete > 0 ? bracketJson(s.delivered_bracket_mean) : json(nullptr)},
         {"meets_delivered_bracket", optionalJson(s.meets_delivered_bracket)},
         {"nees_mean", ofComplete(s.nees_mean)},
+        {"nees_band_low", s.nees_band ? json(s.nees_band->low) : json(nullptr)},
+        {"nees_band_high", s.nees_band ? json(s.nees_band->high) : json(nullptr)},
+        {"nees_confidence", kNeesConfidence},
+        {"nees_consistent", optionalJson(s.nees_consistent)},
         {"sent", s.sent},
         {"received", s.received},
         {"expected", roundedSum(s.expected)},
         {"lost", s.lost},
         {"dropped_by_network", s.dropped_by_network},
         {"late", s.late},
+        {"refused", s.refused},
         {"rejected", s.rejectedTotal()},
         {"rejected_by_reason", s.rejected}}},
       {"sensors", per_sensor},

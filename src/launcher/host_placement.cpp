@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <string_view>
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/unicast_config.hpp"
@@ -60,6 +62,20 @@ std::string shellQuoted(const std::string& word) {
   std::string quoted = "'";
   for (const char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return quoted + "'";
+}
+
+std::string shellLine(const std::vector<std::string>& words) {
+  const auto plain = [](const std::string& word) {
+    return !word.empty() && std::all_of(word.begin(), word.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) != 0 ||
+             std::string_view("_./:=@%+,-").find(c) != std::string_view::npos;
+    });
+  };
+  std::string line;
+  for (const std::string& word : words) {
+    line += (line.empty() ? "" : " ") + (plain(word) ? word : shellQuoted(word));
+  }
+  return line;
 }
 
 

@@ -41,6 +41,11 @@ void ProgressWatcher::poll(std::chrono::milliseconds wait) {
   const std::size_t ready = view_.sensorsReady();
   const bool all = static_cast<int>(ready) >= sensor_count_;
   const auto now = std::chrono::steady_clock::now();
+  if (advice_ && now - created_ >= advice_delay_) {
+    const std::string advice = advice_();
+    advice_ = nullptr;
+    std::fputs(advice.c_str(), stderr);
+  }
   if (ready == ready_said_ || (!all && now - ready_said_at_ < std::chrono::seconds(1))) return;
   sayReady(ready);
 }

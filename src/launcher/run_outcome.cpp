@@ -274,12 +274,31 @@ std::string realtimeLine(const SummaryRecord& summary) {
          shown(summary.realtime_mean);
 }
 
+// "NEES: mean 4.1 in the 99.9% band [2.9, 5.3] of a consistent filter (n = 4, K = 20)", or
+// its failure, which says what it means; "" when no NEES was measured.
+std::string neesLine(const SummaryRecord& summary) {
+  if (!summary.nees_consistent || !summary.nees_band_low || !summary.nees_band_high) return "";
+  const std::string band = "[" + shown(summary.nees_band_low) + ", " +
+                           shown(summary.nees_band_high) + "]";
+  const double confidence = 100.0 * summary.nees_confidence.value_or(0.999);
+  char percent[16];
+  std::snprintf(percent, sizeof percent, "%.4g%%", confidence);
+  if (*summary.nees_consistent) {
+    return "NEES: mean " + shown(summary.nees_mean) + " in the " + percent + " band " + band +
+           " of a consistent filter";
+  }
+  return "NEES: mean " + shown(summary.nees_mean) + " OUTSIDE the " + percent + " band " + band +
+         " of a consistent filter: the estimates' errors do not match their covariance (are "
+         "the measurements of the emulated plant? is R right?)";
+}
+
 std::string measurementsLine(const SummaryRecord& summary) {
   std::string line = "measurements: " + shown(summary.sent) + " sent, " +
                      shown(summary.received) + " received, ";
   if (summary.dropped_by_network > 0) {
     line += shown(summary.dropped_by_network) + " dropped by the emulated network, ";
   }
+  if (summary.refused > 0) line += shown(summary.refused) + " refused (malformed), ";
   return line + shown(summary.lost) + " lost, " + shown(summary.rejected) + " rejected";
 }
 
@@ -402,6 +421,7 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   } else {
     std::printf("realized cost: not measured (no complete episode)\n");
   }
+  if (const std::string line = neesLine(summary); !line.empty()) std::printf("%s\n", line.c_str());
   std::printf("%s\n", arrivalsLine(run.arrivals).c_str());
   std::printf("%s\n", measurementsLine(summary).c_str());
   const auto ms = [](std::optional<double> seconds) {

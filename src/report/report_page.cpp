@@ -785,6 +785,11 @@ std::string summaryTable(const RunRecord& run) {
                                ? "[" + formatTick(info) + ", " + formatTick(cov) + "]"
                                : "not measured (no complete episode)");
   t += row("meets the bracket", yesNo(s.meets_bracket));
+  if (s.nees_band_low && s.nees_band_high && s.nees_mean) {
+    t += row("mean NEES in the chi-square band of a consistent filter",
+             formatTick(*s.nees_mean) + " in [" + formatTick(*s.nees_band_low) + ", " +
+                 formatTick(*s.nees_band_high) + "]: " + yesNo(s.nees_consistent));
+  }
   // What the schedule delivered and the real-time cost, where they are not the planned bracket
   // and the realized cost (as the launcher's closing lines say).
   const BracketRecord delivered = s.delivered_bracket.value_or(BracketRecord{});
@@ -802,13 +807,17 @@ std::string summaryTable(const RunRecord& run) {
   const std::string sent = formatTick(asDouble(s.sent));
   const std::string received = formatTick(asDouble(s.received));
   const std::string lost = formatTick(asDouble(s.lost));
-  if (s.dropped_by_network > 0) {
-    t += row("sent / received / dropped by the emulated network / lost",
-             sent + " / " + received + " / " + formatTick(asDouble(s.dropped_by_network)) +
-                 " / " + lost);
-  } else {
-    t += row("sent / received / lost", sent + " / " + received + " / " + lost);
-  }
+  // sent = received + dropped by the emulated network + refused + lost, the parts that occur.
+  std::string names = "sent / received";
+  std::string counts = sent + " / " + received;
+  const auto part = [&](std::uint64_t count, const std::string& name) {
+    if (count == 0) return;
+    names += " / " + name;
+    counts += " / " + formatTick(asDouble(count));
+  };
+  part(s.dropped_by_network, "dropped by the emulated network");
+  part(s.refused, "refused (malformed)");
+  t += row(names + " / lost", counts + " / " + lost);
   // Causes: an entry that followed from another (caused_by) is counted with it.
   const std::size_t causes = run.causeCount();
   const std::size_t listed = run.faults.size();

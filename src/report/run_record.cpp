@@ -220,6 +220,7 @@ EpisodeRecord decodeEpisodeAt(const json& entry, const std::string& path) {
   f.required("lost", r.lost);
   f.optional("dropped_by_network", r.dropped_by_network);
   f.optional("late", r.late);
+  f.optional("refused", r.refused);
   f.optional("expected", r.expected);
   f.optional("wrong_version", r.wrong_version);
   f.optional("rejected", r.rejected);
@@ -247,6 +248,10 @@ SummaryRecord decodeSummaryAt(const json& summary, const std::string& path) {
   f.optional("realtime_mean", s.realtime_mean);
   f.optional("received_realtime_mean", s.received_realtime_mean);
   f.optional("nees_mean", s.nees_mean);
+  f.optional("nees_band_low", s.nees_band_low);
+  f.optional("nees_band_high", s.nees_band_high);
+  f.optional("nees_confidence", s.nees_confidence);
+  f.optional("nees_consistent", s.nees_consistent);
   f.optional("bracket", s.bracket);
   f.optional("meets_bracket", s.meets_bracket);
   f.optional("delivered_bracket", s.delivered_bracket);
@@ -256,6 +261,7 @@ SummaryRecord decodeSummaryAt(const json& summary, const std::string& path) {
   f.optional("lost", s.lost);
   f.optional("dropped_by_network", s.dropped_by_network);
   f.optional("late", s.late);
+  f.optional("refused", s.refused);
   f.optional("expected", s.expected);
   f.optional("rejected", s.rejected);
   f.optional("rejected_by_reason", s.rejected_by_reason);
@@ -273,6 +279,7 @@ SensorRecord decodeSensor(const json& entry, const std::string& path) {
   f.optional("dropped_by_network", r.dropped_by_network);
   f.optional("late", r.late);
   f.optional("wrong_version", r.wrong_version);
+  f.optional("refused", r.refused);
   f.optional("expected", r.expected);
   return r;
 }
@@ -323,6 +330,7 @@ json encodeSensor(const SensorRecord& r) {
           {"lost", r.lost},
           {"dropped_by_network", r.dropped_by_network},
           {"late", r.late},
+          {"refused", r.refused},
           {"expected", r.expected},
           {"wrong_version", r.wrong_version}};
 }
@@ -496,6 +504,7 @@ json encode(const EpisodeRecord& r) {
               {"latency_p99_s", r.latency_p99_s},
               {"network_delay_mean_s", r.network_delay_mean_s},
               {"network_delay_max_s", r.network_delay_max_s}};
+  if (!r.refused.empty()) doc["refused"] = r.refused;  // absent from records older than it
   merge(doc, r.other);
   return doc;
 }
@@ -519,14 +528,19 @@ json encode(const SummaryRecord& s) {
               {"delivered_bracket", bracketOrNull(s.delivered_bracket)},
               {"meets_delivered_bracket", orNull(s.meets_delivered_bracket)},
               {"nees_mean", orNull(s.nees_mean)},
+              {"nees_band_low", orNull(s.nees_band_low)},
+              {"nees_band_high", orNull(s.nees_band_high)},
+              {"nees_consistent", orNull(s.nees_consistent)},
               {"sent", s.sent},
               {"received", s.received},
               {"expected", s.expected},
               {"lost", s.lost},
               {"dropped_by_network", s.dropped_by_network},
               {"late", s.late},
+              {"refused", s.refused},
               {"rejected", s.rejected},
               {"rejected_by_reason", encode(s.rejected_by_reason)}};
+  if (s.nees_confidence) doc["nees_confidence"] = *s.nees_confidence;
   merge(doc, s.other);
   return doc;
 }

@@ -87,6 +87,10 @@ const std::vector<Property>& properties() {
        [](R r) {
          return valueOf(r.summary.meets_delivered_bracket, "summary.meets_delivered_bracket");
        }},
+      {"nees-consistent", Kind::YesNo,
+       "the mean NEES lies in the 99.9% chi-square band for n x complete episodes (the "
+       "filter's covariance is honest about its error)",
+       [](R r) { return valueOf(r.summary.nees_consistent, "summary.nees_consistent"); }},
       {"no-loss", Kind::YesNo, "no measurement lost (dropped by the emulated network is not lost)",
        [](R r) { return yesNo(r.summary.lost == 0); }},
       {"no-rejects", Kind::YesNo, "no sample refused on the wire",

@@ -43,6 +43,15 @@ std::string RunOptions::chosenCycloneConfig() const {
   return from_environment != nullptr ? from_environment : "";
 }
 
+std::vector<std::string> RunOptions::reachFlags(const std::string& config) const {
+  std::vector<std::string> flags = {"--run-id", run_id};
+  if (domain_id) flags.insert(flags.end(), {"--domain-id", std::to_string(*domain_id)});
+  const std::string& chosen = config.empty() ? cyclone_config : config;
+  if (!chosen.empty()) flags.insert(flags.end(), {"--cyclone-config", chosen});
+  if (!security_dir.empty()) flags.insert(flags.end(), {"--security", security_dir});
+  return flags;
+}
+
 dds::DomainConfig RunOptions::domainConfig(dds::DiscoveryRole role) const {
   dds::validateRunId(run_id, kSource);
   dds::DomainConfig config = dds::DomainConfig::forRun(run_id, role);

@@ -39,14 +39,17 @@
 // It adds the real network's delay (a netem delay, a cut link) and any stall of a process, and
 // at high time scales the loopback latency times the scale.
 //
-// Accounting, per sensor (docs/ARCHITECTURE.md): sent = received + lost + dropped_by_network. `sent` is the
-// sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
+// Accounting, per sensor (docs/ARCHITECTURE.md):
+//   sent = received + lost + dropped_by_network + refused.
+// `sent` is the sensor's own end-of-episode tally; without one, the best lower bound known (its last status,
 // the highest seq received + 1), and the episode is incomplete. The emulated network (the
 // scenario's `network:`) drops some measurements before they are written and writes some twice:
 // the tally says how many. Dropped ones are not lost (the episode can still be complete); of the
 // copies refused as "duplicate", up to the tally's duplicated_by_network are counted as
 // "network_duplicate" instead: a scripted impairment, not a fault. Rejected samples are counted
-// by reason and never fused nor received.
+// by reason and never fused nor received; a sent one refused on its face (malformed) is also
+// `refused` for its sensor, once per seq: accounted for, so the episode is not held open for it,
+// but incomplete ("sensor 2: 1 sample refused (malformed)").
 //
 // Failed sensors (their process died) are never awaited. One that died during the episode
 // (sensorFailedAt) leaves it incomplete ("sensor 3 failed at 1.25 s"), with its sent count the
@@ -110,7 +113,7 @@ struct EpisodeCount {
 struct SensorTally {
   std::uint64_t sent = 0;           // the sensor's tally, else the best lower bound (see above)
   std::uint64_t received = 0;
-  std::uint64_t lost = 0;           // sent - received - dropped_by_network
+  std::uint64_t lost = 0;           // sent - received - dropped_by_network - refused
   std::uint64_t dropped_by_network = 0;     // from the tally
   std::uint64_t duplicated_by_network = 0;  // from the tally
   std::uint64_t duplicates = 0;     // copies of a received seq refused (network's or not)
@@ -118,6 +121,9 @@ struct SensorTally {
   std::uint64_t late = 0;           // arrived after the filter had passed their time
   std::uint64_t wrong_version = 0;  // drawn under another version than the one in force
   bool tallied = false;             // its end-of-episode tally arrived
+  // Sent samples refused on their face (malformed: z of the wrong size or not finite, a time
+  // outside [0, T], ...), once per seq however many copies came: accounted for, not lost.
+  std::uint64_t refused = 0;
 };
 
 // Rejected samples by reason ("malformed", "duplicate", "other_run", "finished_episode", ...).
@@ -268,11 +274,13 @@ class EpisodeFusion {
     std::uint64_t below = 0;
     std::set<std::uint64_t> above;
     bool insert(std::uint64_t seq);  // false: it had arrived
+    [[nodiscard]] bool has(std::uint64_t seq) const { return seq < below || above.count(seq) > 0; }
   };
   // Indices into all_ not fused yet, as a min-heap on the key (std::greater): fused in
   // timestamp order, and an arrival later than every buffered one (the usual case) costs O(1).
   std::vector<std::pair<Key, std::size_t>> pending_;
   std::vector<SeenSeqs> seen_;  // per sensor
+  std::vector<std::set<std::uint64_t>> refused_seqs_;  // per sensor: malformed, not seen since
   std::vector<SensorTally> tallies_;
   std::vector<std::uint64_t> sent_at_least_;  // status and highest seq + 1
   std::vector<std::optional<double>> failed_at_;  // died during the episode, at this time

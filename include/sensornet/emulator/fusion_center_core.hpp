@@ -294,6 +294,12 @@ class FusionCenterCore {
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
   std::map<RejectionReason, std::uint64_t> rejected_outside_;  // refused before an episode
+  // Malformed samples by (sensor, episode): how many, and why the first was refused.
+  struct Refusals {
+    std::uint64_t samples = 0;
+    std::string first_detail;
+  };
+  std::map<std::pair<int, std::uint32_t>, Refusals> refusals_;
   // Which writer speaks for each sensor, per topic (first live writer wins).
   WriterClaims measurement_claims_, tally_claims_, status_claims_;
   std::set<std::uint64_t> refused_commands_;  // commands refused by right, recorded once each

@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "sensornet/core/chi_square.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
@@ -103,12 +104,17 @@ struct RunSummary {
   CostBracket delivered_bracket_mean;     // of the schedules the emulated network delivered
   std::optional<bool> meets_delivered_bracket;
   double nees_mean = 0.0;
+  // The kNeesConfidence band of the mean NEES for n x (complete episodes with a NEES), and
+  // whether the mean lies in it (chi_square.hpp); none without such an episode.
+  std::optional<NeesBand> nees_band;
+  std::optional<bool> nees_consistent;
   std::uint64_t sent = 0;
   std::uint64_t received = 0;
   double expected = 0.0;
   std::uint64_t lost = 0;
   std::uint64_t dropped_by_network = 0;   // by the emulated network: neither received nor lost
   std::uint64_t late = 0;
+  std::uint64_t refused = 0;              // sent samples refused as malformed: neither received nor lost
   RejectionCounts rejected;               // by reason, over episodes and the run's wire
   double latency_median_s = 0.0;          // within kLatencyQuantileRelativeError (LatencyHistogram)
   double latency_p99_s = 0.0;
@@ -132,7 +138,7 @@ class RunReport {
   // One sensor's counts over every episode reported.
   struct SensorTotals {
     std::uint64_t sent = 0, received = 0, lost = 0, dropped_by_network = 0, late = 0,
-                  wrong_version = 0;
+                  wrong_version = 0, refused = 0;
     double expected = 0.0;
   };
   // Without `episode_log`, holds every entry (for small reports and tests); with it, holds none:

@@ -57,6 +57,9 @@ struct LocalAddress {
 
 // `word` quoted for a POSIX shell ('...', with ' as '\'').
 [[nodiscard]] std::string shellQuoted(const std::string& word);
+// `words` as one line a POSIX shell reads back as them: each word quoted only where it holds a
+// character the shell would take apart (a space, a quote, '$', ...).
+[[nodiscard]] std::string shellLine(const std::vector<std::string>& words);
 
 class HostPlacement {
  public:

@@ -14,7 +14,9 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <utility>
 
 #include "sensornet/launcher/run_follower.hpp"
 #include <algorithm>
@@ -40,6 +42,12 @@ class ProgressWatcher {
 
   // Waits up to `wait` for the run's topics; prints a line for each episode reported meanwhile.
   void poll(std::chrono::milliseconds wait);
+  // Once `delay` after this watcher was made, if no episode has started yet, prints what
+  // `advice` returns (nothing when it returns ""): what an outside role still silent needs.
+  void adviseAfter(std::chrono::seconds delay, std::function<std::string()> advice) {
+    advice_delay_ = delay;
+    advice_ = std::move(advice);
+  }
   [[nodiscard]] std::size_t episodesSeen() const noexcept { return view_.episodesReported(); }
   [[nodiscard]] bool heardFrom(int sensor) const {
     return view_.heardFrom(static_cast<std::uint32_t>(sensor));
@@ -78,6 +86,8 @@ class ProgressWatcher {
   std::size_t ready_said_ = 0;  // the count last printed
   std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point ready_said_at_{};
+  std::chrono::seconds advice_delay_{0};
+  std::function<std::string()> advice_;  // called once, then dropped
 };
 
 }  // namespace sensornet::launcher

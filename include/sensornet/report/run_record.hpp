@@ -96,6 +96,7 @@ struct EpisodeRecord {
   std::optional<std::string> incomplete_reason;
   std::vector<int> failed_sensors;
   std::vector<std::uint64_t> sent, received, lost, dropped_by_network, late, wrong_version;
+  std::vector<std::uint64_t> refused;  // sent samples refused as malformed (empty: none read)
   std::vector<double> expected;
   RejectionTally rejected;
   double drain_s = 0.0;
@@ -113,11 +114,16 @@ struct SummaryRecord {
   std::uint64_t episodes_incomplete = 0;
   std::optional<double> mean, std_dev, ci95, ci95_low, ci95_high;  // over complete episodes ("std")
   std::optional<double> realtime_mean, received_realtime_mean, nees_mean;
+  // The band of nees_mean that holds with probability nees_confidence for a consistent filter
+  // (chi-square(n K) / K), and whether nees_mean lies in it; none: no NEES measured.
+  std::optional<double> nees_band_low, nees_band_high, nees_confidence;
+  std::optional<bool> nees_consistent;
   std::optional<BracketRecord> bracket;
   std::optional<bool> meets_bracket;  // none: undetermined (fewer than two complete episodes)
   std::optional<BracketRecord> delivered_bracket;
   std::optional<bool> meets_delivered_bracket;
   std::uint64_t sent = 0, received = 0, lost = 0, dropped_by_network = 0, late = 0;
+  std::uint64_t refused = 0;  // sent samples refused as malformed (also among rejected)
   double expected = 0.0;
   std::uint64_t rejected = 0;  // the total of rejected_by_reason
   RejectionTally rejected_by_reason;
@@ -127,7 +133,7 @@ struct SummaryRecord {
 struct SensorRecord {
   int sensor_id = 0;
   std::uint64_t sent = 0, received = 0, lost = 0, dropped_by_network = 0, late = 0,
-                wrong_version = 0;
+                wrong_version = 0, refused = 0;
   double expected = 0.0;
 };
 

@@ -18,6 +18,7 @@
 #include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "sensornet/dds/domain.hpp"
 #include "sensornet/dds/security.hpp"
@@ -55,6 +56,10 @@ struct RunOptions {
   // The Cyclone configuration domainConfig() uses: --cyclone-config, else the environment
   // variable; empty for the loopback configuration (only this host is heard).
   [[nodiscard]] std::string chosenCycloneConfig() const;
+  // The flags another command on this host needs to reach the run (`sensornet status`,
+  // `replan`, `watch`, `record`): --run-id, then --domain-id, --cyclone-config (`cyclone_config`
+  // when given, else the one set here) and --security where they differ from the defaults.
+  [[nodiscard]] std::vector<std::string> reachFlags(const std::string& cyclone_config = "") const;
 };
 
 // Adds --run-id (required unless `run_id_required` is false), --domain-id, --cyclone-config and

@@ -249,6 +249,39 @@ TEST_F(ExternalRoles, ASensorWrittenInCTakesItsRole) {
                                            external.result().out);
 }
 
+// A role left silent: after a few seconds the launcher says what an outside participant must
+// have, with the C example's command line, and that line run as printed by a shell (no
+// CYCLONEDDS_URI of ours in its environment: the line carries the run's configuration file)
+// fills the role and the run completes with the sensor's every measurement fused. The example
+// sends z = 0, which is not a measurement of the plant: the report's NEES check says so.
+TEST_F(ExternalRoles, TheLaunchersAdviceForASilentRoleWorksAsPrinted) {
+  const LeftoverGuard guard(run_id_);
+  ::unsetenv("CYCLONEDDS_URI");
+  const std::string domain = std::to_string(160 + (::getpid() + 7) % 60);
+  std::vector<std::string> argv = launchArgs(kEpisodes, "4");
+  argv.insert(argv.end(), {"--seed", "7", "--no-html", "--external-sensors", "1", "--domain-id",
+                           domain});
+  testing::BackgroundProcess launcher(argv, (dir_ / "launch.log").string());
+  const std::string lead = "fills sensor 1's role: ";
+  ASSERT_TRUE(testing::waitUntil([&] { return launcher.log().find(lead) != std::string::npos; }, 30s))
+      << launcher.log();
+  const std::string log = launcher.log();
+  EXPECT_NE(log.find("nothing has spoken for external sensors 1 yet"), std::string::npos) << log;
+  EXPECT_NE(log.find("DDS domain " + domain + ", partition sensornet/" + run_id_), std::string::npos)
+      << log;
+  const std::size_t from = log.find(lead) + lead.size();
+  std::string line = log.substr(from, log.find('\n', from) - from);
+  const std::string program = " external_sensor ";
+  ASSERT_NE(line.find(program), std::string::npos) << line;
+  line.replace(line.find(program), program.size(),
+               std::string(" ") + SENSORNET_EXTERNAL_SENSOR_EXAMPLE + " ");
+  const testing::ProcessResult external = runProcess({"/bin/sh", "-c", line}, 120s);
+  EXPECT_EQ(external.exit_code, 0) << line << "\n" << external.err;
+  ASSERT_EQ(launcher.waitForExit(60s), std::optional<int>(0)) << launcher.log();
+  const json report = readJson(dir_ / "report.json");
+  testing::expectExternalSensorTookItsRole(report, kEpisodes, 1, external.out);
+}
+
 // Without --seed the C example draws its arrivals exactly as our agents do (keyed by the run
 // seed, examples/c/schedule_book.c, written apart from our C++): two of them speaking for sensors
 // 2 (p = 2) and 5 make the same run as our agents, every episode's cost equal to the bit to a

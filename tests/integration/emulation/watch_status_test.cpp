@@ -22,6 +22,7 @@
 
 #include "hosts_fixture.hpp"
 #include "launch_fixture.hpp"
+#include "sensornet/dds/domain.hpp"
 
 namespace sensornet::testing {
 namespace {
@@ -209,6 +210,47 @@ TEST_F(WatchStatus, TheLaunchersStatusHintWorksAcrossHosts) {
   const json doc = json::parse(status.out, nullptr, false);
   ASSERT_TRUE(doc.is_object()) << status.out << status.err;
   EXPECT_EQ(doc["sensors"].size(), static_cast<std::size_t>(kSensors)) << status.out;
+  ::kill(launch.pid(), SIGINT);
+  EXPECT_TRUE(launch.waitForExit(20s).has_value());
+}
+
+// The launcher's own hints, as printed, by a shell: a run on a domain of its own (--domain-id,
+// not the one hashed from the run id) answers `status` and `replan` run exactly as the launcher
+// printed them (issue 48: they left out the domain and answered "nothing ... answered").
+TEST_F(WatchStatus, EveryCommandTheLauncherPrintsWorksAsPrinted) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> argv = launchArgs(100, "1");
+  const int hashed = static_cast<int>(dds::DomainConfig::forRun(run_id_).domain_id);
+  const int domain = 1 + (hashed + 1 + ::getpid() % 50) % 200;  // never the hashed one
+  ASSERT_NE(domain, hashed);
+  argv.insert(argv.end(), {"--domain-id", std::to_string(domain)});
+  BackgroundProcess launch(argv, (dir_ / "launch.log").string());
+  const std::string ready = "ready " + std::to_string(kSensors) + "/" + std::to_string(kSensors);
+  ASSERT_TRUE(waitUntil([&] { return launch.log().find(ready) != std::string::npos; }, 60s))
+      << launch.log();
+  const std::string log = launch.log();
+  // "... change it live with: sensornet replan ARGS (or ...); see it with: sensornet status ARGS"
+  const auto printed = [&log](const std::string& after, const std::string& until) {
+    const std::size_t at = log.find(after);
+    if (at == std::string::npos) return std::string();
+    const std::size_t from = at + after.size();
+    return log.substr(from, log.find(until, from) - from);
+  };
+  const std::string replan = printed("change it live with: sensornet ", " (or");
+  const std::string status = printed("see it with: sensornet ", "\n");
+  ASSERT_FALSE(replan.empty()) << log;
+  ASSERT_FALSE(status.empty()) << log;
+  EXPECT_NE(status.find("--domain-id " + std::to_string(domain)), std::string::npos) << status;
+  const auto shell = [](const std::string& line) {
+    return runProcess({"/bin/sh", "-c", kLauncher + " " + line}, 60s);
+  };
+  const ProcessResult seen = shell(status + " --json");
+  EXPECT_EQ(seen.exit_code, 0) << status << "\n" << seen.out << seen.err;
+  const json doc = json::parse(seen.out, nullptr, false);
+  ASSERT_TRUE(doc.is_object()) << seen.out << seen.err;
+  EXPECT_EQ(doc["sensors"].size(), static_cast<std::size_t>(kSensors)) << seen.out;
+  const ProcessResult replanned = shell(replan);
+  EXPECT_EQ(replanned.exit_code, 0) << replan << "\n" << replanned.out << replanned.err;
   ::kill(launch.pid(), SIGINT);
   EXPECT_TRUE(launch.waitForExit(20s).has_value());
 }

@@ -154,6 +154,46 @@ TEST_F(EpisodeFusionTest, RejectsMalformedAndDuplicateMeasurementsAndCountsLosse
   EXPECT_FALSE(r.complete);
 }
 
+// A sent sample refused on its face is accounted for once (not lost, not awaited), however many
+// copies came; the episode settles without waiting for it and is incomplete saying why. A
+// well-formed copy of a refused seq that comes later is received instead.
+TEST_F(EpisodeFusionTest, ARefusedSampleIsAccountedForOnceAndNotAwaited) {
+  const std::vector<FusedMeasurement> all = measurements(2);
+  const int j = all[0].sensor;
+  std::vector<FusedMeasurement> of_j;
+  for (const FusedMeasurement& m : all) {
+    if (m.sensor == j) of_j.push_back(m);
+  }
+  ASSERT_GE(of_j.size(), 3u);
+  EpisodeFusion fusion(scenario_, plant_, book_, 2, bracketOf());
+  FusedMeasurement wrong_size = of_j[0];
+  wrong_size.z = Eigen::VectorXd::Zero(wrong_size.z.size() + 1);
+  const std::optional<Rejection> rejection = fusion.add(wrong_size);
+  ASSERT_TRUE(rejection);
+  EXPECT_EQ(rejection->reason, "malformed");
+  EXPECT_TRUE(fusion.add(wrong_size));  // a second copy: rejected again, refused once
+  FusedMeasurement not_finite = of_j[1];
+  not_finite.z(0) = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(fusion.add(not_finite));
+  EXPECT_FALSE(fusion.add(of_j[1]));  // a well-formed copy of seq 1 after all
+  for (std::size_t i = 2; i < of_j.size(); ++i) EXPECT_FALSE(fusion.add(of_j[i]));
+  fusion.setTally(j, {of_j.size()});
+  EXPECT_TRUE(fusion.settled(j));  // nothing owed: seq 0 was refused, not lost
+  const EpisodeResult r = fusion.finish();
+  const SensorTally& t = r.sensors[static_cast<std::size_t>(j)];
+  EXPECT_EQ(t.sent, of_j.size());
+  EXPECT_EQ(t.refused, 1u);
+  EXPECT_EQ(t.received, of_j.size() - 1);
+  EXPECT_EQ(t.lost, 0u);
+  EXPECT_EQ(t.sent, t.received + t.lost + t.dropped_by_network + t.refused);
+  EXPECT_EQ(r.rejected.at("malformed"), 3u);  // samples, not seqs
+  EXPECT_FALSE(r.complete);
+  EXPECT_NE(r.incomplete_reason.find("sensor " + std::to_string(j) +
+                                     ": 1 sample refused (malformed)"),
+            std::string::npos)
+      << r.incomplete_reason;
+}
+
 TEST_F(EpisodeFusionTest, CountsALostTailAndFallsBackToTheBestLowerBoundWithoutATally) {
   std::vector<FusedMeasurement> all = measurements(1);
   EpisodeFusion fusion(scenario_, plant_, book_, 1, bracketOf());

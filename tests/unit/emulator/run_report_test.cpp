@@ -73,6 +73,33 @@ TEST(RunReport, SummarizesCompleteEpisodesWithAStudentTInterval) {
 
 // Issue 31, finding 2: a run stopped before any episode completed reported 0.0 for the mean, the
 // interval, the bracket and the latency; what was not measured is null.
+// The NEES band of a 2-state filter over one complete episode is the closed form of chi-square(2)'s
+// quantiles, [-2 ln(1 - 0.0005), -2 ln(0.0005)]: a NEES of 3 lies in it, one of 442 (the z = 0
+// sensor of issue 48) does not; over two episodes the band is that of chi-square(4) / 2.
+TEST(RunReport, SaysWhetherTheMeanNeesLiesInTheChiSquareBandOfAConsistentFilter) {
+  RunReport report("r", "d", 2, 2);
+  EpisodeResult e = episodeWith(0, 3.0, 1.0, true);
+  report.add(episodeEntry(e));
+  RunSummary s = report.summary();
+  ASSERT_TRUE(s.nees_band && s.nees_consistent);
+  EXPECT_NEAR(s.nees_band->low, -2.0 * std::log1p(-0.0005), 1e-12);
+  EXPECT_NEAR(s.nees_band->high, -2.0 * std::log(0.0005), 1e-9);
+  EXPECT_TRUE(*s.nees_consistent);
+  e.episode = 1;
+  e.nees = 442.0;
+  report.add(episodeEntry(e));
+  s = report.summary();
+  ASSERT_TRUE(s.nees_consistent);
+  EXPECT_FALSE(*s.nees_consistent);
+  // chi-square(4) has P(X > x) = e^{-x/2} (1 + x/2): the band's top, over K = 2, solves it at 0.0005.
+  const double top = 2.0 * s.nees_band->high;
+  EXPECT_NEAR(std::exp(-0.5 * top) * (1.0 + 0.5 * top), 0.0005, 1e-12);
+  const nlohmann::json doc = report.toJsonWithoutEpisodes("completed", nlohmann::json::array(),
+                                                          nlohmann::json::array(), {});
+  EXPECT_EQ(doc.at("summary").at("nees_consistent"), false);
+  EXPECT_EQ(doc.at("summary").at("nees_confidence"), 0.999);
+}
+
 TEST(RunReport, WritesNullForWhatNoCompleteEpisodeMeasured) {
   using nlohmann::json;
   RunReport none("r", "d", 2, 3);

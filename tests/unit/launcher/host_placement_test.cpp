@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <string>
+
 #include "sensornet/core/input_error.hpp"
 
 namespace sensornet::launcher {
@@ -65,3 +68,28 @@ TEST(HostPlacement, ShellQuotingClosesReopensAroundAQuote) {
 
 }  // namespace
 }  // namespace sensornet::launcher
+
+// The shell reads a printed line back as the words it was made of (checked by /bin/sh itself,
+// not by the quoting rules restated), and plain words are printed bare.
+TEST(HostPlacement, APrintedCommandLineIsReadBackAsItsWords) {
+  const Argv words = {"--run-id", "run-34", "--cyclone-config", "/tmp/a b/c.xml",
+                      "--security", "it's $HOME", "--x", "", "a;b"};
+  const std::string line = shellLine(words);
+  EXPECT_EQ(shellLine({"--run-id", "run-34", "--domain-id", "34"}),
+            "--run-id run-34 --domain-id 34");
+  FILE* shell = ::popen(("/bin/sh -c 'for w; do printf \"%s\\n\" \"$w\"; done' sh " + line)
+                            .c_str(), "r");
+  ASSERT_NE(shell, nullptr);
+  Argv read;
+  std::string current;
+  for (int c = std::fgetc(shell); c != EOF; c = std::fgetc(shell)) {
+    if (c == '\n') {
+      read.push_back(current);
+      current.clear();
+    } else {
+      current += static_cast<char>(c);
+    }
+  }
+  EXPECT_EQ(::pclose(shell), 0);
+  EXPECT_EQ(read, words) << line;
+}
