@@ -13,7 +13,11 @@
  * costs to the bit), or with --seed S from a stream of its own (another draw, as valid);
  * publishes a Measurement at each arrival at its wall time and
  * the EpisodeTally after T, all in partition sensornet/<run id>/sensors/<J>; and leaves on
- * RUN_SHUTDOWN. A measurement is z = 0 (p = --dim values): a driver would put its reading there.
+ * RUN_SHUTDOWN. A measurement is what sensornet's agents would measure at its instant, from the
+ * emulated world library (sensornet/world.h: the plant's truth and the noise keyed by the run
+ * seed), so that the run's NEES and errors are those of our agents; with --measure zero it is
+ * z = 0 instead, which measures nothing (the run's NEES check then fails). A driver would put its
+ * reading there.
  * The QoS are those of include/sensornet/dds/topics.hpp, which a reader checks on matching.
  */
 #include <dds/dds.h>
@@ -26,6 +30,7 @@
 
 #include "run_topics.h"
 #include "sensornet.h"
+#include "sensornet/world.h"
 
 #define MAX_STARTS 8
 #define MAX_DIM 16
@@ -52,6 +57,8 @@ static struct {
   size_t drawn_count;
   int drawn_with; /* how many schedule versions the book held when they were drawn */
   int failed, shutdown;
+  int zero;        /* --measure zero: z = 0 */
+  sn_world* world; /* the emulated world of the run, opened from its Scenario sample */
   uint64_t sent_total;
   uint64_t rng;
 } s;
@@ -125,7 +132,8 @@ static void take_controls(dds_entity_t reader) {
 
 static void usage(void) {
   fprintf(stderr,
-          "usage: external_sensor --run-id ID --sensor J --dim P [--domain-id D] [--seed S]\n");
+          "usage: external_sensor --run-id ID --sensor J [--dim P] [--domain-id D] [--seed S]\n"
+          "                       [--measure truth|zero]\n");
   exit(2);
 }
 
@@ -145,10 +153,14 @@ int main(int argc, char** argv) {
     else if (strcmp(argv[i], "--seed") == 0) {
       s.rng ^= strtoull(argv[i + 1], NULL, 10) * 0x9E3779B97F4A7C15ULL;
       s.as_ours = 0;
-    } else
+    } else if (strcmp(argv[i], "--measure") == 0 && strcmp(argv[i + 1], "truth") == 0)
+      s.zero = 0;
+    else if (strcmp(argv[i], "--measure") == 0 && strcmp(argv[i + 1], "zero") == 0)
+      s.zero = 1;
+    else
       usage();
   }
-  if (s.book.run_id == NULL || s.dim == 0 || s.dim > MAX_DIM) usage();
+  if (s.book.run_id == NULL || s.dim > MAX_DIM) usage();
 
   char run[256], mine[300];
   snprintf(run, sizeof run, "sensornet/%s", s.book.run_id);
@@ -207,6 +219,21 @@ int main(int argc, char** argv) {
               s.book.sensors);
       return 2;
     }
+    if (s.book.have_scenario && s.world == NULL) {
+      char why[256];
+      s.world = sn_world_open(s.book.yaml, s.book.seed, why, sizeof why);
+      if (s.world == NULL) {
+        fprintf(stderr, "external_sensor: the run's scenario: %s\n", why);
+        return 2;
+      }
+      const uint32_t p = sn_world_measurement_dim(s.world, s.sensor);
+      if ((s.dim != 0 && s.dim != p) || p > MAX_DIM) {
+        fprintf(stderr, "external_sensor: --dim %u: sensor %u measures %u values\n", s.dim,
+                s.sensor, p);
+        return 2;
+      }
+      s.dim = p;
+    }
     if (s.book.have_scenario && s.as_ours && (s.book.has_network || s.book.timetable)) {
       fprintf(stderr,
               "external_sensor: run %s %s; this example draws Poisson arrivals as "
@@ -243,6 +270,10 @@ int main(int argc, char** argv) {
         m.seq = s.seq;
         m.emulated_time_s = at;
         m.schedule_version = version;
+        if (!s.zero && sn_world_measure(s.world, s.now.episode, s.sensor, s.seq, at, z) != 0) {
+          fprintf(stderr, "external_sensor: %s\n", sn_world_error(s.world));
+          return 1;
+        }
         m.publish_wall_time_ns = run_wall_ns();
         m.z._length = m.z._maximum = s.dim;
         m.z._buffer = z;
@@ -292,6 +323,7 @@ int main(int argc, char** argv) {
   (void)dds_wait_for_acks(tallies, DDS_SECS(2));
   dds_delete(participant);
   run_book_free(&s.book);
+  sn_world_close(s.world);
   printf("external_sensor: sensor %u sent %llu measurements\n", s.sensor,
          (unsigned long long)s.sent_total);
   return 0;

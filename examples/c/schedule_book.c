@@ -14,6 +14,10 @@ void run_book_set_scenario(struct run_book* book, double horizon_s, uint32_t int
   book->sensors = sensors;
   book->state_dim = state_dim;
   book->has_network = strncmp(yaml, "network:", 8) == 0 || strstr(yaml, "\nnetwork:") != NULL;
+  free(book->yaml);
+  const size_t size = strlen(yaml) + 1;
+  book->yaml = malloc(size);
+  if (book->yaml != NULL) memcpy(book->yaml, yaml, size);
   book->have_scenario = 1;
 }
 
@@ -38,6 +42,8 @@ void run_book_free(struct run_book* book) {
     book->versions[i].rates = NULL;
   }
   book->version_count = 0;
+  free(book->yaml);
+  book->yaml = NULL;
 }
 
 const struct run_version* run_book_in_force(const struct run_book* book, uint32_t episode,

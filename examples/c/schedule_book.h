@@ -31,6 +31,7 @@ struct run_book {
   uint64_t seed;   /* the run seed */
   int has_network; /* the scenario's YAML has a top-level network: section */
   int timetable;   /* arrivals are the timetable's, not Poisson (Scenario.arrivals) */
+  char* yaml;      /* the scenario file's text (Scenario.yaml), for the world library */
   struct run_version versions[RUN_MAX_VERSIONS];
   int version_count;
 };
@@ -40,7 +41,7 @@ struct run_book {
 void run_book_set_scenario(struct run_book* book, double horizon_s, uint32_t intervals,
                            uint32_t sensors, uint32_t state_dim, uint64_t seed, const char* yaml,
                            const char* arrivals);
-/* Frees what the versions hold (their rates); the book is empty afterwards. */
+/* Frees what the versions hold (their rates) and the YAML; the book is empty afterwards. */
 void run_book_free(struct run_book* book);
 
 /* Adds a version (from a Schedule sample); refused (0) when the book is full or the rates are

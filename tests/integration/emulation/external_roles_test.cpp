@@ -252,8 +252,9 @@ TEST_F(ExternalRoles, ASensorWrittenInCTakesItsRole) {
 // A role left silent: after a few seconds the launcher says what an outside participant must
 // have, with the C example's command line, and that line run as printed by a shell (no
 // CYCLONEDDS_URI of ours in its environment: the line carries the run's configuration file)
-// fills the role and the run completes with the sensor's every measurement fused. The example
-// sends z = 0, which is not a measurement of the plant: the report's NEES check says so.
+// fills the role and the run completes with the sensor's every measurement fused. Told to send
+// z = 0 (--measure zero), which measures nothing of the plant (x, y ~ N(0, 100 m^2)), the run
+// still completes, and the report's NEES check says what it is worth.
 TEST_F(ExternalRoles, TheLaunchersAdviceForASilentRoleWorksAsPrinted) {
   const LeftoverGuard guard(run_id_);
   ::unsetenv("CYCLONEDDS_URI");
@@ -275,18 +276,21 @@ TEST_F(ExternalRoles, TheLaunchersAdviceForASilentRoleWorksAsPrinted) {
   ASSERT_NE(line.find(program), std::string::npos) << line;
   line.replace(line.find(program), program.size(),
                std::string(" ") + SENSORNET_EXTERNAL_SENSOR_EXAMPLE + " ");
+  line += " --measure zero";
   const testing::ProcessResult external = runProcess({"/bin/sh", "-c", line}, 120s);
   EXPECT_EQ(external.exit_code, 0) << line << "\n" << external.err;
   ASSERT_EQ(launcher.waitForExit(60s), std::optional<int>(0)) << launcher.log();
   const json report = readJson(dir_ / "report.json");
   testing::expectExternalSensorTookItsRole(report, kEpisodes, 1, external.out);
+  EXPECT_EQ(report.at("summary").at("nees_consistent"), false) << report.at("summary").dump();
+  EXPECT_NE(launcher.log().find("OUTSIDE the 99.9% band"), std::string::npos) << launcher.log();
 }
 
 // Without --seed the C example draws its arrivals exactly as our agents do (keyed by the run
-// seed, examples/c/schedule_book.c, written apart from our C++): two of them speaking for sensors
-// 2 (p = 2) and 5 make the same run as our agents, every episode's cost equal to the bit to a
-// launch with our agents and the same seed. Only the measured values differ (they send z = 0),
-// which the cost does not depend on.
+// seed, examples/c/schedule_book.c, written apart from our C++), and it measures the emulated
+// plant through the world library (sensornet/world.h): two of them speaking for sensors 2 (p = 2)
+// and 5 make the same run as our agents, every episode's cost, NEES and counts equal to the bit
+// to a launch with our agents and the same seed (the NEES depends on every value measured).
 TEST_F(ExternalRoles, SensorsWrittenInCDrawingAsOursMakeTheSameRun) {
   const LeftoverGuard guard(run_id_);
   const json expected = cleanRun();
@@ -320,6 +324,7 @@ TEST_F(ExternalRoles, SensorsWrittenInCDrawingAsOursMakeTheSameRun) {
     EXPECT_EQ(got[k].at("realized_cost").get<double>(), want[k].at("realized_cost").get<double>())
         << "episode " << k;
     EXPECT_EQ(got[k].at("received"), want[k].at("received")) << "episode " << k;
+    EXPECT_EQ(got[k].at("nees").get<double>(), want[k].at("nees").get<double>()) << "episode " << k;
     spoken += got[k].at("sent").at(2).get<std::uint64_t>() + got[k].at("sent").at(5).get<std::uint64_t>();
   }
   EXPECT_GT(spoken, 0u) << "the schedule must give sensors 2 and 5 a rate for the test to mean "
