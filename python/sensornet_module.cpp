@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "participant.hpp"
+#include "world.hpp"
 #include "sensornet/testing/launched_run.hpp"
 
 namespace py = pybind11;
@@ -18,6 +19,7 @@ namespace st = sensornet::testing;
 PYBIND11_MODULE(_sensornet, m) {
   m.doc() = "sensornet's launch fixture (sensornet::testing::LaunchedRun) and a participant of a run";
   sensornet::python::bindParticipant(m);
+  sensornet::python::bindWorld(m);
   py::class_<st::LaunchOptions>(m, "LaunchOptions")
       .def(py::init<>())
       .def_readwrite("program", &st::LaunchOptions::program)

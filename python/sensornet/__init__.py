@@ -23,6 +23,14 @@ QoS the run's own processes use, enough to write an external sensor or a schedul
 Fields a dict leaves out are zero or empty; a field the type does not have, or a value of the
 wrong kind, raises KeyError or TypeError naming it; enums are their IDL names
 ("EPISODE_START"). Cyclone finds its configuration in CYCLONEDDS_URI as usual.
+
+The emulated world of a run (the plant's truth, the noise and the arrivals our agents draw, as
+numpy arrays, bit for bit theirs) from its Scenario sample, for a sensor that measures the plant:
+
+    w = sensornet.World(scenario["yaml"], scenario["seed"])
+    w.add_schedule(v["version"], v["effective_episode"], v["effective_time_s"], v["rates_hz"])
+    times, versions = w.arrivals(episode, sensor)
+    z = w.measure(episode, sensor, seq, times[seq])
 """
 
 import datetime
@@ -33,9 +41,9 @@ import shutil
 
 from ._sensornet import LaunchOptions as _LaunchOptions
 from ._sensornet import LaunchedRun as _LaunchedRun
-from ._sensornet import Participant, topic_names
+from ._sensornet import Participant, World, topic_names
 
-__all__ = ["launch", "Run", "Result", "program", "Participant", "topic_names"]
+__all__ = ["launch", "Run", "Result", "program", "Participant", "World", "topic_names"]
 
 
 def program():

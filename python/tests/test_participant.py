@@ -68,6 +68,17 @@ class PythonSensor:
             t = end
         return math.inf
 
+    # The arrivals (a draw of its own) and what it measures (nothing: z = 0); WorldSensor
+    # overrides them.
+    def first(self, episode):
+        return self.next_arrival(episode, 0.0)
+
+    def after(self, episode, running):
+        return self.next_arrival(episode, running["next"])
+
+    def measure(self, episode, seq, t):
+        return [0.0] * self.dim
+
     def status(self, state):
         episode = self.running["start"]["episode"] if self.running else 0
         version = self.in_force(episode, 0.0)
@@ -92,8 +103,7 @@ class PythonSensor:
                 self.starts.append(c)
         if self.running is None and self.scenario and self.starts:
             start = self.starts.pop(0)
-            self.running = {"start": start, "seq": 0,
-                            "next": self.next_arrival(start["episode"], 0.0)}
+            self.running = {"start": start, "seq": 0, "next": self.first(start["episode"])}
         if self.running is not None:
             e = self.running
             k = e["start"]["episode"]
@@ -103,10 +113,11 @@ class PythonSensor:
                     "sensor_id": self.j, "run_id": run_id, "episode": k, "seq": e["seq"],
                     "emulated_time_s": e["next"],
                     "schedule_version": self.in_force(k, e["next"])["version"],
-                    "publish_wall_time_ns": time.time_ns(), "z": [0.0] * self.dim})
+                    "publish_wall_time_ns": time.time_ns(),
+                    "z": self.measure(k, e["seq"], e["next"])})
                 e["seq"] += 1
                 self.sent_total += 1
-                e["next"] = self.next_arrival(k, e["next"])
+                e["next"] = self.after(k, e)
             if now >= self.scenario["horizon_s"]:
                 self.tallies.write({"sensor_id": self.j, "run_id": run_id, "episode": k,
                                     "sent": e["seq"], "finished": True,
@@ -118,6 +129,87 @@ class PythonSensor:
         if state != self.said or time.monotonic() > self.said_at + 0.5:  # on change, and 2 Hz
             self.status(state)
             self.said, self.said_at = state, time.monotonic()
+
+
+class WorldSensor(PythonSensor):
+    """Draws its arrivals and measures the plant as our agents do, through sensornet.World."""
+
+    def __init__(self, participant, sensor):
+        super().__init__(participant, sensor, dim=0, seed=0)
+        self.world, self.added, self.times = None, 0, []
+
+    def world_now(self):
+        if self.world is None:
+            self.world = sensornet.World(self.scenario["yaml"], self.scenario["seed"])
+            self.world.set_arrivals(self.scenario["arrivals"])
+        for v in self.versions[self.added:]:
+            self.world.add_schedule(v["version"], v["effective_episode"], v["effective_time_s"],
+                                    v["rates_hz"])
+        self.added = len(self.versions)
+        return self.world
+
+    def first(self, episode):
+        self.times = list(self.world_now().arrivals(episode, self.j)[0])
+        return self.times[0] if self.times else math.inf
+
+    def after(self, episode, running):
+        return self.times[running["seq"]] if running["seq"] < len(self.times) else math.inf
+
+    def measure(self, episode, seq, t):
+        return [float(v) for v in self.world.measure(episode, self.j, seq, t)]
+
+
+def run_with(sensor_factory, domain, seed):
+    """A run of the default scenario with sensor 1 spoken for by sensor_factory(participant)."""
+    with sensornet.launch(SCENARIO, episodes=3, time_scale=4, seed=seed, external_sensors=[1],
+                          extra_args=["--domain-id", str(domain), "--no-html"]) as run:
+        participant = sensornet.Participant(run.run_id, domain_id=domain)
+        sensor = sensor_factory(participant)
+        deadline = time.monotonic() + 90
+        while not sensor.shut_down and time.monotonic() < deadline:
+            sensor.step()
+            time.sleep(0.002)
+        sensor.status("SENSOR_STOPPED")
+        sensor.tallies.wait_for_acks(2.0)
+        result = run.wait()
+        participant.close()
+    return sensor, result
+
+
+def test_a_python_sensor_measuring_through_the_world_makes_our_agents_run():
+    """Arrivals and measurements from sensornet.World: every episode's cost and NEES (which
+    depends on every value measured) equal to the bit to a run of our own agents, same seed."""
+    sensor, result = run_with(lambda p: WorldSensor(p, 1), domain_id(2), seed=7)
+    with sensornet.launch(SCENARIO, episodes=3, time_scale=4, seed=7,
+                          extra_args=["--domain-id", str(domain_id(3)), "--no-html"]) as run:
+        ours = run.wait()
+    assert result.status == "completed", result.faults
+    assert ours.status == "completed", ours.faults
+    assert sensor.sent_total > 10
+    assert len(result.episodes) == len(ours.episodes) == 3
+    for got, want in zip(result.episodes, ours.episodes):
+        assert got["sent"] == want["sent"] and got["received"] == want["received"]
+        assert got["realized_cost"] == want["realized_cost"], (got["episode"],)
+        assert got["nees"] == want["nees"], (got["episode"], got["nees"], want["nees"])
+
+
+def test_the_world_gives_numpy_arrays_and_refuses_bad_input():
+    text = SCENARIO.read_text()
+    w = sensornet.World(text, 7)
+    x = w.state(0, 1.5)
+    assert x.shape == (4,) and x.dtype.name == "float64"
+    z, v = w.measure(0, 2, 3, 1.5), w.noise(0, 2, 3)
+    assert z.shape == (2,)
+    # Sensor 2 is the camera: H = [[1, 0, 0, 0], [0, 1, 0, 0]].
+    assert abs(z[0] - (x[0] + v[0])) < 1e-12 and abs(z[1] - (x[1] + v[1])) < 1e-12
+    for bad in (lambda: w.state(0, 99.0), lambda: w.measure(0, 9, 0, 1.0),
+                lambda: sensornet.World("horizon: -1", 1)):
+        try:
+            bad()
+        except ValueError as e:
+            assert str(e)
+        else:
+            raise AssertionError("bad input was accepted")
 
 
 def test_an_external_sensor_written_in_python_takes_its_role():

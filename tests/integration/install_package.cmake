@@ -30,4 +30,31 @@ message("${out}")
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "the example's tests failed (${rc}):\n${err}")
 endif()
+# A user's C program against the world library, found by pkg-config alone.
+file(GLOB_RECURSE pc_files ${WORK}/prefix/*/sensornet-world.pc)
+if(NOT pc_files)
+  message(FATAL_ERROR "the install has no sensornet-world.pc")
+endif()
+list(GET pc_files 0 pc_file)
+get_filename_component(pc_dir ${pc_file} DIRECTORY)
+get_filename_component(lib_dir ${pc_dir} DIRECTORY)
+execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pc_dir}
+                        pkg-config --cflags --libs sensornet-world
+                RESULT_VARIABLE rc OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config sensornet-world failed (${rc})")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags}")
+execute_process(COMMAND cc -std=c11 -Wall -Werror ${CLIENT} -o ${WORK}/world_client ${flags} -lm
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "building a C program with pkg-config sensornet-world failed (${rc}):\n${err}")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -E env LD_LIBRARY_PATH=${lib_dir}
+                        ${WORK}/world_client ${SCENARIO}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the C program against the installed world library failed (${rc}):\n${err}")
+endif()
 file(REMOVE_RECURSE ${WORK})
