@@ -419,14 +419,15 @@ int runLaunch(CommandOptions options) {
   if (outside.any()) {
     const OutsideReach where{static_cast<int>(domain.domain_id), domain.partition,
                              outsideConfigFile(plan.log_dir, options.run, placement.has_value()),
-                             run.reachFlags()};
+                             {"--run-id", plan.run_id, "--domain-id",
+                              std::to_string(domain.domain_id)}};
     std::fputs(outsideRolesAnnouncement(outside, where).c_str(), stderr);
     progress.adviseAfter(kOutsideAdviceDelay, [&progress, outside, where, &scenario] {
       std::vector<int> silent;
       for (const int j : outside.sensors) {
         if (!progress.heardFrom(j)) silent.push_back(j);
       }
-      return outsideRolesAdvice(outside, where, scenario, silent,
+      return outsideRolesAdvice(where, scenario, silent,
                                 outside.fusion_center && !progress.reportWriterSeen());
     });
   }

@@ -38,7 +38,7 @@ std::string outsideRolesAnnouncement(const OutsideRoles& roles, const OutsideRea
   return text;
 }
 
-std::string outsideRolesAdvice(const OutsideRoles& roles, const OutsideReach& reach,
+std::string outsideRolesAdvice(const OutsideReach& reach,
                                const Scenario& scenario, const std::vector<int>& silent_sensors,
                                bool fusion_center_silent) {
   if (silent_sensors.empty() && !fusion_center_silent) return "";

@@ -122,11 +122,13 @@ void checkAccounting(const json& per_episode, std::vector<std::string>& v) {
     const json& sent = e.value("sent", json());
     for (std::size_t j = 0; sent.is_array() && j < sent.size(); ++j) {
       const std::uint64_t s = at(sent, j), rec = at(e["received"], j), lost = at(e["lost"], j),
-                          dropped = at(e["dropped_by_network"], j);
-      if (s != rec + lost + dropped) {
+                          dropped = at(e["dropped_by_network"], j),
+                          refused = at(e.value("refused", json()), j);
+      if (s != rec + lost + dropped + refused) {
         v.push_back("accounting: episode " + e["episode"].dump() + " sensor " + std::to_string(j) +
                     ": sent " + std::to_string(s) + " != received " + std::to_string(rec) +
-                    " + lost " + std::to_string(lost) + " + dropped " + std::to_string(dropped));
+                    " + lost " + std::to_string(lost) + " + dropped " + std::to_string(dropped) +
+                    " + refused " + std::to_string(refused));
       }
     }
   }

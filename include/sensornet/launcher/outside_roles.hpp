@@ -6,10 +6,10 @@
 // configuration file (with Cyclone's default configuration a participant hears nothing of a
 // run on the loopback configuration) and the command line of the C example that fills the role.
 //
-//   const OutsideReach reach{domain_id, partition, config_file, run.reachFlags()};
+//   const OutsideReach reach{domain_id, partition, config_file, {"--run-id", id, "--domain-id", d}};
 //   announce(outsideRolesAnnouncement(roles, reach));
 //   ... after kOutsideAdviceDelay with sensors 1 and 3 silent:
-//   print(outsideRolesAdvice(roles, reach, scenario, {1, 3}, false));
+//   print(outsideRolesAdvice(reach, scenario, {1, 3}, false));
 
 #include <chrono>
 #include <filesystem>
@@ -33,7 +33,7 @@ struct OutsideReach {
   int domain_id = 0;
   std::string partition;                // sensornet/<run id>
   std::filesystem::path cyclone_config;  // the file its CYCLONEDDS_URI must name
-  std::vector<std::string> run_flags;   // --run-id ID [--domain-id D] for the C examples
+  std::vector<std::string> run_flags;   // --run-id ID --domain-id D for the C examples
 };
 
 // The Cyclone configuration file an outside participant of this run must load: the launcher's
@@ -51,7 +51,7 @@ inline constexpr std::chrono::seconds kOutsideAdviceDelay{5};
 
 // What a participant for the silent roles must have, with the C example's command line for the
 // first silent sensor (its measurement dimension from `scenario`); "" when none is silent.
-[[nodiscard]] std::string outsideRolesAdvice(const OutsideRoles& roles, const OutsideReach& reach,
+[[nodiscard]] std::string outsideRolesAdvice(const OutsideReach& reach,
                                              const Scenario& scenario,
                                              const std::vector<int>& silent_sensors,
                                              bool fusion_center_silent);

@@ -39,7 +39,7 @@ TEST(OutsideRoles, TheAdviceNamesTheDomainThePartitionTheConfigurationAndTheExam
   const OutsideRoles roles{{1}, false, false};
   const OutsideReach reach{34, "sensornet/mine", "/tmp/logs/cyclone-outside.xml",
                            {"--run-id", "mine", "--domain-id", "34"}};
-  const std::string advice = outsideRolesAdvice(roles, reach, scenario, {1}, false);
+  const std::string advice = outsideRolesAdvice(reach, scenario, {1}, false);
   EXPECT_NE(advice.find("domain 34, partition sensornet/mine"), std::string::npos) << advice;
   EXPECT_NE(advice.find("CYCLONEDDS_URI=file:///tmp/logs/cyclone-outside.xml"), std::string::npos)
       << advice;
@@ -47,8 +47,8 @@ TEST(OutsideRoles, TheAdviceNamesTheDomainThePartitionTheConfigurationAndTheExam
   EXPECT_NE(advice.find("external_sensor --run-id mine --domain-id 34 --sensor 1 --dim " + p),
             std::string::npos)
       << advice;
-  EXPECT_EQ(outsideRolesAdvice(roles, reach, scenario, {}, false), "");
-  EXPECT_NE(outsideRolesAdvice({{}, true, false}, reach, scenario, {}, true).find("fusion center"),
+  EXPECT_EQ(outsideRolesAdvice(reach, scenario, {}, false), "");
+  EXPECT_NE(outsideRolesAdvice(reach, scenario, {}, true).find("fusion center"),
             std::string::npos);
   EXPECT_NE(outsideRolesAnnouncement(roles, reach).find("sensornet/mine/sensors/<their ids>"),
             std::string::npos);
