@@ -7,9 +7,11 @@
 //   sensornet replay RUN.mcap --info  what a recording of a run (launch --record) holds
 //   sensornet pki init DIR            the files of a secured run (--security DIR)
 //   sensornet runs [...]              the runs in the scratch folder; remove finished ones
+//   sensornet conform sensor -- PROG  whether your participant keeps the protocol, rule by rule
 
 #include <vector>
 
+#include "conform_command.hpp"
 #include "launch_command.hpp"
 #include "pki_command.hpp"
 #include "record_command.hpp"
@@ -36,7 +38,7 @@ int main(int argc, char** argv) {
         sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
         sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app),
         sensornet::launcher::addRunsCommand(app), sensornet::launcher::addReplayCommand(app),
-        sensornet::launcher::addRecordCommand(app)};
+        sensornet::launcher::addRecordCommand(app), sensornet::launcher::addConformCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

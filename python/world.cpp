@@ -102,14 +102,14 @@ the arrival instants they would draw from the run's schedule versions (bit for b
           "add_schedule",
           [](const World& w, std::uint32_t version, std::uint32_t effective_episode,
              double effective_time_s, const std::vector<double>& rates) {
-            const std::size_t m = sn_world_sensors(w.get());
-            if (rates.empty() || rates.size() % m != 0) {
-              throw py::value_error("rates: intervals x " + std::to_string(m) +
+            const std::size_t sensors = sn_world_sensors(w.get());
+            if (rates.empty() || rates.size() % sensors != 0) {
+              throw py::value_error("rates: intervals x " + std::to_string(sensors) +
                                     " values, row-major (got " + std::to_string(rates.size()) + ")");
             }
             w.check(sn_world_add_schedule(w.get(), version, effective_episode, effective_time_s,
                                           rates.data(),
-                                          static_cast<std::uint32_t>(rates.size() / m)));
+                                          static_cast<std::uint32_t>(rates.size() / sensors)));
           },
           py::arg("version"), py::arg("effective_episode"), py::arg("effective_time_s"),
           py::arg("rates"), "A schedule version: rates row-major (the Schedule's rates_hz).")

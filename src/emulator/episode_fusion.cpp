@@ -285,10 +285,13 @@ std::optional<Rejection> EpisodeFusion::add(FusedMeasurement m) {
   if (auto rejection = malformedMeasurement(scenario_, m)) {
     ++rejected_[rejection->reason];
     // A sent sample of a sensor of the scenario: accounted for once, however many copies come.
-    // A well-formed copy of the seq that comes later is received instead.
+    // A well-formed copy of the seq that comes later is received instead. One at or past the
+    // count the sensor's tally gives was never sent by it: refused, not accounted for.
     if (m.sensor >= 0 && m.sensor < scenario_.sensorCount()) {
       const auto j = static_cast<std::size_t>(m.sensor);
-      if (!seen_[j].has(m.seq) && refused_seqs_[j].insert(m.seq).second) {
+      const SensorTally& tally = tallies_[j];
+      const bool beyond_tally = tally.tallied && m.seq >= tally.sent;
+      if (!beyond_tally && !seen_[j].has(m.seq) && refused_seqs_[j].insert(m.seq).second) {
         ++tallies_[j].refused;
         sent_at_least_[j] = std::max(sent_at_least_[j], m.seq + 1);
       }
@@ -330,6 +333,10 @@ void EpisodeFusion::setTally(int sensor, const EpisodeCount& count) {
   tally.sent = count.sent;
   tally.dropped_by_network = count.dropped_by_network;
   tally.duplicated_by_network = count.duplicated_by_network;
+  // Malformed samples numbered at or past what the sensor sent were not its own.
+  auto& refused = refused_seqs_[static_cast<std::size_t>(sensor)];
+  refused.erase(refused.lower_bound(count.sent), refused.end());
+  tally.refused = refused.size();
 }
 
 void EpisodeFusion::noteSentAtLeast(int sensor, std::uint64_t sent) {

@@ -26,4 +26,15 @@ struct JunitRun {
 
 [[nodiscard]] std::string junitXml(const JunitRun& run);
 
+// Any suite of checks as JUnit XML: one <testcase> per case, a <failure> with `failure` as its
+// message when it did not pass. (`sensornet conform` writes its rules so.)
+struct JunitCase {
+  std::string name;
+  bool pass = false;
+  std::string failure;  // the failure's one-line message
+  std::string message;  // the whole story
+};
+[[nodiscard]] std::string junitSuiteXml(const std::string& suite, const std::string& classname,
+                                        const std::vector<JunitCase>& cases, double seconds);
+
 }  // namespace sensornet::report

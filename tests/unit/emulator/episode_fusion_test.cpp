@@ -177,7 +177,14 @@ TEST_F(EpisodeFusionTest, ARefusedSampleIsAccountedForOnceAndNotAwaited) {
   EXPECT_TRUE(fusion.add(not_finite));
   EXPECT_FALSE(fusion.add(of_j[1]));  // a well-formed copy of seq 1 after all
   for (std::size_t i = 2; i < of_j.size(); ++i) EXPECT_FALSE(fusion.add(of_j[i]));
+  // Malformed samples numbered past what the sensor sent (forged, or another participant's):
+  // rejected, never the sensor's refused, before its tally comes and after.
+  FusedMeasurement forged = wrong_size;
+  forged.seq = of_j.size() + 5;
+  EXPECT_TRUE(fusion.add(forged));
   fusion.setTally(j, {of_j.size()});
+  forged.seq = of_j.size();
+  EXPECT_TRUE(fusion.add(forged));
   EXPECT_TRUE(fusion.settled(j));  // nothing owed: seq 0 was refused, not lost
   const EpisodeResult r = fusion.finish();
   const SensorTally& t = r.sensors[static_cast<std::size_t>(j)];
@@ -186,7 +193,7 @@ TEST_F(EpisodeFusionTest, ARefusedSampleIsAccountedForOnceAndNotAwaited) {
   EXPECT_EQ(t.received, of_j.size() - 1);
   EXPECT_EQ(t.lost, 0u);
   EXPECT_EQ(t.sent, t.received + t.lost + t.dropped_by_network + t.refused);
-  EXPECT_EQ(r.rejected.at("malformed"), 3u);  // samples, not seqs
+  EXPECT_EQ(r.rejected.at("malformed"), 5u);  // samples, not seqs
   EXPECT_FALSE(r.complete);
   EXPECT_NE(r.incomplete_reason.find("sensor " + std::to_string(j) +
                                      ": 1 sample refused (malformed)"),

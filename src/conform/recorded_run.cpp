@@ -1,0 +1,107 @@
+// A run's recording read for the conformance rules: the run's inputs as a process keeps them,
+// the episodes' starts and the shutdown, and each asked-for sensor's samples, tallies and
+// statuses, taken only from writers whose partition names that sensor (a sample of another
+// writer is not the participant's).
+#include <algorithm>
+
+#include "sensornet/conform/sensor_conformance.hpp"
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/dds/sample_fields.hpp"
+#include "sensornet/emulator/run_partitions.hpp"
+#include "sensornet/recording/recording_replay.hpp"
+#include "sensornet/wire/messages.hpp"
+#include "sensornet/wire/run_inputs.hpp"
+
+namespace sensornet::conform {
+
+RecordedRun readRecording(const McapReader& file, const std::string& source,
+                          const std::vector<int>& sensors) {
+  RecordedRun run;
+  run.run_id = recording::recordedRunId(file, source);
+  const std::string partition = "sensornet/" + run.run_id;
+  for (const int j : sensors) run.sensors[j];
+  if (!file.messages().empty()) {
+    run.first_ns = static_cast<std::int64_t>(file.messages().front().log_time_ns);
+  }
+
+  // Per channel: its type, and the one sensor its writer speaks for (-1: none of those asked).
+  struct Channel {
+    const dds::SampleType* type = nullptr;
+    int sensor = -1;
+  };
+  std::map<std::uint16_t, Channel> channels;
+  for (const auto& [id, channel] : file.channels()) {
+    const dds::SampleType* type = dds::sampleTypeOfTopic(channel.topic);
+    if (type == nullptr || channel.message_encoding != "cdr") continue;
+    Channel c{type, -1};
+    const auto p = channel.metadata.find("partition");
+    if (p != channel.metadata.end()) {
+      const auto named = emulator::sensorsOfPartition(partition, p->second);
+      if (named && named->size() == 1 && run.sensors.contains(named->front())) {
+        c.sensor = named->front();
+      }
+    }
+    channels[id] = c;
+  }
+
+  std::vector<std::size_t> held_schedules;  // before the scenario, in recorded order
+  emulator::RunInputState::Update ignored;
+  const auto take = [&](std::size_t index) {
+    const McapMessage& m = file.messages()[index];
+    const auto found = channels.find(m.channel_id);
+    if (found == channels.end()) return;
+    const Channel& channel = found->second;
+    const std::string where = source + ", message " + std::to_string(index);
+    const dds::DecodedSample sample(*channel.type, m.data, where);
+    const std::string topic = channel.type->topic;
+    const auto at = static_cast<std::int64_t>(m.log_time_ns);
+    if (topic == "sensornet/Scenario") {
+      wire::feedSample(run.inputs, sample.as<sensornet_Scenario>(), ignored);
+    } else if (topic == "sensornet/Schedule") {
+      if (!run.inputs.hasScenario()) {
+        held_schedules.push_back(index);
+        return;
+      }
+      wire::feedSample(run.inputs, sample.as<sensornet_Schedule>(), ignored);
+    } else if (topic == "sensornet/EpisodeControl") {
+      const emulator::EpisodeControl control = wire::controlOf(sample.as<sensornet_EpisodeControl>());
+      if (control.kind == emulator::ControlKind::EpisodeStart) {
+        run.starts_ns.emplace(control.episode, control.start_wall_ns);
+        run.time_scale = control.time_scale;
+      } else if (control.kind == emulator::ControlKind::RunShutdown && !run.shutdown_ns) {
+        run.shutdown_ns = at;
+      }
+    } else if (channel.sensor >= 0) {
+      SensorTrace& trace = run.sensors[channel.sensor];
+      if (topic == "sensornet/Measurement") {
+        const auto& s = sample.as<sensornet_Measurement>();
+        if (static_cast<int>(s.sensor_id) != channel.sensor) return;
+        trace.samples.push_back({s.episode, s.seq, s.emulated_time_s, s.schedule_version,
+                                 static_cast<std::size_t>(s.z._length), at});
+      } else if (topic == "sensornet/EpisodeTally") {
+        const auto& s = sample.as<sensornet_EpisodeTally>();
+        if (static_cast<int>(s.sensor_id) != channel.sensor) return;
+        trace.tallies.push_back({s.episode, s.sent, s.finished, at});
+      } else if (topic == "sensornet/SensorStatus") {
+        const auto& s = sample.as<sensornet_SensorStatus>();
+        const auto state = wire::sensorStateOf(s.state);
+        if (static_cast<int>(s.sensor_id) != channel.sensor || !state) return;
+        trace.statuses.push_back({*state, s.schedule_version, at});
+      }
+    }
+  };
+  for (std::size_t i = 0; i < file.messages().size(); ++i) {
+    const bool had_scenario = run.inputs.hasScenario();
+    take(i);
+    if (!had_scenario && run.inputs.hasScenario()) {
+      for (const std::size_t s : std::exchange(held_schedules, {})) take(s);
+    }
+  }
+  if (!run.inputs.hasScenario()) {
+    throw InputError(source, "sensornet/Scenario",
+                     "a recording that holds the run's Scenario (sensornet launch --record)");
+  }
+  return run;
+}
+
+}  // namespace sensornet::conform

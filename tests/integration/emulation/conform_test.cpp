@@ -1,0 +1,145 @@
+// `sensornet conform sensor` (issue 48): a launched run with a participant of the user's in a
+// sensor's role, judged rule by rule. The participant is the C example (examples/c/
+// external_sensor.c): measuring the truth through the world library it keeps every rule; sending
+// z = 0 while claiming the truth it fails the NEES rule alone; killed mid-run it fails leaving
+// and the run's outcome. The test reads the verdicts from the table and the JUnit file, and
+// checks the counts the accounting rule judged against the report the run wrote.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "launch_fixture.hpp"
+
+namespace sensornet {
+namespace {
+
+#ifdef SENSORNET_EXTERNAL_SENSOR_EXAMPLE
+
+using namespace std::chrono_literals;
+using testing::LeftoverGuard;
+using testing::ProcessResult;
+using testing::runProcess;
+
+// The rule -> "ok" / "FAIL" lines of the table conform prints.
+std::map<std::string, std::string> verdicts(const std::string& table) {
+  std::map<std::string, std::string> out;
+  std::istringstream lines(table);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string rule, verdict;
+    words >> rule >> verdict;
+    if (!line.empty() && line[0] != ' ' && (verdict == "ok" || verdict == "FAIL")) out[rule] = verdict;
+  }
+  return out;
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+class ConformSensor : public testing::LaunchTest {
+ protected:
+  ProcessResult conform(std::vector<std::string> options, std::vector<std::string> program,
+                        const std::string& time_scale = "4", const std::string& sensor = "1") {
+    std::vector<std::string> argv = {testing::kLauncher, "conform", "sensor",
+                                     "--sensor", sensor,
+                                     "--scenario", testing::kDefaultScenario,
+                                     "--episodes", "3",
+                                     "--time-scale", time_scale,
+                                     "--run-id", run_id_,
+                                     "--dir", (dir_ / "conform").string()};
+    argv.insert(argv.end(), options.begin(), options.end());
+    argv.emplace_back("--");
+    argv.insert(argv.end(), program.begin(), program.end());
+    return runProcess(argv, 300s);
+  }
+  std::vector<std::string> example(const std::string& measure) const {
+    return {SENSORNET_EXTERNAL_SENSOR_EXAMPLE, "--run-id", "{run_id}", "--domain-id",
+            "{domain_id}", "--sensor", "{sensor}", "--dim", "{dim}", "--measure", measure};
+  }
+};
+
+TEST_F(ConformSensor, TheCExampleMeasuringTheTruthKeepsEveryRule) {
+  const LeftoverGuard guard(run_id_);
+  const ProcessResult r =
+      conform({"--measures-truth", "--junit", (dir_ / "rules.xml").string()}, example("truth"));
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  const auto rules = verdicts(r.out);
+  EXPECT_EQ(rules.size(), 11u) << r.out;
+  for (const auto& [rule, verdict] : rules) EXPECT_EQ(verdict, "ok") << rule << "\n" << r.out;
+  // The C example draws its arrivals as our agents do (without --seed).
+  EXPECT_NE(r.out.find("3 of 3 drawn exactly as our agents draw"), std::string::npos) << r.out;
+  const std::string junit = testing::readText(dir_ / "rules.xml");
+  EXPECT_EQ(count(junit, "<testcase "), 11u) << junit;
+  EXPECT_EQ(count(junit, "<failure "), 0u) << junit;
+  // What the accounting rule judged, from the report itself: every sample of sensor 1 arrived.
+  const nlohmann::json report = testing::readJson(dir_ / "conform" / "report.json");
+  std::uint64_t sent = 0, received = 0;
+  for (const nlohmann::json& e : report.at("per_episode")) {
+    sent += e.at("sent").at(1).get<std::uint64_t>();
+    received += e.at("received").at(1).get<std::uint64_t>();
+  }
+  EXPECT_GT(sent, 0u);
+  EXPECT_EQ(sent, received);
+  EXPECT_NE(r.out.find("sent " + std::to_string(sent) + ", received " + std::to_string(received) +
+                       ", lost 0, refused 0"),
+            std::string::npos)
+      << r.out;
+}
+
+// Its own arrivals (--seed: a stream of its own, as valid a Poisson draw) and z = 0 while
+// claiming the truth: the protocol holds, the measurements do not.
+TEST_F(ConformSensor, ASensorSendingZerosFailsOnlyTheTruth) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> program = example("zero");
+  program.insert(program.end(), {"--seed", "7"});
+  const ProcessResult r = conform({"--measures-truth"}, program);
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  const auto rules = verdicts(r.out);
+  EXPECT_EQ(rules.size(), 11u) << r.out;
+  for (const auto& [rule, verdict] : rules) {
+    EXPECT_EQ(verdict, rule == "truth" ? "FAIL" : "ok") << rule << "\n" << r.out;
+  }
+  EXPECT_NE(r.out.find("KS D = "), std::string::npos) << r.out;  // its own draw: the law tested
+  EXPECT_NE(r.out.find("OUTSIDE"), std::string::npos) << r.out;
+}
+
+// Killed (SIGKILL) four seconds in, in real time (3 episodes of 3 s): it neither says STOPPED
+// nor leaves by itself, and the run does not complete.
+TEST_F(ConformSensor, ASensorKilledMidRunFailsLeavingAndTheRun) {
+  const LeftoverGuard guard(run_id_);
+  std::vector<std::string> program = {"/usr/bin/timeout", "-s", "KILL", "4"};
+  const std::vector<std::string> sensor = example("truth");
+  program.insert(program.end(), sensor.begin(), sensor.end());
+  const ProcessResult r = conform({}, program, "1");
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  const auto rules = verdicts(r.out);
+  ASSERT_TRUE(rules.contains("leaving") && rules.contains("run")) << r.out;
+  EXPECT_EQ(rules.at("leaving"), "FAIL") << r.out;
+  EXPECT_EQ(rules.at("run"), "FAIL") << r.out;
+  EXPECT_EQ(rules.at("readiness"), "ok") << r.out;
+  EXPECT_NE(r.out.find("it left with exit 137"), std::string::npos) << r.out;
+}
+
+TEST_F(ConformSensor, BadInputIsOneLineAndExitTwo) {
+  const ProcessResult r = conform({}, example("truth"), "4", "99");
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--sensor"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("0 to "), std::string::npos) << r.err;
+  const ProcessResult role = runProcess({testing::kLauncher, "conform", "scheduler", "--", "true"});
+  EXPECT_EQ(role.exit_code, 2) << role.err;
+  EXPECT_NE(role.err.find("the role `sensor`"), std::string::npos) << role.err;
+}
+
+#endif
+
+}  // namespace
+}  // namespace sensornet
