@@ -501,7 +501,8 @@ int runLaunch(CommandOptions options) {
       external,
       options.external_fusion_center,
       plan.reference_report,
-      progress.reportsRefused()};
+      progress.reportsRefused(),
+      scenario.stateDim()};
   const RunOutcome outcome = settleRun(end);
   if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());

@@ -66,7 +66,8 @@ int sn_world_measure(sn_world* world, uint32_t episode, uint32_t sensor, uint64_
 /* "poisson" (also "" or NULL) or "timetable": the Scenario sample's `arrivals`. */
 int sn_world_set_arrivals(sn_world* world, const char* mode);
 /* A schedule version, as the Schedule sample carries it: `rates` row-major, `intervals` rows of
- * M rates in Hz. Versions must come in increasing order (a repeat of the last is ignored). */
+ * M rates in Hz (`intervals` must be the scenario's N). Versions must come in increasing order
+ * (a repeat of the last is ignored). */
 int sn_world_add_schedule(sn_world* world, uint32_t version, uint32_t effective_episode,
                           double effective_time_s, const double* rates, uint32_t intervals);
 /* The instants (on ticks, increasing) at which our agent would transmit for `sensor` in

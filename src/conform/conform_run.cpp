@@ -130,13 +130,18 @@ ConformResult conformSensor(const ConformOptions& options,
   RunFacts facts;
   facts.measures_truth = options.measures_truth;
   const auto deadline = std::chrono::steady_clock::now() + options.timeout + 30s;
-  std::optional<launcher::ChildExit> launched;
-  bool said_participant_ended = false;
+  std::optional<launcher::ChildExit> launched, left;
   while (!launched) {
     launched = processes.waitFor("launch", 1s);
-    if (!said_participant_ended && !processes.isRunning("participant") && !launched) {
-      said_participant_ended = true;
-      say("conform: your program ended while the run goes on (see its output)");
+    // A program that fails while the run goes on is told at once; one that leaves cleanly has
+    // most likely seen the shutdown.
+    for (const launcher::ChildExit& e : processes.reap()) {
+      if (e.name == "launch") launched = e;
+      if (e.name != "participant") continue;
+      left = e;
+      if (!e.succeeded()) {
+        say("conform: your program " + e.describe() + " while the run goes on (see its output)");
+      }
     }
     if (!launched && std::chrono::steady_clock::now() > deadline) {
       say("conform: the run did not end in time; stopping it");
@@ -146,12 +151,7 @@ ConformResult conformSensor(const ConformOptions& options,
   }
   facts.launcher_exit = launched->signal != 0 ? 128 + launched->signal : launched->exit_code;
   // The participant leaves by itself on RUN_SHUTDOWN; a few seconds for its acknowledgements.
-  std::optional<launcher::ChildExit> left = processes.waitFor("participant", 5s);
-  if (!left) {
-    for (const launcher::ChildExit& e : processes.reap()) {
-      if (e.name == "participant") left = e;
-    }
-  }
+  if (!left) left = processes.waitFor("participant", 5s);
   if (left && left->signal == 0) facts.program_exit = left->exit_code;
   if (!left) processes.stop({"participant"}, 3s);
 

@@ -421,7 +421,7 @@ RuleCheck runCompletes(const RunFacts& facts) {
     r.evidence = "no report; the launcher exited " + std::to_string(facts.launcher_exit);
     return r;
   }
-  r.pass = facts.launcher_exit == 0 && facts.report->status == RunStatus::Completed;
+  r.pass = facts.launcher_exit == 0 && facts.report->status == emulator::RunStatus::Completed;
   r.evidence = fmt::format("status {}, exit {}, {}", wordOf(facts.report->status),
                            facts.launcher_exit, plural(facts.report->faults.size(), "fault", "faults"));
   if (!facts.report->faults.empty()) {

@@ -578,10 +578,10 @@ std::vector<std::uint32_t> ResumedRun::heardEnd(std::uint32_t episodes_run) {
   return restarted;
 }
 
-json reportFromEpisodes(const std::string& run_id, int sensor_count,
+json reportFromEpisodes(const std::string& run_id, int sensor_count, int state_dim,
                         const std::vector<json>& per_episode, const std::string& status,
                         const json& faults) {
-  RunReport report(run_id, "", sensor_count, 0);
+  RunReport report(run_id, "", sensor_count, state_dim);
   for (const json& entry : per_episode) report.add(entry);
   return report.toJson(status, faults, json::array(),
                        {{"rebuilt_from", "episode log (the fusion center wrote no report)"}});

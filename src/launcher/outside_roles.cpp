@@ -22,6 +22,7 @@ fs::path outsideConfigFile(const fs::path& log_dir, const wire::RunOptions& run,
 std::string outsideRolesAnnouncement(const OutsideRoles& roles, const OutsideReach& reach) {
   const std::string domain = std::to_string(reach.domain_id);
   std::string text;
+  if (!roles.any()) return text;
   if (!roles.sensors.empty()) {
     text += "sensornet: sensors " + emulator::formatSensorIds(roles.sensors) +
             " are external: the run waits (up to the coordinator's ready timeout) for a "
@@ -35,6 +36,8 @@ std::string outsideRolesAnnouncement(const OutsideRoles& roles, const OutsideRea
             " and writes Report and FusionState there (docs/wire-protocol.md, \"Fusion center\")" +
             (roles.reference_fusion ? "; ours runs beside it as the reference" : "") + "\n";
   }
+  text += "sensornet: an outside participant loads this run's Cyclone configuration: "
+          "CYCLONEDDS_URI=" + shellLine({"file://" + reach.cyclone_config.string()}) + "\n";
   return text;
 }
 

@@ -69,11 +69,12 @@ RunRecord rebuildReport(const RunEnd& end, bool logged) {
   }
   json doc;
   if (logged) {
-    emulator::RunReport rebuilt(end.run_id, "", end.sensor_count, 0, log);
+    emulator::RunReport rebuilt(end.run_id, "", end.sensor_count, end.state_dim, log);
     sensornet::report::forEachReportedEpisode(log, [&rebuilt](const json& entry) { rebuilt.add(entry); });
     doc = rebuilt.toJsonWithoutEpisodes("failed", faults, json::array());
   } else {
-    doc = emulator::reportFromEpisodes(end.run_id, end.sensor_count, {}, "failed", faults);
+    doc = emulator::reportFromEpisodes(end.run_id, end.sensor_count, end.state_dim, {}, "failed",
+                                       faults);
   }
   RunRecord run = report::decodeRunRecord(doc);
   run.rebuilt_from = log.string();

@@ -185,8 +185,13 @@ SN_WORLD_EXPORT int sn_world_add_schedule(sn_world* world, uint32_t version,
   return guarded(world, [&] {
     if (!checkOut(world, rates, "rates")) return false;
     const Scenario& s = world->scenario;
-    if (intervals == 0 || !(effective_time_s >= 0.0 && effective_time_s <= s.horizon_s)) {
-      world->error = "a schedule needs at least one interval and an effective time in [0, T]";
+    if (intervals != static_cast<uint32_t>(s.intervals)) {
+      world->error = "a schedule has the scenario's " + std::to_string(s.intervals) +
+                     " intervals (got " + std::to_string(intervals) + ")";
+      return false;
+    }
+    if (!(effective_time_s >= 0.0 && effective_time_s <= s.horizon_s)) {
+      world->error = "a schedule's effective time lies in [0, T]";
       return false;
     }
     const auto m = static_cast<Eigen::Index>(s.sensorCount());

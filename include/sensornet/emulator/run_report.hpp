@@ -268,8 +268,9 @@ class ResumedRun {
 };
 
 // A whole report from episode entries (the launcher's rebuild after a fusion center death),
-// with the same keys and statistics as the fusion center's.
+// with the same keys and statistics as the fusion center's (the NEES band needs n, `state_dim`).
 [[nodiscard]] nlohmann::json reportFromEpisodes(const std::string& run_id, int sensor_count,
+                                                int state_dim,
                                                 const std::vector<nlohmann::json>& per_episode,
                                                 const std::string& status,
                                                 const nlohmann::json& faults);

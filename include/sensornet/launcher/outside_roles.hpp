@@ -45,7 +45,8 @@ struct OutsideReach {
 // The silence after which the launcher says what an outside participant needs.
 inline constexpr std::chrono::seconds kOutsideAdviceDelay{5};
 
-// The lines printed when the run starts ("" when no role is outside).
+// The lines printed when the run starts, the configuration to load among them ("" when no role
+// is outside).
 [[nodiscard]] std::string outsideRolesAnnouncement(const OutsideRoles& roles,
                                                    const OutsideReach& reach);
 

@@ -43,6 +43,7 @@ struct RunEnd {
   // --reference-fusion: the reference fusion center's report, compared episode by episode.
   std::filesystem::path reference_report;
   std::uint64_t reports_refused = 0;  // external Reports that did not fit the scenario
+  int state_dim = 0;  // n: the NEES band of a rebuilt report (0: none)
 };
 
 struct RunOutcome {

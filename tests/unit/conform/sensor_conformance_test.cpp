@@ -90,7 +90,7 @@ class SensorConformanceTest : public ::testing::Test {
       trace.tallies.push_back({k, seq, true, wallOf(k, scenario_.horizon_s) + 1000});
     }
     report::RunRecord record;
-    record.status = RunStatus::Completed;
+    record.status = emulator::RunStatus::Completed;
     report::SensorRecord line;
     line.sensor_id = kSensor;
     line.sent = line.received = trace.samples.size();

@@ -266,7 +266,7 @@ TEST(RunReport, RebuildsTheSameReportFromItsEpisodeLog) {
   const auto entries = readEpisodeLog(episodeLogPath(report_path));
   ASSERT_EQ(entries.size(), 3u);
   const nlohmann::json rebuilt =
-      reportFromEpisodes("r", 2, entries, "failed", nlohmann::json::array());
+      reportFromEpisodes("r", 2, 3, entries, "failed", nlohmann::json::array());
   const nlohmann::json original =
       report.toJson("failed", nlohmann::json::array(), nlohmann::json::array());
   EXPECT_EQ(rebuilt.at("per_episode"), original.at("per_episode"));
@@ -327,7 +327,7 @@ TEST(ResumedRun, StartsFromTheEpisodeLogAndRecordsWhatItCouldNotFuse) {
   EXPECT_EQ(four.at("sent"), nlohmann::json({0, 0}));
 
   const nlohmann::json rebuilt =
-      reportFromEpisodes("r", 2, entries, "degraded", nlohmann::json::array());
+      reportFromEpisodes("r", 2, 3, entries, "degraded", nlohmann::json::array());
   EXPECT_EQ(rebuilt.at("summary").at("episodes"), 5);
   EXPECT_EQ(rebuilt.at("summary").at("episodes_complete"), 4);
   EXPECT_DOUBLE_EQ(rebuilt.at("summary").at("mean").get<double>(), (2.0 + 4.0 + 5.0 + 7.0) / 4.0);

@@ -66,9 +66,6 @@ TEST(HostPlacement, ShellQuotingClosesReopensAroundAQuote) {
   EXPECT_EQ(shellQuoted("$HOME; rm"), "'$HOME; rm'");
 }
 
-}  // namespace
-}  // namespace sensornet::launcher
-
 // The shell reads a printed line back as the words it was made of (checked by /bin/sh itself,
 // not by the quoting rules restated), and plain words are printed bare.
 TEST(HostPlacement, APrintedCommandLineIsReadBackAsItsWords) {
@@ -93,3 +90,6 @@ TEST(HostPlacement, APrintedCommandLineIsReadBackAsItsWords) {
   EXPECT_EQ(::pclose(shell), 0);
   EXPECT_EQ(read, words) << line;
 }
+
+}  // namespace
+}  // namespace sensornet::launcher

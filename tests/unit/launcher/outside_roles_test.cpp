@@ -52,6 +52,9 @@ TEST(OutsideRoles, TheAdviceNamesTheDomainThePartitionTheConfigurationAndTheExam
             std::string::npos);
   EXPECT_NE(outsideRolesAnnouncement(roles, reach).find("sensornet/mine/sensors/<their ids>"),
             std::string::npos);
+  EXPECT_NE(outsideRolesAnnouncement(roles, reach)
+                .find("CYCLONEDDS_URI=file:///tmp/logs/cyclone-outside.xml"),
+            std::string::npos);
   EXPECT_EQ(outsideRolesAnnouncement({}, reach), "");
 }
 

@@ -43,14 +43,15 @@ json handWrittenReport() {
       "std": null, "ci95": null, "ci95_low": null, "ci95_high": null, "realtime_mean": 2.25,
       "received_realtime_mean": 2.25, "bracket": {"info": 1.5, "cov": 2.5}, "meets_bracket": null,
       "delivered_bracket": {"info": 1.75, "cov": 3.0}, "meets_delivered_bracket": null,
-      "nees_mean": 3.5, "sent": 30, "received": 27, "expected": 31.5, "lost": 2,
-      "dropped_by_network": 1, "late": 0, "rejected": 3,
+      "nees_mean": 3.5, "nees_band_low": 0.09, "nees_band_high": 18.47, "nees_confidence": 0.999,
+      "nees_consistent": true, "sent": 30, "received": 27, "expected": 31.5, "lost": 2,
+      "dropped_by_network": 1, "late": 0, "refused": 0, "rejected": 3,
       "rejected_by_reason": {"duplicate": 1, "other_run": 2}},
     "sensors": [
       {"sensor_id": 0, "sent": 20, "received": 19, "lost": 1, "dropped_by_network": 0, "late": 0,
-       "expected": 21.0, "wrong_version": 0},
+       "expected": 21.0, "wrong_version": 0, "refused": 0},
       {"sensor_id": 1, "sent": 10, "received": 8, "lost": 1, "dropped_by_network": 1, "late": 0,
-       "expected": 10.5, "wrong_version": 0}
+       "expected": 10.5, "wrong_version": 0, "refused": 0}
     ],
     "latency_s": {"median": 0.0001, "p99": 0.002, "quantile_relative_error": 0.000576,
                   "histogram": {"edges_s": [0.0001, 0.001], "counts": [27]}},

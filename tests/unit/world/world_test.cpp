@@ -151,7 +151,9 @@ TEST_F(World, ArrivalsFollowTheSchedule) {
       EXPECT_FALSE(t >= 0.5 && t < 1.0) << t;
       EXPECT_EQ(sn_world_on_tick(world_, t), t);
       EXPECT_EQ(versions[static_cast<std::size_t>(i)], 1u);
-      if (i > 0) EXPECT_LE(times[static_cast<std::size_t>(i - 1)], t);
+      if (i > 0) {
+        EXPECT_LE(times[static_cast<std::size_t>(i - 1)], t);
+      }
     }
     total += static_cast<double>(n);
   }
@@ -174,6 +176,11 @@ TEST_F(World, BadInputIsRefusedWithItsReason) {
   const std::vector<double> negative = {1, -1, 1, 1, 1, 1, 1, 1};
   EXPECT_EQ(sn_world_add_schedule(world_, 1, 0, 0.0, negative.data(), 4), -1);
   EXPECT_NE(std::string(sn_world_error(world_)).find("rates[0][1]"), std::string::npos)
+      << sn_world_error(world_);
+  const std::vector<double> three_intervals = {1, 1, 1, 1, 1, 1};  // the scenario has 4
+  EXPECT_EQ(sn_world_add_schedule(world_, 1, 0, 0.0, three_intervals.data(), 3), -1);
+  EXPECT_NE(std::string(sn_world_error(world_)).find("the scenario's 4 intervals"),
+            std::string::npos)
       << sn_world_error(world_);
   EXPECT_EQ(sn_world_set_arrivals(world_, "sometimes"), -1);
   EXPECT_EQ(sn_world_set_arrivals(world_, "timetable"), 0);
