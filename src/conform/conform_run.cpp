@@ -153,7 +153,11 @@ ConformResult conformSensor(const ConformOptions& options,
   // The participant leaves by itself on RUN_SHUTDOWN; a few seconds for its acknowledgements.
   if (!left) left = processes.waitFor("participant", 5s);
   if (left && left->signal == 0) facts.program_exit = left->exit_code;
-  if (!left) processes.stop({"participant"}, 3s);
+  if (left) facts.program_end = (left->signal != 0 ? "was " : "") + left->describe();
+  if (!left) {
+    processes.stop({"participant"}, 3s);
+    facts.program_end = "was still running 5 s after the run ended: stopped";
+  }
 
   const report::ReportFile file = report::readReport(report_path);
   if (file.ok()) facts.report = report::decodeRunRecord(file.report);

@@ -135,8 +135,11 @@ RuleCheck leaving(const RecordedRun& run, const SensorTrace& trace, const RunFac
                                        ? std::string("none")
                                        : std::string(wordOf(trace.statuses.back().state))) +
                                   ")";
-  r.evidence += !facts.program_exit ? "; it did not leave: stopped by a signal"
-                                    : "; it left with exit " + std::to_string(*facts.program_exit);
+  r.evidence += "; it " + (facts.program_end.empty()
+                               ? (facts.program_exit ? "exited with status " +
+                                                           std::to_string(*facts.program_exit)
+                                                     : std::string("ended by a signal"))
+                               : facts.program_end);
   r.pass = said_stopped && facts.program_exit == 0;
   return r;
 }

@@ -89,8 +89,9 @@ struct RunFacts {
   int launcher_exit = 1;
   std::optional<report::RunRecord> report;  // none: no report was written
   bool measures_truth = false;              // the sensor claims to measure the plant's truth
-  // The participant's own exit once the run shut down: nullopt when it had to be stopped.
+  // The participant's own exit status: nullopt when a signal ended it or it had to be stopped.
   std::optional<int> program_exit;
+  std::string program_end;  // how it ended, for the evidence: "exited with status 0", ...
 };
 
 // Every rule of a sensor's role, in the order the protocol meets them.
