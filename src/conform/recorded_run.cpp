@@ -77,7 +77,8 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
         const auto& s = sample.as<sensornet_Measurement>();
         if (static_cast<int>(s.sensor_id) != channel.sensor) return;
         trace.samples.push_back({s.episode, s.seq, s.emulated_time_s, s.schedule_version,
-                                 static_cast<std::size_t>(s.z._length), at});
+                                 std::vector<double>(s.z._buffer, s.z._buffer + s.z._length),
+                                 at});
       } else if (topic == "sensornet/EpisodeTally") {
         const auto& s = sample.as<sensornet_EpisodeTally>();
         if (static_cast<int>(s.sensor_id) != channel.sensor) return;

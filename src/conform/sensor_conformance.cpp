@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -434,6 +435,50 @@ RuleCheck runCompletes(const RunFacts& facts) {
   return r;
 }
 
+// The z of each sample against the truth at its tick: Σ e' R^-1 e ~ χ²(p N).
+RuleCheck measurementNoise(const RecordedRun& run, int sensor, const SensorTrace& trace) {
+  RuleCheck r = rule("measurement-noise",
+                     fmt::format("z = H x(t) + v with v ~ N(0, R) at the plant's truth: the sum of "
+                                 "e' R^-1 e is chi-square (two-sided, alpha {:g})",
+                                 kConformAlpha),
+                     "the-emulated-world");
+  const Scenario& scenario = run.inputs.scenario();
+  const EmulatedPlant& plant = run.inputs.plant();
+  const SensorModel& model = scenario.sensors[static_cast<std::size_t>(sensor)];
+  const auto p = static_cast<std::size_t>(model.H.rows());
+  const Eigen::LLT<Eigen::MatrixXd> r_factor(model.R);
+  double sum = 0.0;
+  std::size_t used = 0, wrong_size = 0;
+  for (const SensorTrace::Sample& s : trace.samples) {
+    if (s.z.size() != p || !run.starts_ns.contains(s.episode)) {
+      ++wrong_size;
+      continue;
+    }
+    // Instants lie on ticks (t = tick τ); the nearest tick, so that rounding cannot move it.
+    const auto tick = std::clamp<std::int64_t>(std::llround(s.time_s / plant.tickSeconds()), 0,
+                                               plant.tickCount());
+    const Eigen::VectorXd x = plant.stateAt(s.episode, tick);
+    const Eigen::VectorXd e =
+        Eigen::Map<const Eigen::VectorXd>(s.z.data(), static_cast<Eigen::Index>(p)) - model.H * x;
+    sum += e.dot(r_factor.solve(e));
+    ++used;
+  }
+  if (used == 0) {
+    r.evidence = "no well-formed measurement to judge";
+    return r;
+  }
+  const double dof = static_cast<double>(p * used);
+  const double low = chiSquareQuantile(kConformAlpha / 2.0, dof) / dof;
+  const double high = chiSquareQuantile(1.0 - kConformAlpha / 2.0, dof) / dof;
+  const double mean = sum / dof;
+  r.pass = mean >= low && mean <= high;
+  r.evidence = fmt::format("{}: mean e' R^-1 e / p = {:.3f} {} [{:.3f}, {:.3f}]{}",
+                           plural(used, "sample", "samples"), mean, r.pass ? "in" : "OUTSIDE", low,
+                           high,
+                           wrong_size > 0 ? fmt::format(" ({} not judged)", wrong_size) : "");
+  return r;
+}
+
 RuleCheck truth(const RunFacts& facts) {
   RuleCheck r = rule("truth",
                      "measures the plant's truth: the run's mean NEES lies in its chi-square band",
@@ -488,7 +533,10 @@ std::vector<RuleCheck> checkSensor(const RecordedRun& run, int sensor, const Run
                                   sequenceNumbers(trace),       tallies(run, trace),
                                   arrivals(run, sensor, trace), accounted(sensor, facts),
                                   leaving(run, trace, facts),   runCompletes(facts)};
-  if (facts.measures_truth) rules.push_back(truth(facts));
+  if (facts.measures_truth) {
+    rules.push_back(measurementNoise(run, sensor, trace));
+    rules.push_back(truth(facts));
+  }
   return rules;
 }
 

@@ -137,7 +137,13 @@ RunRecorder::RunRecorder(const dds::Participant& participant, const std::string&
   add(static_cast<sensornet_CommandReply*>(nullptr), run);
   McapMap run_record = run_metadata;
   run_record["run_id"] = run_id;
-  writer_->addMetadata("run", run_record);
+  // The first write to disk (the schemas go out with it): a disk that refuses it is the same
+  // fault as one that fills later, and the run goes on.
+  try {
+    writer_->addMetadata("run", run_record);
+  } catch (const std::exception& e) {
+    summary_.error = e.what();
+  }
   thread_ = std::thread([this] { loop(); });
 }
 

@@ -57,4 +57,22 @@ message("${out}")
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "the C program against the installed world library failed (${rc}):\n${err}")
 endif()
+# The same program against the build tree, uninstalled: its -uninstalled.pc, run by its rpath.
+execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${BUILD_DIR}/src/world
+                        pkg-config --cflags --libs sensornet-world
+                RESULT_VARIABLE rc OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config sensornet-world in the build tree failed (${rc})")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags}")
+execute_process(COMMAND cc -std=c11 -Wall -Werror ${CLIENT} -o ${WORK}/world_client_tree ${flags} -lm
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "building against the uninstalled world library failed (${rc}):\n${err}")
+endif()
+execute_process(COMMAND ${WORK}/world_client_tree ${SCENARIO}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the C program against the uninstalled world library failed (${rc}):\n${err}")
+endif()
 file(REMOVE_RECURSE ${WORK})

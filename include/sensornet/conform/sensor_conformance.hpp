@@ -14,7 +14,10 @@
 // integrated rate between successive arrivals of a stretch is Exp(1), so 1 - exp(-ΔΛ) is
 // uniform; a Kolmogorov-Smirnov test of those values, and a two-sided test of the count against
 // its Poisson mean, each at a false-alarm rate of kConformAlpha. Timetable arrivals are
-// deterministic: they must equal the timetable's instants.
+// deterministic: they must equal the timetable's instants. A sensor that claims to measure the
+// plant's truth (--measures-truth) has its z judged against it: with e = z - H_j x(t), the sum
+// of e' R_j^-1 e over its N samples is chi-square with p_j N degrees of freedom, tested two-sided
+// at kConformAlpha; and the run's mean NEES must lie in its band.
 
 #include <cstdint>
 #include <map>
@@ -51,7 +54,7 @@ struct SensorTrace {
     std::uint64_t seq = 0;
     double time_s = 0.0;
     std::uint32_t version = 0;
-    std::size_t z_size = 0;
+    std::vector<double> z;
     std::int64_t received_ns = 0;
   };
   struct Tally {

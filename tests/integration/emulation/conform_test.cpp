@@ -73,12 +73,12 @@ TEST_F(ConformSensor, TheCExampleMeasuringTheTruthKeepsEveryRule) {
       conform({"--measures-truth", "--junit", (dir_ / "rules.xml").string()}, example("truth"));
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
   const auto rules = verdicts(r.out);
-  EXPECT_EQ(rules.size(), 11u) << r.out;
+  EXPECT_EQ(rules.size(), 12u) << r.out;
   for (const auto& [rule, verdict] : rules) EXPECT_EQ(verdict, "ok") << rule << "\n" << r.out;
   // The C example draws its arrivals as our agents do (without --seed).
   EXPECT_NE(r.out.find("3 of 3 drawn exactly as our agents draw"), std::string::npos) << r.out;
   const std::string junit = testing::readText(dir_ / "rules.xml");
-  EXPECT_EQ(count(junit, "<testcase "), 11u) << junit;
+  EXPECT_EQ(count(junit, "<testcase "), 12u) << junit;
   EXPECT_EQ(count(junit, "<failure "), 0u) << junit;
   // What the accounting rule judged, from the report itself: every sample of sensor 1 arrived.
   const nlohmann::json report = testing::readJson(dir_ / "conform" / "report.json");
@@ -95,8 +95,22 @@ TEST_F(ConformSensor, TheCExampleMeasuringTheTruthKeepsEveryRule) {
       << r.out;
 }
 
+// Our own sensor_agent in the role: every rule holds, its arrivals are ours to the instant.
+TEST_F(ConformSensor, OurOwnAgentKeepsEveryRule) {
+  const LeftoverGuard guard(run_id_);
+  const ProcessResult r = conform({"--measures-truth"},
+                                  {SENSORNET_SENSOR_AGENT, "--run-id", "{run_id}", "--domain-id",
+                                   "{domain_id}", "--sensors", "{sensor}"},
+                                  "4", "3");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  const auto rules = verdicts(r.out);
+  EXPECT_EQ(rules.size(), 12u) << r.out;
+  for (const auto& [rule, verdict] : rules) EXPECT_EQ(verdict, "ok") << rule << "\n" << r.out;
+  EXPECT_NE(r.out.find("3 of 3 drawn exactly as our agents draw"), std::string::npos) << r.out;
+}
+
 // Its own arrivals (--seed: a stream of its own, as valid a Poisson draw) and z = 0 while
-// claiming the truth: the protocol holds, the measurements do not.
+// claiming the truth: the protocol holds, the measurements do not (nor, then, the NEES).
 TEST_F(ConformSensor, ASensorSendingZerosFailsOnlyTheTruth) {
   const LeftoverGuard guard(run_id_);
   std::vector<std::string> program = example("zero");
@@ -104,9 +118,10 @@ TEST_F(ConformSensor, ASensorSendingZerosFailsOnlyTheTruth) {
   const ProcessResult r = conform({"--measures-truth"}, program);
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   const auto rules = verdicts(r.out);
-  EXPECT_EQ(rules.size(), 11u) << r.out;
+  EXPECT_EQ(rules.size(), 12u) << r.out;
   for (const auto& [rule, verdict] : rules) {
-    EXPECT_EQ(verdict, rule == "truth" ? "FAIL" : "ok") << rule << "\n" << r.out;
+    const bool judged_by_truth = rule == "truth" || rule == "measurement-noise";
+    EXPECT_EQ(verdict, judged_by_truth ? "FAIL" : "ok") << rule << "\n" << r.out;
   }
   EXPECT_NE(r.out.find("KS D = "), std::string::npos) << r.out;  // its own draw: the law tested
   EXPECT_NE(r.out.find("OUTSIDE"), std::string::npos) << r.out;

@@ -221,8 +221,9 @@ TEST_F(Recording, ARunInterruptedWithCtrlCLeavesACompleteFile) {
 }
 
 // A recording that cannot be written whole (the disk fills: here a file-size limit of 160 KB on
-// the launcher and its children, which the 75 KB report fits and a 3-episode recording of about
-// 350 KB does not) is one `recording_incomplete` fault: the run is degraded (exit 3, the
+// the launcher and its children, which the 75 KB report fits and a 3-episode recording does not:
+// its first chunk alone, the IDL as the schema of each of its 10 types, is about 185 KB, so the
+// very first write fails) is one `recording_incomplete` fault: the run is degraded (exit 3, the
 // outcome table), every episode still complete with the costs of the same seed's run without
 // --record, recomputed from both reports.
 TEST_F(Recording, ARecordingThatCannotBeWrittenWholeIsOneFaultAndChangesNoCost) {

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
 
@@ -85,7 +86,12 @@ class SensorConformanceTest : public ::testing::Test {
       for (const emulator::TimedArrival& a :
            emulator::sensorTimeline(run_.inputs.book(), run_.inputs.plant(), kSeed, k, {kSensor},
                                     scenario_.horizon_s)) {
-        trace.samples.push_back({k, seq++, a.time_s, a.version, 1, wallOf(k, a.time_s)});
+        const Eigen::VectorXd z =
+            run_.inputs.plant().measure(run_.inputs.plant().stateAt(k, a.tick), kSensor, k, seq);
+        ticks_.push_back(a.tick);
+        trace.samples.push_back({k, seq++, a.time_s, a.version,
+                                 std::vector<double>(z.data(), z.data() + z.size()),
+                                 wallOf(k, a.time_s)});
       }
       trace.tallies.push_back({k, seq, true, wallOf(k, scenario_.horizon_s) + 1000});
     }
@@ -123,6 +129,7 @@ class SensorConformanceTest : public ::testing::Test {
 
   Scenario scenario_;
   RecordedRun run_;
+  std::vector<std::int64_t> ticks_;  // each sample's tick, as drawn
   RunFacts facts_;
 };
 
@@ -226,6 +233,35 @@ TEST_F(SensorConformanceTest, ALossInTheReportFailsTheAccountingRule) {
   facts_.report->sensors[0].received -= 1;
   facts_.report->sensors[0].lost = 1;
   expectOnlyFails("accounted");
+}
+
+// z judged against the truth: our agents' z (truth + R-noise) pass; the truth without noise,
+// noise twice too large, and z = 0 fail.
+TEST_F(SensorConformanceTest, MeasurementsAreJudgedAgainstTheTruthWhenClaimed) {
+  facts_.measures_truth = true;
+  facts_.report->summary.nees_mean = 3.0;
+  facts_.report->summary.nees_band_low = 2.5;
+  facts_.report->summary.nees_band_high = 3.6;
+  facts_.report->summary.nees_consistent = true;
+  EXPECT_TRUE(failing().empty()) << ::testing::PrintToString(failing());
+  const EmulatedPlant& plant = run_.inputs.plant();
+  const SensorModel& model = scenario_.sensors[kSensor];
+  const std::vector<SensorTrace::Sample> ours = trace().samples;
+  const auto remake = [&](double noise_scale) {
+    for (std::size_t i = 0; i < ours.size(); ++i) {
+      const SensorTrace::Sample& s = ours[i];
+      const Eigen::VectorXd truth = model.H * plant.stateAt(s.episode, ticks_[i]);
+      const Eigen::Map<const Eigen::VectorXd> z(s.z.data(), static_cast<Eigen::Index>(s.z.size()));
+      const Eigen::VectorXd scaled = truth + noise_scale * (z - truth);
+      trace().samples[i].z.assign(scaled.data(), scaled.data() + scaled.size());
+    }
+  };
+  remake(0.0);
+  expectOnlyFails("measurement-noise");
+  remake(2.0);
+  expectOnlyFails("measurement-noise");
+  for (SensorTrace::Sample& s : trace().samples) std::fill(s.z.begin(), s.z.end(), 0.0);
+  expectOnlyFails("measurement-noise");
 }
 
 TEST_F(SensorConformanceTest, TruthIsCheckedOnlyWhenClaimed) {
