@@ -18,22 +18,23 @@ struct ConformCommandOptions {
 };
 
 int runConform(ConformCommandOptions options) {
-  if (options.role != "sensor") {
+  if (options.role == "fusion-center") {
+    options.run.role = conform::ConformRole::FusionCenter;
+  } else if (options.role != "sensor") {
     throw InputError("sensornet conform", options.role,
-                     "the role `sensor` (the fusion center's and the scheduler's rules are not "
-                     "checked yet)");
+                     "the role `sensor` or `fusion-center` (a scheduler's rules are not checked "
+                     "yet)");
   }
   if (!options.junit_path.empty()) checkOutputFile(options.junit_path, "--junit");
   options.run.sensornet = std::filesystem::read_symlink("/proc/self/exe");
-  const conform::ConformResult result = conform::conformSensor(
+  const conform::ConformResult result = conform::conform(
       options.run, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
   std::fputs(conform::ruleTable(result.rules).c_str(), stdout);
   std::printf("the run's files: %s\n", result.dir.c_str());
   if (!options.junit_path.empty()) {
     replaceFileAtomically(options.junit_path,
-                          conform::rulesJunit("sensornet conform sensor " +
-                                                  std::to_string(options.run.sensor),
-                                              result.rules, result.seconds));
+                          conform::rulesJunit("sensornet conform " + options.role, result.rules,
+                                      result.seconds));
   }
   return result.allPass() ? kExitOk : kExitFailure;
 }
@@ -46,18 +47,22 @@ Subcommand addConformCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "conform",
       "Check that your participant keeps the protocol (docs/wire-protocol.md): runs a launched "
-      "run with your program in a sensor's role (`sensornet launch --external-sensors J "
-      "--record`), then checks what the run recorded rule by rule: readiness before the first "
+      "run with your program in a role and checks what the run recorded rule by rule. A "
+      "sensor (`sensornet launch --external-sensors J --record`): readiness before the first "
       "episode, the status period, measurement times, schedule versions, seq numbers and "
       "tallies, the arrival law (a time-rescaling test at a false-alarm rate of 0.001), "
       "nothing lost or refused, leaving on shutdown, the run's outcome; with --measures-truth, "
-      "the mean NEES in its band. Prints a table (rule, ok/FAIL, evidence, the page's section); "
-      "exit 0 only when every rule holds, 1 when one fails, 2 on bad input. Your command line "
-      "may hold {run_id}, {domain_id}, {sensor}, {dim} and {config}; it runs with "
-      "CYCLONEDDS_URI set to the run's configuration. Example:\n"
+      "its z against the plant's truth and the NEES. A fusion center (`--external-fusion-center "
+      "--reference-fusion`): a Report per episode, costs, brackets and counts equal to our "
+      "exact CD-KF's on the same measurements, leaving, the outcome. Prints a table (rule, "
+      "ok/FAIL, evidence, the page's section); exit 0 only when every rule holds, 1 when one "
+      "fails, 2 on bad input. Your command line may hold {run_id}, {domain_id} and {config} "
+      "(a sensor's also {sensor} and {dim}); it runs with CYCLONEDDS_URI set to the run's "
+      "configuration. Example:\n"
       "  sensornet conform sensor --sensor 1 -- ./external_sensor --run-id {run_id} "
       "--domain-id {domain_id} --sensor {sensor} --measure truth");
-  cmd->add_option("ROLE", options->role, "the role your program fills: sensor")->required();
+  cmd->add_option("ROLE", options->role, "the role your program fills: sensor, fusion-center")
+      ->required();
   cmd->add_option("PROGRAM", options->run.program,
                   "your participant's command line, after `--`")
       ->required();
@@ -74,7 +79,12 @@ Subcommand addConformCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", options->run.seed, "the run seed")->capture_default_str();
   cmd->add_flag("--measures-truth", options->run.measures_truth,
-                "your program measures the plant's truth (the world library): check the NEES");
+                "your program measures the plant's truth (a sensor through the world library) or "
+                "estimates the state (a fusion center): check z against the truth and the NEES");
+  cmd->add_option("--tolerance", options->run.tolerance,
+                  "a fusion center's costs and brackets against ours, relative")
+      ->check(positiveNumber(1.0))
+      ->capture_default_str();
   cmd->add_option("--run-id", options->run.run_id,
                   "the run's id (default: conform- and 8 random hex digits)");
   cmd->add_option("--dir", options->run.dir,

@@ -63,17 +63,18 @@ std::string number(double value) { return fmt::format("{}", value); }
 
 }  // namespace
 
-ConformResult conformSensor(const ConformOptions& options,
-                            const std::function<void(const std::string&)>& say) {
+ConformResult conform(const ConformOptions& options,
+                      const std::function<void(const std::string&)>& say) {
   const auto began = std::chrono::steady_clock::now();
   const Scenario scenario = loadScenarioFile(options.scenario.string());
-  if (options.sensor < 0 || options.sensor >= scenario.sensorCount()) {
+  const bool sensor_role = options.role == ConformRole::Sensor;
+  if (sensor_role && (options.sensor < 0 || options.sensor >= scenario.sensorCount())) {
     throw InputError("--sensor", std::to_string(options.sensor),
                      fmt::format("a sensor of {} (0 to {})", options.scenario.string(),
                                  scenario.sensorCount() - 1));
   }
   if (options.program.empty()) {
-    throw InputError("sensornet conform sensor", "PROGRAM", "the participant's command line");
+    throw InputError("sensornet conform", "PROGRAM", "the participant's command line");
   }
   ConformResult result;
   result.run_id = options.run_id.empty() ? freshRunId() : options.run_id;
@@ -87,17 +88,19 @@ ConformResult conformSensor(const ConformOptions& options,
   run.run_id = result.run_id;
   const fs::path config = launcher::outsideConfigFile(dir, run, false);
   const std::string sensor = std::to_string(options.sensor);
-  const std::map<std::string, std::string> values = {
-      {"run_id", result.run_id},
-      {"domain_id", std::to_string(domain_id)},
-      {"sensor", sensor},
-      {"dim", std::to_string(scenario.sensors[static_cast<std::size_t>(options.sensor)].H.rows())},
-      {"config", config.string()}};
+  std::map<std::string, std::string> values = {{"run_id", result.run_id},
+                                               {"domain_id", std::to_string(domain_id)},
+                                               {"config", config.string()}};
   std::vector<std::string> participant = {"/usr/bin/env",
                                           "CYCLONEDDS_URI=file://" + config.string(),
                                           "SENSORNET_RUN_ID=" + result.run_id,
-                                          "SENSORNET_DOMAIN_ID=" + std::to_string(domain_id),
-                                          "SENSORNET_SENSOR=" + sensor};
+                                          "SENSORNET_DOMAIN_ID=" + std::to_string(domain_id)};
+  if (sensor_role) {
+    values["sensor"] = sensor;
+    values["dim"] =
+        std::to_string(scenario.sensors[static_cast<std::size_t>(options.sensor)].H.rows());
+    participant.push_back("SENSORNET_SENSOR=" + sensor);
+  }
   const std::vector<std::string> program =
       fillPlaceholders(options.program, values, "the participant's command line");
   participant.insert(participant.end(), program.begin(), program.end());
@@ -109,7 +112,6 @@ ConformResult conformSensor(const ConformOptions& options,
                                      fs::absolute(options.scenario).string(),
                                      "--run-id", result.run_id,
                                      "--domain-id", std::to_string(domain_id),
-                                     "--external-sensors", sensor,
                                      "--episodes", std::to_string(options.episodes),
                                      "--time-scale", number(options.time_scale),
                                      "--seed", std::to_string(options.seed),
@@ -118,14 +120,20 @@ ConformResult conformSensor(const ConformOptions& options,
                                      "--log-dir", (dir / "logs").string(),
                                      "--timeout", std::to_string(options.timeout.count()),
                                      "--no-html"};
+  if (sensor_role) {
+    launch.insert(launch.end(), {"--external-sensors", sensor});
+  } else {
+    launch.insert(launch.end(), {"--external-fusion-center", "--reference-fusion"});
+  }
   launch.insert(launch.end(), options.launch_args.begin(), options.launch_args.end());
 
   launcher::ProcessGroup processes;
   processes.start({"launch", launch, dir / "launch.log"});
   processes.start({"participant", participant, dir / "participant.log"});
-  say(fmt::format("conform: run {} on DDS domain {}, your program in sensor {}'s role; "
-                  "its output: {}",
-                  result.run_id, domain_id, sensor, (dir / "participant.log").string()));
+  say(fmt::format("conform: run {} on DDS domain {}, your program in {}'s role; its output: {}",
+                  result.run_id, domain_id,
+                  sensor_role ? "sensor " + sensor : std::string("the fusion center"),
+                  (dir / "participant.log").string()));
 
   RunFacts facts;
   facts.measures_truth = options.measures_truth;
@@ -167,8 +175,11 @@ ConformResult conformSensor(const ConformOptions& options,
                              ", see " + (dir / "launch.log").string());
   }
   const McapReader mcap(recording);
-  const RecordedRun recorded = readRecording(mcap, recording.string(), {options.sensor});
-  result.rules = checkSensor(recorded, options.sensor, facts);
+  const RecordedRun recorded =
+      readRecording(mcap, recording.string(), sensor_role ? std::vector<int>{options.sensor}
+                                                          : std::vector<int>{});
+  result.rules = sensor_role ? checkSensor(recorded, options.sensor, facts)
+                             : checkFusionCenter(recorded, facts, options.tolerance);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   return result;
 }

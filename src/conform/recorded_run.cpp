@@ -28,14 +28,18 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
   struct Channel {
     const dds::SampleType* type = nullptr;
     int sensor = -1;
+    std::vector<RecordedReport>* report = nullptr;  // a Report channel of the run or reference
   };
   std::map<std::uint16_t, Channel> channels;
   for (const auto& [id, channel] : file.channels()) {
     const dds::SampleType* type = dds::sampleTypeOfTopic(channel.topic);
     if (type == nullptr || channel.message_encoding != "cdr") continue;
-    Channel c{type, -1};
+    Channel c{type, -1, nullptr};
     const auto p = channel.metadata.find("partition");
-    if (p != channel.metadata.end()) {
+    if (p != channel.metadata.end() && channel.topic == "sensornet/Report") {
+      if (p->second == partition) c.report = &run.reports;
+      if (p->second == emulator::referencePartition(partition)) c.report = &run.reference_reports;
+    } else if (p != channel.metadata.end()) {
       const auto named = emulator::sensorsOfPartition(partition, p->second);
       if (named && named->size() == 1 && run.sensors.contains(named->front())) {
         c.sensor = named->front();
@@ -71,6 +75,16 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
       } else if (control.kind == emulator::ControlKind::RunShutdown && !run.shutdown_ns) {
         run.shutdown_ns = at;
       }
+    } else if (topic == "sensornet/Report" && channel.report != nullptr) {
+      const auto& s = sample.as<sensornet_Report>();
+      RecordedReport report{s.episode, s.realized_cost, s.bracket_lower, s.bracket_upper,
+                            s.nees, s.complete, {}, at};
+      for (std::uint32_t i = 0; i < s.counts._length; ++i) {
+        const sensornet_SensorCounts& c = s.counts._buffer[i];
+        if (c.sensor_id >= report.counts.size()) report.counts.resize(c.sensor_id + 1);
+        report.counts[c.sensor_id] = {c.sent, c.received, c.lost};
+      }
+      channel.report->push_back(std::move(report));
     } else if (channel.sensor >= 0) {
       SensorTrace& trace = run.sensors[channel.sensor];
       if (topic == "sensornet/Measurement") {

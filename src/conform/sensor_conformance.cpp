@@ -10,21 +10,14 @@
 #include "sensornet/core/chi_square.hpp"
 #include "sensornet/report/junit_report.hpp"
 #include "sensornet/emulator/sensor_timeline.hpp"
+#include "rules.hpp"
 
 namespace sensornet::conform {
-namespace {
-
-using emulator::SensorState;
-
-constexpr const char* kPage = "docs/wire-protocol.md#";
-// A sample's receipt may precede its wall instant by this much (the recorder's clock reading
-// and the episode clock's rounding), not more.
-constexpr double kEarlyToleranceS = 0.002;
-// Below this many expected arrivals the Poisson law is not tested (the tests have no power).
-constexpr double kFewestExpected = 10.0;
+namespace detail {
 
 RuleCheck rule(std::string id, std::string statement, std::string section) {
-  return {std::move(id), std::move(statement), false, "", kPage + std::move(section)};
+  return {std::move(id), std::move(statement), false, "",
+          "docs/wire-protocol.md#" + std::move(section)};
 }
 
 double secondsSince(std::int64_t from_ns, std::int64_t ns) {
@@ -34,6 +27,61 @@ double secondsSince(std::int64_t from_ns, std::int64_t ns) {
 std::string plural(std::size_t n, const char* one, const char* many) {
   return std::to_string(n) + " " + (n == 1 ? one : many);
 }
+
+std::string programEnding(const RunFacts& facts) {
+  if (!facts.program_end.empty()) return facts.program_end;
+  return facts.program_exit ? "exited with status " + std::to_string(*facts.program_exit)
+                            : std::string("ended by a signal");
+}
+
+RuleCheck runCompletes(const RunFacts& facts) {
+  RuleCheck r = rule("run",
+                     "the run completes with it in the role (status completed, exit 0)",
+                     "an-episodes-life");
+  if (!facts.report) {
+    r.evidence = "no report; the launcher exited " + std::to_string(facts.launcher_exit);
+    return r;
+  }
+  r.pass = facts.launcher_exit == 0 && facts.report->status == emulator::RunStatus::Completed;
+  r.evidence = fmt::format("status {}, exit {}, {}", wordOf(facts.report->status),
+                           facts.launcher_exit, plural(facts.report->faults.size(), "fault", "faults"));
+  if (!facts.report->faults.empty()) {
+    const report::FaultRecord& f = facts.report->faults.front();
+    r.evidence += fmt::format(" (first: {}: {})", wordOf(f.kind), f.detail);
+  }
+  return r;
+}
+
+RuleCheck truth(const RunFacts& facts) {
+  RuleCheck r = rule("truth",
+                     "measures the plant's truth: the run's mean NEES lies in its chi-square band",
+                     "the-emulated-world");
+  const report::SummaryRecord* s = facts.report ? &facts.report->summary : nullptr;
+  if (s == nullptr || !s->nees_consistent || !s->nees_mean || !s->nees_band_low ||
+      !s->nees_band_high) {
+    r.evidence = "no NEES measured (no complete episode)";
+    return r;
+  }
+  r.pass = *s->nees_consistent;
+  r.evidence = fmt::format("mean NEES {:.3f} {} the {:g}% band [{:.3f}, {:.3f}]", *s->nees_mean,
+                           r.pass ? "in" : "OUTSIDE", 100.0 * s->nees_confidence.value_or(0.0),
+                           *s->nees_band_low, *s->nees_band_high);
+  return r;
+}
+
+}  // namespace detail
+
+namespace {
+
+using namespace detail;
+
+using emulator::SensorState;
+
+// A sample's receipt may precede its wall instant by this much (the recorder's clock reading
+// and the episode clock's rounding), not more.
+constexpr double kEarlyToleranceS = 0.002;
+// Below this many expected arrivals the Poisson law is not tested (the tests have no power).
+constexpr double kFewestExpected = 10.0;
 
 bool readyLike(SensorState s) {
   return s == SensorState::Ready || s == SensorState::Excluded || s == SensorState::Running;
@@ -136,11 +184,7 @@ RuleCheck leaving(const RecordedRun& run, const SensorTrace& trace, const RunFac
                                        ? std::string("none")
                                        : std::string(wordOf(trace.statuses.back().state))) +
                                   ")";
-  r.evidence += "; it " + (facts.program_end.empty()
-                               ? (facts.program_exit ? "exited with status " +
-                                                           std::to_string(*facts.program_exit)
-                                                     : std::string("ended by a signal"))
-                               : facts.program_end);
+  r.evidence += "; it " + programEnding(facts);
   r.pass = said_stopped && facts.program_exit == 0;
   return r;
 }
@@ -417,24 +461,6 @@ RuleCheck accounted(int sensor, const RunFacts& facts) {
   return r;
 }
 
-RuleCheck runCompletes(const RunFacts& facts) {
-  RuleCheck r = rule("run",
-                     "the run completes with it in the role (status completed, exit 0)",
-                     "an-episodes-life");
-  if (!facts.report) {
-    r.evidence = "no report; the launcher exited " + std::to_string(facts.launcher_exit);
-    return r;
-  }
-  r.pass = facts.launcher_exit == 0 && facts.report->status == emulator::RunStatus::Completed;
-  r.evidence = fmt::format("status {}, exit {}, {}", wordOf(facts.report->status),
-                           facts.launcher_exit, plural(facts.report->faults.size(), "fault", "faults"));
-  if (!facts.report->faults.empty()) {
-    const report::FaultRecord& f = facts.report->faults.front();
-    r.evidence += fmt::format(" (first: {}: {})", wordOf(f.kind), f.detail);
-  }
-  return r;
-}
-
 // The z of each sample against the truth at its tick: Σ e' R^-1 e ~ χ²(p N).
 RuleCheck measurementNoise(const RecordedRun& run, int sensor, const SensorTrace& trace) {
   RuleCheck r = rule("measurement-noise",
@@ -476,23 +502,6 @@ RuleCheck measurementNoise(const RecordedRun& run, int sensor, const SensorTrace
                            plural(used, "sample", "samples"), mean, r.pass ? "in" : "OUTSIDE", low,
                            high,
                            wrong_size > 0 ? fmt::format(" ({} not judged)", wrong_size) : "");
-  return r;
-}
-
-RuleCheck truth(const RunFacts& facts) {
-  RuleCheck r = rule("truth",
-                     "measures the plant's truth: the run's mean NEES lies in its chi-square band",
-                     "the-emulated-world");
-  const report::SummaryRecord* s = facts.report ? &facts.report->summary : nullptr;
-  if (s == nullptr || !s->nees_consistent || !s->nees_mean || !s->nees_band_low ||
-      !s->nees_band_high) {
-    r.evidence = "no NEES measured (no complete episode)";
-    return r;
-  }
-  r.pass = *s->nees_consistent;
-  r.evidence = fmt::format("mean NEES {:.3f} {} the {:g}% band [{:.3f}, {:.3f}]", *s->nees_mean,
-                           r.pass ? "in" : "OUTSIDE", 100.0 * s->nees_confidence.value_or(0.0),
-                           *s->nees_band_low, *s->nees_band_high);
   return r;
 }
 

@@ -1,16 +1,17 @@
 #pragma once
-// `sensornet conform sensor`: a launched run with the user's program in one sensor's role,
-// recorded, and then judged rule by rule (sensor_conformance.hpp). The run is a plain
-// `sensornet launch --external-sensors J --record ...` on a run id and domain of its own; the
-// program is started beside it with the run's Cyclone configuration in CYCLONEDDS_URI and the
-// placeholders of its command line filled in:
+// `sensornet conform sensor|fusion-center`: a launched run with the user's program in one
+// sensor's role or the fusion center's, recorded, and then judged rule by rule
+// (sensor_conformance.hpp). The run is a plain `sensornet launch --external-sensors J --record
+// ...` (or `--external-fusion-center --reference-fusion`: ours beside it is the yardstick) on a
+// run id and domain of its own; the program is started beside it with the run's Cyclone
+// configuration in CYCLONEDDS_URI and the placeholders of its command line filled in:
 //
-//   {run_id} {domain_id} {sensor} {dim} {config}   (also SENSORNET_RUN_ID, SENSORNET_DOMAIN_ID,
-//                                                   SENSORNET_SENSOR in its environment)
+//   {run_id} {domain_id} {config}, and for a sensor {sensor} {dim}   (also SENSORNET_RUN_ID,
+//   SENSORNET_DOMAIN_ID and SENSORNET_SENSOR in its environment)
 //
 //   ConformOptions options;
 //   options.program = {"./my_sensor", "--run-id", "{run_id}", "--domain-id", "{domain_id}"};
-//   const ConformResult result = conformSensor(options, print);
+//   const ConformResult result = conform(options, print);
 //   exit(result.allPass() ? 0 : 1);
 //
 // Everything the run wrote (the launcher's and the program's logs, the report, the recording)
@@ -28,7 +29,10 @@
 
 namespace sensornet::conform {
 
+enum class ConformRole { Sensor, FusionCenter };
+
 struct ConformOptions {
+  ConformRole role = ConformRole::Sensor;
   std::string run_id;               // empty: "conform-" and 8 random hex digits
   std::filesystem::path sensornet;  // the `sensornet` program whose `launch` runs the run
   std::filesystem::path scenario;
@@ -42,6 +46,7 @@ struct ConformOptions {
                                      // under the system's temporary folder)
   std::chrono::seconds timeout{600};
   std::vector<std::string> launch_args;  // more `sensornet launch` options
+  double tolerance = 1e-9;  // a fusion center's costs and brackets against ours, relative
 };
 
 struct ConformResult {
@@ -60,7 +65,7 @@ struct ConformResult {
 
 // Runs the run and judges it; `say` gets each progress line. Throws InputError for a bad
 // scenario or sensor, std::runtime_error when the run left no recording to judge.
-[[nodiscard]] ConformResult conformSensor(const ConformOptions& options,
-                                          const std::function<void(const std::string&)>& say);
+[[nodiscard]] ConformResult conform(const ConformOptions& options,
+                                    const std::function<void(const std::string&)>& say);
 
 }  // namespace sensornet::conform

@@ -73,6 +73,21 @@ struct SensorTrace {
   std::vector<Status> statuses;
 };
 
+// A Report as recorded: what a fusion center published for one episode.
+struct RecordedReport {
+  std::uint32_t episode = 0;
+  double realized_cost = 0.0;
+  double bracket_lower = 0.0, bracket_upper = 0.0;
+  double nees = 0.0;
+  bool complete = false;
+  struct Counts {
+    std::uint64_t sent = 0, received = 0, lost = 0;
+    bool operator==(const Counts&) const = default;
+  };
+  std::vector<Counts> counts;  // by sensor id
+  std::int64_t received_ns = 0;
+};
+
 struct RecordedRun {
   std::string run_id;
   emulator::RunInputState inputs;  // the scenario and every schedule version, as a process keeps them
@@ -81,6 +96,8 @@ struct RecordedRun {
   std::optional<std::int64_t> shutdown_ns;  // RUN_SHUTDOWN's receipt
   std::int64_t first_ns = 0;                // the recording's first message
   std::map<int, SensorTrace> sensors;       // the sensors asked for (written in their partitions)
+  std::vector<RecordedReport> reports;            // in the run's partition, in receipt order
+  std::vector<RecordedReport> reference_reports;  // ours beside an outside one (P/reference)
 };
 
 // Reads a recording of `sensornet launch --record`; InputError naming the file when it is none.
@@ -100,6 +117,13 @@ struct RunFacts {
 // Every rule of a sensor's role, in the order the protocol meets them.
 [[nodiscard]] std::vector<RuleCheck> checkSensor(const RecordedRun& run, int sensor,
                                                  const RunFacts& facts);
+
+// Every rule of a fusion center's role, against our fusion center run beside it on the same
+// measurements (--reference-fusion): a Report per episode after its end, costs, brackets and
+// counts equal to the reference's (costs and brackets to a relative `tolerance`), leaving, the
+// run's outcome; with facts.measures_truth, its NEES in the chi-square band.
+[[nodiscard]] std::vector<RuleCheck> checkFusionCenter(const RecordedRun& run,
+                                                       const RunFacts& facts, double tolerance);
 
 // The Kolmogorov-Smirnov test of values against the uniform law on [0, 1]: the statistic D and
 // its asymptotic p-value (Stephens' correction; exact enough for n >= 5).

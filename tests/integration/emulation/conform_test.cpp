@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "launch_fixture.hpp"
+#include "sensornet/io/command_line.hpp"
 
 namespace sensornet {
 namespace {
@@ -145,6 +146,59 @@ TEST_F(ConformSensor, ASensorKilledMidRunFailsLeavingAndTheRun) {
   EXPECT_NE(r.out.find("it was killed by signal 9"), std::string::npos) << r.out;
 }
 
+#ifdef SENSORNET_EXTERNAL_FUSION_CENTER_EXAMPLE
+// `conform fusion-center`: ours beside it (--reference-fusion) is the yardstick. Our own
+// fusion_center and the C example (the scalar plant's CD-KF in closed form) keep every rule; the
+// C example given a wrong process noise (q 0.6 for the scenario's 0.5) fails the costs alone.
+class ConformFusionCenter : public ConformSensor {
+ protected:
+  ProcessResult conformFusionCenter(const std::string& scenario, std::vector<std::string> program) {
+    std::vector<std::string> argv = {testing::kLauncher, "conform", "fusion-center",
+                                     "--scenario", scenario, "--episodes", "3",
+                                     "--time-scale", "2", "--run-id", run_id_,
+                                     "--dir", (dir_ / "conform").string(), "--"};
+    argv.insert(argv.end(), program.begin(), program.end());
+    return runProcess(argv, 300s);
+  }
+  std::vector<std::string> example(double q) const {
+    std::vector<std::string> argv = {SENSORNET_EXTERNAL_FUSION_CENTER_EXAMPLE, "--run-id",
+                                     "{run_id}", "--domain-id", "{domain_id}"};
+    for (std::string a : testing::scalarModelArgs(kScalar)) {
+      argv.push_back(a == "0.5" && argv.back() == "--q" ? formatNumber(q) : a);
+    }
+    return argv;
+  }
+  const std::string kScalar = std::string(SENSORNET_SOURCE_DIR) + "/examples/c/scalar.yaml";
+};
+
+TEST_F(ConformFusionCenter, OursAndTheCExampleKeepEveryRule) {
+  const LeftoverGuard guard(run_id_);
+  const ProcessResult ours = conformFusionCenter(
+      kScalar, {SENSORNET_FUSION_CENTER, "serve", "--run-id", "{run_id}", "--domain-id",
+                "{domain_id}", "--report", (dir_ / "users.json").string()});
+  EXPECT_EQ(ours.exit_code, 0) << ours.out << ours.err;
+  auto rules = verdicts(ours.out);
+  EXPECT_EQ(rules.size(), 7u) << ours.out;
+  for (const auto& [rule, verdict] : rules) EXPECT_EQ(verdict, "ok") << rule << "\n" << ours.out;
+  const ProcessResult c = conformFusionCenter(kScalar, example(0.5));
+  EXPECT_EQ(c.exit_code, 0) << c.out << c.err;
+  rules = verdicts(c.out);
+  EXPECT_EQ(rules.size(), 7u) << c.out;
+  for (const auto& [rule, verdict] : rules) EXPECT_EQ(verdict, "ok") << rule << "\n" << c.out;
+}
+
+TEST_F(ConformFusionCenter, AWrongModelFailsTheCostsAlone) {
+  const LeftoverGuard guard(run_id_);
+  const ProcessResult r = conformFusionCenter(kScalar, example(0.6));
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  const auto rules = verdicts(r.out);
+  EXPECT_EQ(rules.size(), 7u) << r.out;
+  for (const auto& [rule, verdict] : rules) {
+    EXPECT_EQ(verdict, rule == "costs" ? "FAIL" : "ok") << rule << "\n" << r.out;
+  }
+}
+#endif
+
 TEST_F(ConformSensor, BadInputIsOneLineAndExitTwo) {
   const ProcessResult r = conform({}, example("truth"), "4", "99");
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
@@ -152,7 +206,7 @@ TEST_F(ConformSensor, BadInputIsOneLineAndExitTwo) {
   EXPECT_NE(r.err.find("0 to "), std::string::npos) << r.err;
   const ProcessResult role = runProcess({testing::kLauncher, "conform", "scheduler", "--", "true"});
   EXPECT_EQ(role.exit_code, 2) << role.err;
-  EXPECT_NE(role.err.find("the role `sensor`"), std::string::npos) << role.err;
+  EXPECT_NE(role.err.find("the role `sensor` or `fusion-center`"), std::string::npos) << role.err;
 }
 
 #endif
