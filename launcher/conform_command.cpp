@@ -32,9 +32,9 @@ int runConform(ConformCommandOptions options) {
   std::fputs(conform::ruleTable(result.rules).c_str(), stdout);
   std::printf("the run's files: %s\n", result.dir.c_str());
   if (!options.junit_path.empty()) {
-    replaceFileAtomically(options.junit_path,
-                          conform::rulesJunit("sensornet conform " + options.role, result.rules,
-                                      result.seconds));
+    replaceFileAtomically(
+        options.junit_path,
+        conform::rulesJunit("sensornet conform " + options.role, result.rules, result.seconds));
   }
   return result.allPass() ? kExitOk : kExitFailure;
 }
@@ -63,8 +63,7 @@ Subcommand addConformCommand(CLI::App& app) {
       "--domain-id {domain_id} --sensor {sensor} --measure truth");
   cmd->add_option("ROLE", options->role, "the role your program fills: sensor, fusion-center")
       ->required();
-  cmd->add_option("PROGRAM", options->run.program,
-                  "your participant's command line, after `--`")
+  cmd->add_option("PROGRAM", options->run.program, "your participant's command line, after `--`")
       ->required();
   cmd->add_option("--sensor", options->run.sensor, "the sensor id your program speaks for")
       ->capture_default_str();
@@ -73,8 +72,7 @@ Subcommand addConformCommand(CLI::App& app) {
   cmd->add_option("--episodes", options->run.episodes, "episodes of the run")
       ->check(integerRange(1, 100000))
       ->capture_default_str();
-  cmd->add_option("--time-scale", options->run.time_scale,
-                  "emulated seconds per wall second")
+  cmd->add_option("--time-scale", options->run.time_scale, "emulated seconds per wall second")
       ->check(positiveNumber(1e4))
       ->capture_default_str();
   cmd->add_option("--seed", options->run.seed, "the run seed")->capture_default_str();

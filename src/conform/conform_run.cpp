@@ -91,10 +91,9 @@ ConformResult conform(const ConformOptions& options,
   std::map<std::string, std::string> values = {{"run_id", result.run_id},
                                                {"domain_id", std::to_string(domain_id)},
                                                {"config", config.string()}};
-  std::vector<std::string> participant = {"/usr/bin/env",
-                                          "CYCLONEDDS_URI=file://" + config.string(),
-                                          "SENSORNET_RUN_ID=" + result.run_id,
-                                          "SENSORNET_DOMAIN_ID=" + std::to_string(domain_id)};
+  std::vector<std::string> participant = {
+      "/usr/bin/env", "CYCLONEDDS_URI=file://" + config.string(),
+      "SENSORNET_RUN_ID=" + result.run_id, "SENSORNET_DOMAIN_ID=" + std::to_string(domain_id)};
   if (sensor_role) {
     values["sensor"] = sensor;
     values["dim"] =
@@ -110,15 +109,24 @@ ConformResult conform(const ConformOptions& options,
   std::vector<std::string> launch = {options.sensornet.string(),
                                      "launch",
                                      fs::absolute(options.scenario).string(),
-                                     "--run-id", result.run_id,
-                                     "--domain-id", std::to_string(domain_id),
-                                     "--episodes", std::to_string(options.episodes),
-                                     "--time-scale", number(options.time_scale),
-                                     "--seed", std::to_string(options.seed),
-                                     "--record", recording.string(),
-                                     "--report", report_path.string(),
-                                     "--log-dir", (dir / "logs").string(),
-                                     "--timeout", std::to_string(options.timeout.count()),
+                                     "--run-id",
+                                     result.run_id,
+                                     "--domain-id",
+                                     std::to_string(domain_id),
+                                     "--episodes",
+                                     std::to_string(options.episodes),
+                                     "--time-scale",
+                                     number(options.time_scale),
+                                     "--seed",
+                                     std::to_string(options.seed),
+                                     "--record",
+                                     recording.string(),
+                                     "--report",
+                                     report_path.string(),
+                                     "--log-dir",
+                                     (dir / "logs").string(),
+                                     "--timeout",
+                                     std::to_string(options.timeout.count()),
                                      "--no-html"};
   if (sensor_role) {
     launch.insert(launch.end(), {"--external-sensors", sensor});
@@ -176,8 +184,8 @@ ConformResult conform(const ConformOptions& options,
   }
   const McapReader mcap(recording);
   const RecordedRun recorded =
-      readRecording(mcap, recording.string(), sensor_role ? std::vector<int>{options.sensor}
-                                                          : std::vector<int>{});
+      readRecording(mcap, recording.string(),
+                    sensor_role ? std::vector<int>{options.sensor} : std::vector<int>{});
   result.rules = sensor_role ? checkSensor(recorded, options.sensor, facts)
                              : checkFusionCenter(recorded, facts, options.tolerance);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();

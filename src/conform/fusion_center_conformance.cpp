@@ -52,8 +52,7 @@ RuleCheck presence(const RecordedRun& run) {
 
 RuleCheck reportPerEpisode(const RecordedRun& run) {
   RuleCheck r = rule("report-per-episode",
-                     "publishes one Report per episode, after the episode's end",
-                     kSection);
+                     "publishes one Report per episode, after the episode's end", kSection);
   const ByEpisode mine = byEpisode(run.reports);
   const double horizon = run.inputs.scenario().horizon_s;
   std::string first;
@@ -102,7 +101,7 @@ RuleCheck againstReference(const RecordedRun& run, RuleCheck r, const Compare& c
     if (!why.empty() && first.empty()) first = fmt::format("episode {}: {}", k, why);
   }
   r.pass = first.empty() && compared > 0;
-  r.evidence = !first.empty()   ? first
+  r.evidence = !first.empty()  ? first
                : compared == 0 ? std::string("no episode to compare")
                                : fmt::format("{} equal the reference's{}",
                                              plural(compared, "episode", "episodes"), worst);
@@ -116,20 +115,18 @@ RuleCheck costs(const RecordedRun& run, double tolerance) {
                                  tolerance),
                      kSection);
   double largest = 0.0;
-  return againstReference(run, std::move(r),
-                          [&](const RecordedReport& mine, const RecordedReport& reference,
-                              std::string& note) {
-                            const double d =
-                                relativeDifference(mine.realized_cost, reference.realized_cost);
-                            largest = std::max(largest, d);
-                            note = fmt::format(" (largest relative difference {:.3g})", largest);
-                            return d <= tolerance
-                                       ? std::string()
-                                       : fmt::format("cost {} against the reference's {} "
-                                                     "(relative difference {:.3g})",
-                                                     mine.realized_cost, reference.realized_cost,
-                                                     d);
-                          });
+  return againstReference(
+      run, std::move(r),
+      [&](const RecordedReport& mine, const RecordedReport& reference, std::string& note) {
+        const double d = relativeDifference(mine.realized_cost, reference.realized_cost);
+        largest = std::max(largest, d);
+        note = fmt::format(" (largest relative difference {:.3g})", largest);
+        return d <= tolerance ? std::string()
+                              : fmt::format(
+                                    "cost {} against the reference's {} "
+                                    "(relative difference {:.3g})",
+                                    mine.realized_cost, reference.realized_cost, d);
+      });
 }
 
 RuleCheck brackets(const RecordedRun& run, double tolerance) {
@@ -167,9 +164,10 @@ RuleCheck counts(const RecordedRun& run) {
           const auto& a = j < mine.counts.size() ? mine.counts[j] : none;
           const auto& b = j < reference.counts.size() ? reference.counts[j] : none;
           if (a == b) continue;
-          return fmt::format("sensor {}: sent/received/lost {}/{}/{} against the reference's "
-                             "{}/{}/{}",
-                             j, a.sent, a.received, a.lost, b.sent, b.received, b.lost);
+          return fmt::format(
+              "sensor {}: sent/received/lost {}/{}/{} against the reference's "
+              "{}/{}/{}",
+              j, a.sent, a.received, a.lost, b.sent, b.received, b.lost);
         }
         return std::string();
       });
@@ -178,8 +176,9 @@ RuleCheck counts(const RecordedRun& run) {
 RuleCheck leaves(const RecordedRun& run, const RunFacts& facts) {
   RuleCheck r = rule("leaving", "on RUN_SHUTDOWN leaves by itself with exit 0", "leaving-the-run");
   r.pass = run.shutdown_ns.has_value() && facts.program_exit == 0;
-  r.evidence = (run.shutdown_ns ? std::string("RUN_SHUTDOWN came") : std::string("no RUN_SHUTDOWN")) +
-               "; it " + programEnding(facts);
+  r.evidence =
+      (run.shutdown_ns ? std::string("RUN_SHUTDOWN came") : std::string("no RUN_SHUTDOWN")) +
+      "; it " + programEnding(facts);
   return r;
 }
 
@@ -187,10 +186,9 @@ RuleCheck leaves(const RecordedRun& run, const RunFacts& facts) {
 
 std::vector<RuleCheck> checkFusionCenter(const RecordedRun& run, const RunFacts& facts,
                                          double tolerance) {
-  std::vector<RuleCheck> rules = {presence(run),          reportPerEpisode(run),
-                                  costs(run, tolerance),  brackets(run, tolerance),
-                                  counts(run),            leaves(run, facts),
-                                  runCompletes(facts)};
+  std::vector<RuleCheck> rules = {
+      presence(run), reportPerEpisode(run), costs(run, tolerance), brackets(run, tolerance),
+      counts(run),   leaves(run, facts),    runCompletes(facts)};
   if (facts.measures_truth) rules.push_back(truth(facts));
   return rules;
 }

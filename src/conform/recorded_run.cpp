@@ -68,7 +68,8 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
       }
       wire::feedSample(run.inputs, sample.as<sensornet_Schedule>(), ignored);
     } else if (topic == "sensornet/EpisodeControl") {
-      const emulator::EpisodeControl control = wire::controlOf(sample.as<sensornet_EpisodeControl>());
+      const emulator::EpisodeControl control =
+          wire::controlOf(sample.as<sensornet_EpisodeControl>());
       if (control.kind == emulator::ControlKind::EpisodeStart) {
         run.starts_ns.emplace(control.episode, control.start_wall_ns);
         run.time_scale = control.time_scale;
@@ -77,8 +78,8 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
       }
     } else if (topic == "sensornet/Report" && channel.report != nullptr) {
       const auto& s = sample.as<sensornet_Report>();
-      RecordedReport report{s.episode, s.realized_cost, s.bracket_lower, s.bracket_upper,
-                            s.nees, s.complete, {}, at};
+      RecordedReport report{
+          s.episode, s.realized_cost, s.bracket_lower, s.bracket_upper, s.nees, s.complete, {}, at};
       for (std::uint32_t i = 0; i < s.counts._length; ++i) {
         const sensornet_SensorCounts& c = s.counts._buffer[i];
         if (c.sensor_id >= report.counts.size()) report.counts.resize(c.sensor_id + 1);
@@ -91,8 +92,7 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
         const auto& s = sample.as<sensornet_Measurement>();
         if (static_cast<int>(s.sensor_id) != channel.sensor) return;
         trace.samples.push_back({s.episode, s.seq, s.emulated_time_s, s.schedule_version,
-                                 std::vector<double>(s.z._buffer, s.z._buffer + s.z._length),
-                                 at});
+                                 std::vector<double>(s.z._buffer, s.z._buffer + s.z._length), at});
       } else if (topic == "sensornet/EpisodeTally") {
         const auto& s = sample.as<sensornet_EpisodeTally>();
         if (static_cast<int>(s.sensor_id) != channel.sensor) return;

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <set>
 
-#include "sensornet/core/chi_square.hpp"
-#include "sensornet/report/junit_report.hpp"
-#include "sensornet/emulator/sensor_timeline.hpp"
 #include "rules.hpp"
+#include "sensornet/core/chi_square.hpp"
+#include "sensornet/emulator/sensor_timeline.hpp"
+#include "sensornet/report/junit_report.hpp"
 
 namespace sensornet::conform {
 namespace detail {
@@ -35,16 +35,16 @@ std::string programEnding(const RunFacts& facts) {
 }
 
 RuleCheck runCompletes(const RunFacts& facts) {
-  RuleCheck r = rule("run",
-                     "the run completes with it in the role (status completed, exit 0)",
+  RuleCheck r = rule("run", "the run completes with it in the role (status completed, exit 0)",
                      "an-episodes-life");
   if (!facts.report) {
     r.evidence = "no report; the launcher exited " + std::to_string(facts.launcher_exit);
     return r;
   }
   r.pass = facts.launcher_exit == 0 && facts.report->status == emulator::RunStatus::Completed;
-  r.evidence = fmt::format("status {}, exit {}, {}", wordOf(facts.report->status),
-                           facts.launcher_exit, plural(facts.report->faults.size(), "fault", "faults"));
+  r.evidence =
+      fmt::format("status {}, exit {}, {}", wordOf(facts.report->status), facts.launcher_exit,
+                  plural(facts.report->faults.size(), "fault", "faults"));
   if (!facts.report->faults.empty()) {
     const report::FaultRecord& f = facts.report->faults.front();
     r.evidence += fmt::format(" (first: {}: {})", wordOf(f.kind), f.detail);
@@ -53,9 +53,9 @@ RuleCheck runCompletes(const RunFacts& facts) {
 }
 
 RuleCheck truth(const RunFacts& facts) {
-  RuleCheck r = rule("truth",
-                     "measures the plant's truth: the run's mean NEES lies in its chi-square band",
-                     "the-emulated-world");
+  RuleCheck r =
+      rule("truth", "measures the plant's truth: the run's mean NEES lies in its chi-square band",
+           "the-emulated-world");
   const report::SummaryRecord* s = facts.report ? &facts.report->summary : nullptr;
   if (s == nullptr || !s->nees_consistent || !s->nees_mean || !s->nees_band_low ||
       !s->nees_band_high) {
@@ -101,18 +101,17 @@ RuleCheck readiness(const RecordedRun& run, const SensorTrace& trace) {
                      "says SENSOR_READY (or EXCLUDED) holding a schedule version before the "
                      "first episode starts, and before any measurement",
                      "the-readiness-handshake");
-  const auto ready = std::find_if(trace.statuses.begin(), trace.statuses.end(),
-                                  [](const SensorTrace::Status& s) {
-                                    return readyLike(s.state) && s.version >= 1;
-                                  });
+  const auto ready = std::find_if(
+      trace.statuses.begin(), trace.statuses.end(),
+      [](const SensorTrace::Status& s) { return readyLike(s.state) && s.version >= 1; });
   if (ready == trace.statuses.end()) {
     r.evidence = "no READY status with a schedule version >= 1 (" +
                  plural(trace.statuses.size(), "status", "statuses") + " recorded)";
     return r;
   }
   const double ready_s = secondsSince(run.first_ns, ready->received_ns);
-  r.evidence = fmt::format("{} (version {}) at +{:.3f} s", wordOf(ready->state), ready->version,
-                           ready_s);
+  r.evidence =
+      fmt::format("{} (version {}) at +{:.3f} s", wordOf(ready->state), ready->version, ready_s);
   r.pass = true;
   if (!run.starts_ns.empty()) {
     const std::int64_t first_start = run.starts_ns.begin()->second;
@@ -129,10 +128,10 @@ RuleCheck readiness(const RecordedRun& run, const SensorTrace& trace) {
 }
 
 RuleCheck statusPeriod(const RecordedRun& run, const SensorTrace& trace) {
-  RuleCheck r = rule("status-period",
-                     fmt::format("writes a SensorStatus at least every {:g} s until it leaves",
-                                 kStatusPeriodS),
-                     "sensorstatus-when-and-what");
+  RuleCheck r = rule(
+      "status-period",
+      fmt::format("writes a SensorStatus at least every {:g} s until it leaves", kStatusPeriodS),
+      "sensorstatus-when-and-what");
   if (trace.statuses.empty()) {
     r.evidence = "no SensorStatus recorded";
     return r;
@@ -168,9 +167,9 @@ RuleCheck statusPeriod(const RecordedRun& run, const SensorTrace& trace) {
 }
 
 RuleCheck leaving(const RecordedRun& run, const SensorTrace& trace, const RunFacts& facts) {
-  RuleCheck r = rule("leaving",
-                     "on RUN_SHUTDOWN says SENSOR_STOPPED, then leaves by itself with exit 0",
-                     "leaving-the-run");
+  RuleCheck r =
+      rule("leaving", "on RUN_SHUTDOWN says SENSOR_STOPPED, then leaves by itself with exit 0",
+           "leaving-the-run");
   if (!run.shutdown_ns) {
     r.evidence = "the run recorded no RUN_SHUTDOWN";
     return r;
@@ -220,12 +219,13 @@ RuleCheck measurementTimes(const RecordedRun& run, const SensorTrace& trace) {
     if (bad++ == 0) first = fmt::format("episode {} seq {}: {}", s.episode, s.seq, why);
   }
   r.pass = bad == 0;
-  r.evidence = bad == 0 ? (trace.samples.empty()
-                               ? std::string("no measurement to check")
-                               : fmt::format("{} within [{:.4f}, {:.4f}] s of [0, {:g}]",
-                                             plural(trace.samples.size(), "sample", "samples"),
-                                             lowest, highest, horizon))
-                        : fmt::format("{} of {} wrong; first: {}", bad, trace.samples.size(), first);
+  r.evidence =
+      bad == 0
+          ? (trace.samples.empty() ? std::string("no measurement to check")
+                                   : fmt::format("{} within [{:.4f}, {:.4f}] s of [0, {:g}]",
+                                                 plural(trace.samples.size(), "sample", "samples"),
+                                                 lowest, highest, horizon))
+          : fmt::format("{} of {} wrong; first: {}", bad, trace.samples.size(), first);
   return r;
 }
 
@@ -256,7 +256,8 @@ RuleCheck sequenceNumbers(const SensorTrace& trace) {
     }
     const auto t = tallies.find(k);
     if (t == tallies.end()) {
-      fail(fmt::format("episode {}: {} without a tally", k, plural(list.size(), "sample", "samples")));
+      fail(fmt::format("episode {}: {} without a tally", k,
+                       plural(list.size(), "sample", "samples")));
       continue;
     }
     if (!list.empty() && list.back() >= t->second.sent) {
@@ -310,18 +311,18 @@ RuleCheck tallies(const RecordedRun& run, const SensorTrace& trace) {
     if (!why.empty() && first.empty()) first = fmt::format("episode {}: {}", k, why);
   }
   r.pass = first.empty() && !episodes.empty();
-  r.evidence = !first.empty()      ? first
+  r.evidence = !first.empty()     ? first
                : episodes.empty() ? std::string("no episode started")
-                                   : fmt::format("{} for {} started", 
-                                                 plural(trace.tallies.size(), "tally", "tallies"),
-                                                 plural(episodes.size(), "episode", "episodes"));
+                                  : fmt::format("{} for {} started",
+                                                plural(trace.tallies.size(), "tally", "tallies"),
+                                                plural(episodes.size(), "episode", "episodes"));
   return r;
 }
 
 RuleCheck versions(const RecordedRun& run, const SensorTrace& trace) {
-  RuleCheck r = rule("schedule-version",
-                     "each Measurement carries the schedule version in force at its time",
-                     "which-version-is-in-force");
+  RuleCheck r =
+      rule("schedule-version", "each Measurement carries the schedule version in force at its time",
+           "which-version-is-in-force");
   std::set<std::uint32_t> seen;
   std::size_t bad = 0;
   std::string first;
@@ -336,7 +337,8 @@ RuleCheck versions(const RecordedRun& run, const SensorTrace& trace) {
     }
   }
   std::string versions_seen;
-  for (const std::uint32_t v : seen) versions_seen += (versions_seen.empty() ? "" : ", ") + std::to_string(v);
+  for (const std::uint32_t v : seen)
+    versions_seen += (versions_seen.empty() ? "" : ", ") + std::to_string(v);
   r.pass = bad == 0;
   r.evidence = r.pass ? fmt::format("{} under version(s) {} ({} published)",
                                     plural(trace.samples.size(), "sample", "samples"),
@@ -362,13 +364,13 @@ double integratedRate(const RateSchedule& schedule, int j, double from, double t
 RuleCheck arrivals(const RecordedRun& run, int sensor, const SensorTrace& trace) {
   const Scenario& scenario = run.inputs.scenario();
   const bool timetable = scenario.arrivals == ArrivalMode::Timetable;
-  RuleCheck r = rule(
-      "arrivals",
-      timetable ? "transmits at the timetable's instants of the versions in force"
-                : fmt::format("transmits as a Poisson process of the rates in force (time "
-                              "rescaling: Kolmogorov-Smirnov and count, each at alpha {:g})",
-                              kConformAlpha),
-      "when-a-sensor-transmits");
+  RuleCheck r =
+      rule("arrivals",
+           timetable ? "transmits at the timetable's instants of the versions in force"
+                     : fmt::format("transmits as a Poisson process of the rates in force (time "
+                                   "rescaling: Kolmogorov-Smirnov and count, each at alpha {:g})",
+                                   kConformAlpha),
+           "when-a-sensor-transmits");
   const auto tallies = talliesByEpisode(trace);
   std::map<std::uint32_t, std::vector<double>> times;
   for (const SensorTrace::Sample& s : trace.samples) times[s.episode].push_back(s.time_s);
@@ -423,9 +425,9 @@ RuleCheck arrivals(const RecordedRun& run, int sensor, const SensorTrace& trace)
   }
   if (expected < kFewestExpected) {
     r.pass = true;
-    r.evidence = fmt::format("not tested: {:.1f} arrivals expected over {} (fewer than {:g}){}",
-                             expected, plural(episodes, "episode", "episodes"), kFewestExpected,
-                             same);
+    r.evidence =
+        fmt::format("not tested: {:.1f} arrivals expected over {} (fewer than {:g}){}", expected,
+                    plural(episodes, "episode", "episodes"), kFewestExpected, same);
     return r;
   }
   // The count: Poisson with mean `expected`; normal approximation, two-sided at alpha.
@@ -433,9 +435,10 @@ RuleCheck arrivals(const RecordedRun& run, int sensor, const SensorTrace& trace)
   const double z_limit = std::sqrt(chiSquareQuantile(1.0 - kConformAlpha, 1.0));  // z² ~ χ²(1)
   const KsTest ks = ksUniform(uniforms);
   r.pass = std::abs(z) <= z_limit && ks.p_value >= kConformAlpha;
-  r.evidence = fmt::format("{} arrivals for {:.1f} expected (z = {:.2f}, |z| <= {:.2f}); KS D = "
-                           "{:.4f}, p = {:.3g} over {} rescaled gaps{}",
-                           counted, expected, z, z_limit, ks.d, ks.p_value, ks.n, same);
+  r.evidence = fmt::format(
+      "{} arrivals for {:.1f} expected (z = {:.2f}, |z| <= {:.2f}); KS D = "
+      "{:.4f}, p = {:.3g} over {} rescaled gaps{}",
+      counted, expected, z, z_limit, ks.d, ks.p_value, ks.n, same);
   return r;
 }
 
@@ -449,8 +452,9 @@ RuleCheck accounted(int sensor, const RunFacts& facts) {
     return r;
   }
   const auto& sensors = facts.report->sensors;
-  const auto it = std::find_if(sensors.begin(), sensors.end(),
-                               [&](const report::SensorRecord& s) { return s.sensor_id == sensor; });
+  const auto it = std::find_if(sensors.begin(), sensors.end(), [&](const report::SensorRecord& s) {
+    return s.sensor_id == sensor;
+  });
   if (it == sensors.end()) {
     r.evidence = "the report has no line for sensor " + std::to_string(sensor);
     return r;
@@ -500,8 +504,7 @@ RuleCheck measurementNoise(const RecordedRun& run, int sensor, const SensorTrace
   r.pass = mean >= low && mean <= high;
   r.evidence = fmt::format("{}: mean e' R^-1 e / p = {:.3f} {} [{:.3f}, {:.3f}]{}",
                            plural(used, "sample", "samples"), mean, r.pass ? "in" : "OUTSIDE", low,
-                           high,
-                           wrong_size > 0 ? fmt::format(" ({} not judged)", wrong_size) : "");
+                           high, wrong_size > 0 ? fmt::format(" ({} not judged)", wrong_size) : "");
   return r;
 }
 
@@ -537,7 +540,7 @@ std::vector<RuleCheck> checkSensor(const RecordedRun& run, int sensor, const Run
   static const SensorTrace none;
   const auto found = run.sensors.find(sensor);
   const SensorTrace& trace = found != run.sensors.end() ? found->second : none;
-  std::vector<RuleCheck> rules = {readiness(run, trace),       statusPeriod(run, trace),
+  std::vector<RuleCheck> rules = {readiness(run, trace),        statusPeriod(run, trace),
                                   measurementTimes(run, trace), versions(run, trace),
                                   sequenceNumbers(trace),       tallies(run, trace),
                                   arrivals(run, sensor, trace), accounted(sensor, facts),
@@ -568,7 +571,8 @@ std::string rulesJunit(const std::string& suite, const std::vector<RuleCheck>& r
                        double seconds) {
   std::vector<report::JunitCase> cases;
   for (const RuleCheck& r : rules) {
-    cases.push_back({r.rule, r.pass, r.evidence, r.statement + " (" + r.section + "): " + r.evidence});
+    cases.push_back(
+        {r.rule, r.pass, r.evidence, r.statement + " (" + r.section + "): " + r.evidence});
   }
   return report::junitSuiteXml(suite, suite, cases, seconds);
 }

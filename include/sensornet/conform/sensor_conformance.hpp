@@ -43,8 +43,8 @@ struct RuleCheck {
   std::string rule;       // "readiness"
   std::string statement;  // what the protocol asks, in one line
   bool pass = false;
-  std::string evidence;   // what the run showed
-  std::string section;    // "docs/wire-protocol.md#the-readiness-handshake"
+  std::string evidence;  // what the run showed
+  std::string section;   // "docs/wire-protocol.md#the-readiness-handshake"
 };
 
 // What a run's recording shows of one sensor, in receipt order.
@@ -90,13 +90,14 @@ struct RecordedReport {
 
 struct RecordedRun {
   std::string run_id;
-  emulator::RunInputState inputs;  // the scenario and every schedule version, as a process keeps them
+  emulator::RunInputState
+      inputs;  // the scenario and every schedule version, as a process keeps them
   std::map<std::uint32_t, std::int64_t> starts_ns;  // EPISODE_START: the wall instant of time 0
   double time_scale = 1.0;
   std::optional<std::int64_t> shutdown_ns;  // RUN_SHUTDOWN's receipt
   std::int64_t first_ns = 0;                // the recording's first message
   std::map<int, SensorTrace> sensors;       // the sensors asked for (written in their partitions)
-  std::vector<RecordedReport> reports;            // in the run's partition, in receipt order
+  std::vector<RecordedReport> reports;      // in the run's partition, in receipt order
   std::vector<RecordedReport> reference_reports;  // ours beside an outside one (P/reference)
 };
 

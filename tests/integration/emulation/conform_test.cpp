@@ -35,7 +35,8 @@ std::map<std::string, std::string> verdicts(const std::string& table) {
     std::istringstream words(line);
     std::string rule, verdict;
     words >> rule >> verdict;
-    if (!line.empty() && line[0] != ' ' && (verdict == "ok" || verdict == "FAIL")) out[rule] = verdict;
+    if (!line.empty() && line[0] != ' ' && (verdict == "ok" || verdict == "FAIL"))
+      out[rule] = verdict;
   }
   return out;
 }
@@ -50,21 +51,38 @@ class ConformSensor : public testing::LaunchTest {
  protected:
   ProcessResult conform(std::vector<std::string> options, std::vector<std::string> program,
                         const std::string& time_scale = "4", const std::string& sensor = "1") {
-    std::vector<std::string> argv = {testing::kLauncher, "conform", "sensor",
-                                     "--sensor", sensor,
-                                     "--scenario", testing::kDefaultScenario,
-                                     "--episodes", "3",
-                                     "--time-scale", time_scale,
-                                     "--run-id", run_id_,
-                                     "--dir", (dir_ / "conform").string()};
+    std::vector<std::string> argv = {testing::kLauncher,
+                                     "conform",
+                                     "sensor",
+                                     "--sensor",
+                                     sensor,
+                                     "--scenario",
+                                     testing::kDefaultScenario,
+                                     "--episodes",
+                                     "3",
+                                     "--time-scale",
+                                     time_scale,
+                                     "--run-id",
+                                     run_id_,
+                                     "--dir",
+                                     (dir_ / "conform").string()};
     argv.insert(argv.end(), options.begin(), options.end());
     argv.emplace_back("--");
     argv.insert(argv.end(), program.begin(), program.end());
     return runProcess(argv, 300s);
   }
   std::vector<std::string> example(const std::string& measure) const {
-    return {SENSORNET_EXTERNAL_SENSOR_EXAMPLE, "--run-id", "{run_id}", "--domain-id",
-            "{domain_id}", "--sensor", "{sensor}", "--dim", "{dim}", "--measure", measure};
+    return {SENSORNET_EXTERNAL_SENSOR_EXAMPLE,
+            "--run-id",
+            "{run_id}",
+            "--domain-id",
+            "{domain_id}",
+            "--sensor",
+            "{sensor}",
+            "--dim",
+            "{dim}",
+            "--measure",
+            measure};
   }
 };
 
@@ -153,10 +171,20 @@ TEST_F(ConformSensor, ASensorKilledMidRunFailsLeavingAndTheRun) {
 class ConformFusionCenter : public ConformSensor {
  protected:
   ProcessResult conformFusionCenter(const std::string& scenario, std::vector<std::string> program) {
-    std::vector<std::string> argv = {testing::kLauncher, "conform", "fusion-center",
-                                     "--scenario", scenario, "--episodes", "3",
-                                     "--time-scale", "2", "--run-id", run_id_,
-                                     "--dir", (dir_ / "conform").string(), "--"};
+    std::vector<std::string> argv = {testing::kLauncher,
+                                     "conform",
+                                     "fusion-center",
+                                     "--scenario",
+                                     scenario,
+                                     "--episodes",
+                                     "3",
+                                     "--time-scale",
+                                     "2",
+                                     "--run-id",
+                                     run_id_,
+                                     "--dir",
+                                     (dir_ / "conform").string(),
+                                     "--"};
     argv.insert(argv.end(), program.begin(), program.end());
     return runProcess(argv, 300s);
   }

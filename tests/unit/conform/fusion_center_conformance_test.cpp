@@ -31,7 +31,13 @@ class FusionCenterConformanceTest : public ::testing::Test {
     for (std::uint32_t k = 0; k < 3; ++k) {
       const std::int64_t start = kT0 + kSecond + k * (episode_ns + kSecond / 10);
       run_.starts_ns[k] = start;
-      RecordedReport r{k, 1.5 + k, 1.0, 2.5, 1.9, true, {{10, 10, 0}, {4 + k, 4 + k, 0}},
+      RecordedReport r{k,
+                       1.5 + k,
+                       1.0,
+                       2.5,
+                       1.9,
+                       true,
+                       {{10, 10, 0}, {4 + k, 4 + k, 0}},
                        start + episode_ns + kSecond / 100};
       run_.reports.push_back(r);
       r.received_ns += 1000;

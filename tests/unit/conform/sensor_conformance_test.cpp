@@ -69,7 +69,8 @@ class SensorConformanceTest : public ::testing::Test {
     run_.inputs.onSchedule(version(2, doubled, 1, 0.4 * scenario_.horizon_s), update);
     run_.run_id = "made-up";
     run_.first_ns = kT0;
-    const std::int64_t period = static_cast<std::int64_t>(scenario_.horizon_s * kSecond) + kSecond / 10;
+    const std::int64_t period =
+        static_cast<std::int64_t>(scenario_.horizon_s * kSecond) + kSecond / 10;
     for (std::uint32_t k = 0; k < kEpisodes; ++k) run_.starts_ns[k] = kT0 + kSecond + k * period;
     run_.time_scale = 1.0;
     run_.shutdown_ns = kT0 + kSecond + kEpisodes * period;
@@ -83,9 +84,8 @@ class SensorConformanceTest : public ::testing::Test {
     trace.statuses.push_back({SensorState::Stopped, 2, *run_.shutdown_ns + kSecond / 100});
     for (std::uint32_t k = 0; k < kEpisodes; ++k) {
       std::uint64_t seq = 0;
-      for (const emulator::TimedArrival& a :
-           emulator::sensorTimeline(run_.inputs.book(), run_.inputs.plant(), kSeed, k, {kSensor},
-                                    scenario_.horizon_s)) {
+      for (const emulator::TimedArrival& a : emulator::sensorTimeline(
+               run_.inputs.book(), run_.inputs.plant(), kSeed, k, {kSensor}, scenario_.horizon_s)) {
         const Eigen::VectorXd z =
             run_.inputs.plant().measure(run_.inputs.plant().stateAt(k, a.tick), kSensor, k, seq);
         ticks_.push_back(a.tick);
@@ -202,10 +202,11 @@ TEST_F(SensorConformanceTest, AMissingTallyFailsTheTallyRuleAndTheSeqRule) {
   trace().tallies.erase(trace().tallies.begin() + 1);
   const std::vector<std::string> names = failing();
   ASSERT_EQ(names.size(), 2u) << ::testing::PrintToString(names);
-  EXPECT_EQ(names[0], "seq: episode 1: " + std::to_string(std::count_if(
-                                             trace().samples.begin(), trace().samples.end(),
+  EXPECT_EQ(names[0],
+            "seq: episode 1: " +
+                std::to_string(std::count_if(trace().samples.begin(), trace().samples.end(),
                                              [](const auto& s) { return s.episode == 1; })) +
-                          " samples without a tally");
+                " samples without a tally");
   EXPECT_EQ(names[1], "tally: episode 1: no tally");
 }
 
