@@ -8,6 +8,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/domain.hpp"
+#include "sensornet/io/command_line.hpp"
 #include "sensornet/io/mcap.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/launcher/outside_roles.hpp"
@@ -59,8 +60,6 @@ std::string freshRunId() {
   return fmt::format("conform-{:08x}", device());
 }
 
-std::string number(double value) { return fmt::format("{}", value); }
-
 }  // namespace
 
 ConformResult conform(const ConformOptions& options,
@@ -106,28 +105,20 @@ ConformResult conform(const ConformOptions& options,
 
   const fs::path recording = dir / "run.mcap";
   const fs::path report_path = dir / "report.json";
-  std::vector<std::string> launch = {options.sensornet.string(),
-                                     "launch",
-                                     fs::absolute(options.scenario).string(),
-                                     "--run-id",
-                                     result.run_id,
-                                     "--domain-id",
-                                     std::to_string(domain_id),
-                                     "--episodes",
-                                     std::to_string(options.episodes),
-                                     "--time-scale",
-                                     number(options.time_scale),
-                                     "--seed",
-                                     std::to_string(options.seed),
-                                     "--record",
-                                     recording.string(),
-                                     "--report",
-                                     report_path.string(),
-                                     "--log-dir",
-                                     (dir / "logs").string(),
-                                     "--timeout",
-                                     std::to_string(options.timeout.count()),
-                                     "--no-html"};
+  // clang-format off
+  std::vector<std::string> launch = {
+      options.sensornet.string(), "launch", fs::absolute(options.scenario).string(),
+      "--run-id", result.run_id,
+      "--domain-id", std::to_string(domain_id),
+      "--episodes", std::to_string(options.episodes),
+      "--time-scale", formatNumber(options.time_scale),
+      "--seed", std::to_string(options.seed),
+      "--record", recording.string(),
+      "--report", report_path.string(),
+      "--log-dir", (dir / "logs").string(),
+      "--timeout", std::to_string(options.timeout.count()),
+      "--no-html"};
+  // clang-format on
   if (sensor_role) {
     launch.insert(launch.end(), {"--external-sensors", sensor});
   } else {
@@ -161,16 +152,17 @@ ConformResult conform(const ConformOptions& options,
     }
     if (!launched && std::chrono::steady_clock::now() > deadline) {
       say("conform: the run did not end in time; stopping it");
-      processes.stop({"launch"}, 20s);
-      launched = launcher::ChildExit{"launch", 0, 1, 0};
+      launched = launcher::ChildExit{"launch", 0, 1, 0};  // unless stop() tells how it ended
+      for (const launcher::ChildExit& e : processes.stop({"launch"}, 20s)) launched = e;
     }
   }
-  facts.launcher_exit = launched->signal != 0 ? 128 + launched->signal : launched->exit_code;
+  facts.launcher_exit = launched->exit_code;  // 128 + the signal when one ended it
   // The participant leaves by itself on RUN_SHUTDOWN; a few seconds for its acknowledgements.
   if (!left) left = processes.waitFor("participant", 5s);
-  if (left && left->signal == 0) facts.program_exit = left->exit_code;
-  if (left) facts.program_end = (left->signal != 0 ? "was " : "") + left->describe();
-  if (!left) {
+  if (left) {
+    if (left->signal == 0) facts.program_exit = left->exit_code;
+    facts.program_end = (left->signal != 0 ? "was " : "") + left->describe();
+  } else {
     processes.stop({"participant"}, 3s);
     facts.program_end = "was still running 5 s after the run ended: stopped";
   }

@@ -56,10 +56,9 @@ RuleCheck reportPerEpisode(const RecordedRun& run) {
   const ByEpisode mine = byEpisode(run.reports);
   const double horizon = run.inputs.scenario().horizon_s;
   std::string first;
-  std::size_t started = 0;
-  for (const auto& [k, start_ns] : run.starts_ns) {
-    if (run.shutdown_ns && start_ns >= *run.shutdown_ns) continue;
-    ++started;
+  const std::vector<std::uint32_t> started = startedEpisodes(run);
+  for (const std::uint32_t k : started) {
+    const std::int64_t start_ns = run.starts_ns.at(k);
     const auto report = mine.first.find(k);
     std::string why;
     if (report == mine.first.end()) {
@@ -73,12 +72,12 @@ RuleCheck reportPerEpisode(const RecordedRun& run) {
     }
     if (!why.empty() && first.empty()) first = fmt::format("episode {}: {}", k, why);
   }
-  r.pass = first.empty() && started > 0;
-  r.evidence = !first.empty() ? first
-               : started == 0 ? std::string("no episode started")
-                              : fmt::format("{} for {} started",
-                                            plural(run.reports.size(), "Report", "Reports"),
-                                            plural(started, "episode", "episodes"));
+  r.pass = first.empty() && !started.empty();
+  r.evidence = !first.empty()    ? first
+               : started.empty() ? std::string("no episode started")
+                                 : fmt::format("{} for {} started",
+                                               plural(run.reports.size(), "Report", "Reports"),
+                                               plural(started.size(), "episode", "episodes"));
   return r;
 }
 

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "sensornet/conform/sensor_conformance.hpp"
 
@@ -15,6 +16,8 @@ namespace sensornet::conform::detail {
 [[nodiscard]] RuleCheck rule(std::string id, std::string statement, std::string section);
 [[nodiscard]] double secondsSince(std::int64_t from_ns, std::int64_t ns);
 [[nodiscard]] std::string plural(std::size_t n, const char* one, const char* many);
+// The episodes the run started before it shut down, in order.
+[[nodiscard]] std::vector<std::uint32_t> startedEpisodes(const RecordedRun& run);
 // How the participant's process ended: "exited with status 0", "was killed by signal 9 ...".
 [[nodiscard]] std::string programEnding(const RunFacts& facts);
 // The run completed: status completed, the launcher's exit 0.

@@ -69,6 +69,14 @@ RuleCheck truth(const RunFacts& facts) {
   return r;
 }
 
+std::vector<std::uint32_t> startedEpisodes(const RecordedRun& run) {
+  std::vector<std::uint32_t> episodes;
+  for (const auto& [k, start] : run.starts_ns) {
+    if (!run.shutdown_ns || start < *run.shutdown_ns) episodes.push_back(k);
+  }
+  return episodes;
+}
+
 }  // namespace detail
 
 namespace {
@@ -85,15 +93,6 @@ constexpr double kFewestExpected = 10.0;
 
 bool readyLike(SensorState s) {
   return s == SensorState::Ready || s == SensorState::Excluded || s == SensorState::Running;
-}
-
-// The episodes the run started before it shut down, in order.
-std::vector<std::uint32_t> startedEpisodes(const RecordedRun& run) {
-  std::vector<std::uint32_t> episodes;
-  for (const auto& [k, start] : run.starts_ns) {
-    if (!run.shutdown_ns || start < *run.shutdown_ns) episodes.push_back(k);
-  }
-  return episodes;
 }
 
 RuleCheck readiness(const RecordedRun& run, const SensorTrace& trace) {

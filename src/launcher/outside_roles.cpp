@@ -19,6 +19,15 @@ fs::path outsideConfigFile(const fs::path& log_dir, const wire::RunOptions& run,
   return path;
 }
 
+namespace {
+
+// The environment assignment that loads the run's configuration, as a shell reads it.
+std::string cycloneUri(const OutsideReach& reach) {
+  return "CYCLONEDDS_URI=" + shellLine({"file://" + reach.cyclone_config.string()});
+}
+
+}  // namespace
+
 std::string outsideRolesAnnouncement(const OutsideRoles& roles, const OutsideReach& reach) {
   const std::string domain = std::to_string(reach.domain_id);
   std::string text;
@@ -36,8 +45,8 @@ std::string outsideRolesAnnouncement(const OutsideRoles& roles, const OutsideRea
             " and writes Report and FusionState there (docs/wire-protocol.md, \"Fusion center\")" +
             (roles.reference_fusion ? "; ours runs beside it as the reference" : "") + "\n";
   }
-  text += "sensornet: an outside participant loads this run's Cyclone configuration: "
-          "CYCLONEDDS_URI=" + shellLine({"file://" + reach.cyclone_config.string()}) + "\n";
+  text += "sensornet: an outside participant loads this run's Cyclone configuration: " +
+          cycloneUri(reach) + "\n";
   return text;
 }
 
@@ -45,7 +54,7 @@ std::string outsideRolesAdvice(const OutsideReach& reach,
                                const Scenario& scenario, const std::vector<int>& silent_sensors,
                                bool fusion_center_silent) {
   if (silent_sensors.empty() && !fusion_center_silent) return "";
-  const std::string uri = "CYCLONEDDS_URI=" + shellLine({"file://" + reach.cyclone_config.string()});
+  const std::string uri = cycloneUri(reach);
   std::string who = silent_sensors.empty()
                         ? std::string()
                         : "external sensors " + emulator::formatSensorIds(silent_sensors);

@@ -30,7 +30,29 @@ message("${out}")
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "the example's tests failed (${rc}):\n${err}")
 endif()
-# A user's C program against the world library, found by pkg-config alone.
+# A user's C program against the world library, found by pkg-config alone (`pc_dir` on
+# PKG_CONFIG_PATH), built as `exe` and run with `run_env` (cmake -E env assignments).
+function(check_world_client what pc_dir exe run_env)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pc_dir}
+                          pkg-config --cflags --libs sensornet-world
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "pkg-config sensornet-world (${what}) failed (${rc})")
+  endif()
+  separate_arguments(flags UNIX_COMMAND "${flags}")
+  execute_process(COMMAND cc -std=c11 -Wall -Werror ${CLIENT} -o ${exe} ${flags} -lm
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "building a C program against the ${what} world library failed (${rc}):\n${err}")
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env ${run_env} ${exe} ${SCENARIO}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message("${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "the C program against the ${what} world library failed (${rc}):\n${err}")
+  endif()
+endfunction()
+
 file(GLOB_RECURSE pc_files ${WORK}/prefix/*/sensornet-world.pc)
 if(NOT pc_files)
   message(FATAL_ERROR "the install has no sensornet-world.pc")
@@ -38,41 +60,7 @@ endif()
 list(GET pc_files 0 pc_file)
 get_filename_component(pc_dir ${pc_file} DIRECTORY)
 get_filename_component(lib_dir ${pc_dir} DIRECTORY)
-execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pc_dir}
-                        pkg-config --cflags --libs sensornet-world
-                RESULT_VARIABLE rc OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "pkg-config sensornet-world failed (${rc})")
-endif()
-separate_arguments(flags UNIX_COMMAND "${flags}")
-execute_process(COMMAND cc -std=c11 -Wall -Werror ${CLIENT} -o ${WORK}/world_client ${flags} -lm
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "building a C program with pkg-config sensornet-world failed (${rc}):\n${err}")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} -E env LD_LIBRARY_PATH=${lib_dir}
-                        ${WORK}/world_client ${SCENARIO}
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message("${out}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the C program against the installed world library failed (${rc}):\n${err}")
-endif()
+check_world_client(installed ${pc_dir} ${WORK}/world_client LD_LIBRARY_PATH=${lib_dir})
 # The same program against the build tree, uninstalled: its -uninstalled.pc, run by its rpath.
-execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${BUILD_DIR}/src/world
-                        pkg-config --cflags --libs sensornet-world
-                RESULT_VARIABLE rc OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "pkg-config sensornet-world in the build tree failed (${rc})")
-endif()
-separate_arguments(flags UNIX_COMMAND "${flags}")
-execute_process(COMMAND cc -std=c11 -Wall -Werror ${CLIENT} -o ${WORK}/world_client_tree ${flags} -lm
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "building against the uninstalled world library failed (${rc}):\n${err}")
-endif()
-execute_process(COMMAND ${WORK}/world_client_tree ${SCENARIO}
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the C program against the uninstalled world library failed (${rc}):\n${err}")
-endif()
+check_world_client(uninstalled ${BUILD_DIR}/src/world ${WORK}/world_client_tree "")
 file(REMOVE_RECURSE ${WORK})
