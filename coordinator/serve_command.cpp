@@ -257,6 +257,7 @@ Subcommand addServeCommand(CLI::App& app) {
   addSeedOption(*cmd, options->seed);
   addReadyTimeoutOption(*cmd, options->core.ready_timeout_s);
   addSwitchMarginOption(*cmd, options->core.switch_margin_s);
+  addDropFirstCommandCopyOption(*cmd, options->core.drop_first_command_copy);
   addReplanEveryOption(*cmd, options->replan_every);
   cmd->add_option("--episode-gap", options->core.episode_gap_s,
                   "wall seconds between one episode's end and the next one's start (the next "

@@ -20,10 +20,11 @@ struct ConformCommandOptions {
 int runConform(ConformCommandOptions options) {
   if (options.role == "fusion-center") {
     options.run.role = conform::ConformRole::FusionCenter;
+  } else if (options.role == "scheduler") {
+    options.run.role = conform::ConformRole::Scheduler;
   } else if (options.role != "sensor") {
     throw InputError("sensornet conform", options.role,
-                     "the role `sensor` or `fusion-center` (a scheduler's rules are not checked "
-                     "yet)");
+                     "the role `sensor`, `fusion-center` or `scheduler`");
   }
   if (!options.junit_path.empty()) checkOutputFile(options.junit_path, "--junit");
   options.run.sensornet = std::filesystem::read_symlink("/proc/self/exe");
@@ -54,14 +55,20 @@ Subcommand addConformCommand(CLI::App& app) {
       "nothing lost or refused, leaving on shutdown, the run's outcome; with --measures-truth, "
       "its z against the plant's truth and the NEES. A fusion center (`--external-fusion-center "
       "--reference-fusion`): a Report per episode, costs, brackets and counts equal to our "
-      "exact CD-KF's on the same measurements, leaving, the outcome. Prints a table (rule, "
-      "ok/FAIL, evidence, the page's section); exit 0 only when every rule holds, 1 when one "
-      "fails, 2 on bad input. Your command line may hold {run_id}, {domain_id} and {config} "
+      "exact CD-KF's on the same measurements, leaving, the outcome. A scheduler (an "
+      "operator: `--drop-first-command-copy`, the coordinator leaves each command's first copy "
+      "unanswered): commands in the operator's partition, ids of their own, written again "
+      "every 2 s until the reply and not after it, accepted, leaving, the outcome. Prints a "
+      "table (rule, ok/FAIL, evidence, the page's section); exit 0 only when every rule "
+      "holds, 1 when one fails, 2 on bad input. Your command line may hold {run_id}, {domain_id} and {config} "
       "(a sensor's also {sensor} and {dim}); it runs with CYCLONEDDS_URI set to the run's "
-      "configuration. Example:\n"
+      "configuration. Examples:\n"
       "  sensornet conform sensor --sensor 1 -- ./external_sensor --run-id {run_id} "
-      "--domain-id {domain_id} --sensor {sensor} --measure truth");
-  cmd->add_option("ROLE", options->role, "the role your program fills: sensor, fusion-center")
+      "--domain-id {domain_id} --sensor {sensor} --measure truth\n"
+      "  sensornet conform scheduler -- sensornet replan --run-id {run_id} --domain-id "
+      "{domain_id} --surrogate info");
+  cmd->add_option("ROLE", options->role,
+                  "the role your program fills: sensor, fusion-center, scheduler")
       ->required();
   cmd->add_option("PROGRAM", options->run.program, "your participant's command line, after `--`")
       ->required();

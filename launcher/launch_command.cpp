@@ -622,6 +622,7 @@ Subcommand addLaunchCommand(CLI::App& app) {
   addSwitchMarginOption(*cmd, options->switch_margin_s,
                         ". Default: the coordinator's, " +
                             formatNumber(emulator::CoordinatorConfig{}.switch_margin_s));
+  addDropFirstCommandCopyOption(*cmd, options->drop_first_command_copy);
   cmd->add_option("--timeout", options->timeout_s,
                   "stop everything and fail if the run is not over after this many seconds "
                   "(0: no limit)")

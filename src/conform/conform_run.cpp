@@ -9,6 +9,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/domain.hpp"
 #include "sensornet/io/command_line.hpp"
+#include "sensornet/io/forwarded_options.hpp"
 #include "sensornet/io/mcap.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/launcher/outside_roles.hpp"
@@ -54,6 +55,18 @@ std::vector<std::string> fillPlaceholders(const std::vector<std::string>& args,
 }
 
 namespace {
+
+std::string roleName(ConformRole role, int sensor) {
+  switch (role) {
+    case ConformRole::Sensor:
+      return "sensor " + std::to_string(sensor) + "'s";
+    case ConformRole::FusionCenter:
+      return "the fusion center's";
+    case ConformRole::Scheduler:
+      break;
+  }
+  return "a scheduler's (each command's first copy goes unanswered)";
+}
 
 std::string freshRunId() {
   std::random_device device;
@@ -121,17 +134,19 @@ ConformResult conform(const ConformOptions& options,
   // clang-format on
   if (sensor_role) {
     launch.insert(launch.end(), {"--external-sensors", sensor});
-  } else {
+  } else if (options.role == ConformRole::FusionCenter) {
     launch.insert(launch.end(), {"--external-fusion-center", "--reference-fusion"});
+  } else {
+    launch.emplace_back(kDropFirstCommandCopyFlag);
   }
   launch.insert(launch.end(), options.launch_args.begin(), options.launch_args.end());
 
   launcher::ProcessGroup processes;
   processes.start({"launch", launch, dir / "launch.log"});
   processes.start({"participant", participant, dir / "participant.log"});
-  say(fmt::format("conform: run {} on DDS domain {}, your program in {}'s role; its output: {}",
+  say(fmt::format("conform: run {} on DDS domain {}, your program in {} role; its output: {}",
                   result.run_id, domain_id,
-                  sensor_role ? "sensor " + sensor : std::string("the fusion center"),
+                  roleName(options.role, options.sensor),
                   (dir / "participant.log").string()));
 
   RunFacts facts;
@@ -178,8 +193,17 @@ ConformResult conform(const ConformOptions& options,
   const RecordedRun recorded =
       readRecording(mcap, recording.string(),
                     sensor_role ? std::vector<int>{options.sensor} : std::vector<int>{});
-  result.rules = sensor_role ? checkSensor(recorded, options.sensor, facts)
-                             : checkFusionCenter(recorded, facts, options.tolerance);
+  switch (options.role) {
+    case ConformRole::Sensor:
+      result.rules = checkSensor(recorded, options.sensor, facts);
+      break;
+    case ConformRole::FusionCenter:
+      result.rules = checkFusionCenter(recorded, facts, options.tolerance);
+      break;
+    case ConformRole::Scheduler:
+      result.rules = checkScheduler(recorded, facts);
+      break;
+  }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   return result;
 }

@@ -7,12 +7,28 @@
 #include "sensornet/conform/sensor_conformance.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/sample_fields.hpp"
+#include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/recording/recording_replay.hpp"
+#include "sensornet/wire/coordinator_wire.hpp"
 #include "sensornet/wire/messages.hpp"
 #include "sensornet/wire/run_inputs.hpp"
 
 namespace sensornet::conform {
+namespace {
+
+// The IDL's name of an enum value of `field` ("COMMAND_REPLAN"), or the number.
+std::string enumName(const dds::SampleType& type, std::string_view field, int value) {
+  for (const dds::SampleField& f : type.fields) {
+    if (f.name != field || f.enum_names == nullptr) continue;
+    for (const dds::EnumName& e : *f.enum_names) {
+      if (e.value == value) return e.name;
+    }
+  }
+  return std::to_string(value);
+}
+
+}  // namespace
 
 RecordedRun readRecording(const McapReader& file, const std::string& source,
                           const std::vector<int>& sensors) {
@@ -27,6 +43,7 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
   // Per channel: its type, and the one sensor its writer speaks for (-1: none of those asked).
   struct Channel {
     const dds::SampleType* type = nullptr;
+    std::string partition;  // its writer's
     int sensor = -1;
     std::vector<RecordedReport>* report = nullptr;  // a Report channel of the run or reference
   };
@@ -34,8 +51,9 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
   for (const auto& [id, channel] : file.channels()) {
     const dds::SampleType* type = dds::sampleTypeOfTopic(channel.topic);
     if (type == nullptr || channel.message_encoding != "cdr") continue;
-    Channel c{type, -1, nullptr};
+    Channel c{type, "", -1, nullptr};
     const auto p = channel.metadata.find("partition");
+    if (p != channel.metadata.end()) c.partition = p->second;
     if (p != channel.metadata.end() && channel.topic == "sensornet/Report") {
       if (p->second == partition) c.report = &run.reports;
       if (p->second == emulator::referencePartition(partition)) c.report = &run.reference_reports;
@@ -86,6 +104,15 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
         report.counts[c.sensor_id] = {c.sent, c.received, c.lost};
       }
       channel.report->push_back(std::move(report));
+    } else if (topic == "sensornet/Command") {
+      const auto& s = sample.as<sensornet_Command>();
+      run.commands.push_back({wire::commandOf(s, emulator::CommandSender::Operator),
+                              enumName(*channel.type, "kind", s.kind), channel.partition, at});
+    } else if (topic == "sensornet/CommandReply") {
+      const auto& s = sample.as<sensornet_CommandReply>();
+      if (dds::viewString(s.run_id) != run.run_id) return;
+      run.replies.push_back({s.command_id, s.accepted, s.schedule_version,
+                             std::string(dds::viewString(s.reason)), at});
     } else if (channel.sensor >= 0) {
       SensorTrace& trace = run.sensors[channel.sensor];
       if (topic == "sensornet/Measurement") {

@@ -196,6 +196,13 @@ CoordinatorActions CoordinatorCore::onCommand(const CommandEvent& c, std::int64_
     act(SendReply{c.command_id, it->second});
     return take();
   }
+  if (config_.drop_first_command_copy && c.sender == CommandSender::Operator &&
+      dropped_copies_.insert(c.command_id).second) {
+    log(info, fmt::format("command {} from the operator ('{}'): its first copy left unanswered "
+                          "(--drop-first-command-copy)",
+                          c.command_id, c.issuer));
+    return take();
+  }
   AnsweredCommand reply = answer(c, now_ns);
   log(reply.accepted ? info : warn,
       fmt::format("command {} from the {} ('{}'): {} ({})", c.command_id,

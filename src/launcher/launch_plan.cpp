@@ -52,6 +52,7 @@ std::vector<std::string> coordinatorArgv(const LaunchOptions& options, const Pla
   add(argv, kReadyTimeoutFlag, formatNumber(options.ready_timeout_s));
   if (options.replan_every_s > 0.0) add(argv, kReplanEveryFlag, formatNumber(options.replan_every_s));
   if (options.switch_margin_s) add(argv, kSwitchMarginFlag, formatNumber(*options.switch_margin_s));
+  if (options.drop_first_command_copy) argv.emplace_back(kDropFirstCommandCopyFlag);
   return argv;
 }
 

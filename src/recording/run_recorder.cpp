@@ -134,6 +134,8 @@ RunRecorder::RunRecorder(const dds::Participant& participant, const std::string&
   add(static_cast<sensornet_FusionState*>(nullptr), reference);
   add(static_cast<sensornet_Command*>(nullptr), launcher);
   add(static_cast<sensornet_Command*>(nullptr), operator_partition);
+  // No one may write Command here; a scheduler that does is shown (sensornet conform scheduler).
+  add(static_cast<sensornet_Command*>(nullptr), run);
   add(static_cast<sensornet_CommandReply*>(nullptr), run);
   McapMap run_record = run_metadata;
   run_record["run_id"] = run_id;

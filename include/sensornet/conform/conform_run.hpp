@@ -1,9 +1,10 @@
 #pragma once
-// `sensornet conform sensor|fusion-center`: a launched run with the user's program in one
-// sensor's role or the fusion center's, recorded, and then judged rule by rule
+// `sensornet conform sensor|fusion-center|scheduler`: a launched run with the user's program in
+// one sensor's role, the fusion center's or an operator's, recorded, and then judged rule by rule
 // (sensor_conformance.hpp). The run is a plain `sensornet launch --external-sensors J --record
-// ...` (or `--external-fusion-center --reference-fusion`: ours beside it is the yardstick) on a
-// run id and domain of its own; the program is started beside it with the run's Cyclone
+// ...` (or `--external-fusion-center --reference-fusion`: ours beside it is the yardstick; or,
+// for a scheduler, `--drop-first-command-copy`) on a run id and domain of its own; the program is
+// started beside it with the run's Cyclone
 // configuration in CYCLONEDDS_URI and the placeholders of its command line filled in:
 //
 //   {run_id} {domain_id} {config}, and for a sensor {sensor} {dim}   (also SENSORNET_RUN_ID,
@@ -29,7 +30,7 @@
 
 namespace sensornet::conform {
 
-enum class ConformRole { Sensor, FusionCenter };
+enum class ConformRole { Sensor, FusionCenter, Scheduler };
 
 struct ConformOptions {
   ConformRole role = ConformRole::Sensor;

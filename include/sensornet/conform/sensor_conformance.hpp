@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "sensornet/emulator/coordinator_core.hpp"
 #include "sensornet/emulator/run_input_state.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/mcap.hpp"
@@ -88,6 +89,23 @@ struct RecordedReport {
   std::int64_t received_ns = 0;
 };
 
+// A Command as recorded: what it asked, the partition its writer wrote in, and its receipt.
+struct RecordedCommand {
+  emulator::CommandEvent command;  // sender: unused (the partition says it)
+  std::string kind;                // the IDL's name, "COMMAND_REPLAN"
+  std::string partition;           // "sensornet/<run id>/operator"
+  std::int64_t received_ns = 0;
+};
+
+// A CommandReply as recorded (the coordinator answers each copy it hears of an answered command).
+struct RecordedReply {
+  std::uint64_t command_id = 0;
+  bool accepted = false;
+  std::uint32_t schedule_version = 0;
+  std::string reason;
+  std::int64_t received_ns = 0;
+};
+
 struct RecordedRun {
   std::string run_id;
   emulator::RunInputState
@@ -99,6 +117,8 @@ struct RecordedRun {
   std::map<int, SensorTrace> sensors;       // the sensors asked for (written in their partitions)
   std::vector<RecordedReport> reports;      // in the run's partition, in receipt order
   std::vector<RecordedReport> reference_reports;  // ours beside an outside one (P/reference)
+  std::vector<RecordedCommand> commands;  // every Command of any writer, in receipt order
+  std::vector<RecordedReply> replies;     // every CommandReply of the run, in receipt order
 };
 
 // Reads a recording of `sensornet launch --record`; InputError naming the file when it is none.
@@ -125,6 +145,17 @@ struct RunFacts {
 // run's outcome; with facts.measures_truth, its NEES in the chi-square band.
 [[nodiscard]] std::vector<RuleCheck> checkFusionCenter(const RecordedRun& run,
                                                        const RunFacts& facts, double tolerance);
+
+// Every rule of a scheduler's (an operator's) role, judged from the Commands of a run whose
+// coordinator left the first copy of each operator command unanswered
+// (--drop-first-command-copy): at least one command; each in the operator's partition and of a
+// kind an operator may send; its run and an id of its own (copies identical); written again
+// every 2 s (1 to kResendMaxS) until its reply, and not after it (kReplySlackS); accepted; the
+// program leaves by itself; the run completes.
+inline constexpr double kResendMinS = 1.0;
+inline constexpr double kResendMaxS = 3.5;
+inline constexpr double kReplySlackS = 0.5;
+[[nodiscard]] std::vector<RuleCheck> checkScheduler(const RecordedRun& run, const RunFacts& facts);
 
 // The Kolmogorov-Smirnov test of values against the uniform law on [0, 1]: the statistic D and
 // its asymptotic p-value (Stephens' correction; exact enough for n >= 5).

@@ -89,6 +89,9 @@ struct CoordinatorConfig {
   // Wall time between every peer being ready and the first announcement: the last discovery
   // settles (the others' readers match the coordinator's writers).
   std::chrono::nanoseconds settle = std::chrono::milliseconds(100);
+  // `sensornet conform scheduler`: the first copy of each operator command goes unanswered, as
+  // a lost one would, so that a scheduler under test must write it again.
+  bool drop_first_command_copy = false;
 };
 
 // Events: the wire samples as plain values (the executable's codecs make them).
@@ -289,6 +292,7 @@ class CoordinatorCore {
   EpisodeSet reported_;  // as ranges: small over millions of episodes
   std::optional<AnnouncedEpisode> announced_;
   std::map<std::uint64_t, AnsweredCommand> answered_;
+  std::set<std::uint64_t> dropped_copies_;  // config_.drop_first_command_copy: ids met once
   std::int64_t fusion_heard_ns_ = 0;  // the fusion center's latest state or report
   std::optional<std::uint32_t> awaited_;  // whose report fusion_heard_ns_ is counted for
   StallWatch stall_watch_;

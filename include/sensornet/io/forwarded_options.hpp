@@ -49,6 +49,7 @@ inline constexpr std::string_view kOnSensorFailureFlag = "--on-sensor-failure";
 inline constexpr std::string_view kNetworkAwareFlag = "--network-aware";
 inline constexpr std::string_view kArrivalsFlag = "--arrivals";
 inline constexpr std::string_view kMetricsFlag = "--metrics";
+inline constexpr std::string_view kDropFirstCommandCopyFlag = "--drop-first-command-copy";
 
 // A run seed: a decimal integer that fits 64 bits unsigned (CLI11 alone would read "-1" as
 // 2^64 - 1 and "010" as octal).
@@ -73,5 +74,6 @@ CLI::Option* addOnSensorFailureOption(CLI::App& app, emulator::FailurePolicy& po
 // Empty: the scenario's `arrivals:`.
 CLI::Option* addArrivalsOption(CLI::App& app, std::string& arrivals, const std::string& more = {});
 CLI::Option* addMetricsOption(CLI::App& app, std::string& address, const std::string& more = {});
+CLI::Option* addDropFirstCommandCopyOption(CLI::App& app, bool& drop);
 
 }  // namespace sensornet

@@ -58,6 +58,7 @@ struct LaunchOptions {
   double ready_timeout_s = 30.0;  // --ready-timeout, passed to the coordinator
   double replan_every_s = 0.0;    // --replan-every, passed to the coordinator (0: open loop)
   std::optional<double> switch_margin_s;  // --switch-margin, passed to the coordinator
+  bool drop_first_command_copy = false;   // --drop-first-command-copy, passed to the coordinator
   std::string hosts_path;  // --hosts: run across the hosts of this file (hosts_file.hpp)
 };
 
