@@ -1,5 +1,5 @@
 // The rules of a scheduler's (an operator's) role, judged from the Commands and CommandReplies
-// of a run whose coordinator left the first copy of each operator command unanswered
+// of a run whose coordinator left the first copy of each command unanswered
 // (--drop-first-command-copy): a reply to a command proves that it was written again, and the
 // intervals between its recorded copies say how soon.
 #include <fmt/format.h>
@@ -206,11 +206,13 @@ RuleCheck repliesRead(const Exchanges& exchanges) {
                           e.copies.end() - late);
     }
   }
-  r.pass = first.empty() && replied > 0;
-  r.evidence = !first.empty() ? first
-               : replied == 0 ? std::string("no command was answered")
-                              : fmt::format("no copy after the reply, for {}",
-                                            plural(replied, "command", "commands"));
+  // Unanswered commands fail `retries`; with no reply there is nothing more to read.
+  r.pass = first.empty() && !exchanges.order.empty();
+  r.evidence = !first.empty()            ? first
+               : exchanges.order.empty() ? std::string("no Command to judge")
+               : replied == 0            ? std::string("no reply came to judge by (see retries)")
+                                         : fmt::format("no copy after the reply, for {}",
+                                                       plural(replied, "command", "commands"));
   return r;
 }
 
@@ -225,11 +227,12 @@ RuleCheck accepted(const Exchanges& exchanges) {
     const Exchange& e = exchanges.by_id.at(id);
     if (e.reply == nullptr) continue;
     ++answered;
-    if (!e.reply->accepted && first.empty()) {
+    // A refusal by right is by-right's to tell.
+    if (!e.reply->accepted && !e.reply->reason.starts_with("not permitted") && first.empty()) {
       first = fmt::format("{} refused: {}", named(*e.copies[0]), e.reply->reason);
     }
   }
-  r.pass = first.empty() && answered > 0;
+  r.pass = first.empty() && !exchanges.order.empty();
   std::string versions;
   for (const std::uint64_t id : exchanges.order) {
     const RecordedReply* reply = exchanges.by_id.at(id).reply;
@@ -237,9 +240,10 @@ RuleCheck accepted(const Exchanges& exchanges) {
       versions += (versions.empty() ? "" : ", ") + std::to_string(reply->schedule_version);
     }
   }
-  r.evidence = !first.empty() ? first
+  r.evidence = !first.empty()            ? first
+               : exchanges.order.empty() ? std::string("no Command to judge")
                : answered == 0
-                   ? std::string("no command was answered")
+                   ? std::string("no reply came to judge by (see retries)")
                    : fmt::format("{} accepted{}", plural(answered, "command", "commands"),
                                  versions.empty() ? "" : "; versions " + versions);
   return r;

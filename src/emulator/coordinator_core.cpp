@@ -196,11 +196,10 @@ CoordinatorActions CoordinatorCore::onCommand(const CommandEvent& c, std::int64_
     act(SendReply{c.command_id, it->second});
     return take();
   }
-  if (config_.drop_first_command_copy && c.sender == CommandSender::Operator &&
-      dropped_copies_.insert(c.command_id).second) {
-    log(info, fmt::format("command {} from the operator ('{}'): its first copy left unanswered "
+  if (config_.drop_first_command_copy && dropped_copies_.insert(c.command_id).second) {
+    log(info, fmt::format("command {} from the {} ('{}'): its first copy left unanswered "
                           "(--drop-first-command-copy)",
-                          c.command_id, c.issuer));
+                          c.command_id, commandSenderName(c.sender), c.issuer));
     return take();
   }
   AnsweredCommand reply = answer(c, now_ns);

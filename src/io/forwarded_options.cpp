@@ -144,7 +144,7 @@ CLI::Option* addMetricsOption(CLI::App& app, std::string& address, const std::st
 CLI::Option* addDropFirstCommandCopyOption(CLI::App& app, bool& drop) {
   return app.add_flag(name(kDropFirstCommandCopyFlag), drop,
                       "testing a scheduler of your own (sensornet conform scheduler): the "
-                      "coordinator leaves the first copy of each operator Command unanswered, as "
+                      "coordinator leaves the first copy of each Command unanswered, as "
                       "if it were lost, so that the sender must write it again");
 }
 

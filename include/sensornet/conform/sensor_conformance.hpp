@@ -147,7 +147,7 @@ struct RunFacts {
                                                        const RunFacts& facts, double tolerance);
 
 // Every rule of a scheduler's (an operator's) role, judged from the Commands of a run whose
-// coordinator left the first copy of each operator command unanswered
+// coordinator left the first copy of each command unanswered
 // (--drop-first-command-copy): at least one command; each in the operator's partition and of a
 // kind an operator may send; its run and an id of its own (copies identical); written again
 // every 2 s (1 to kResendMaxS) until its reply, and not after it (kReplySlackS); accepted; the

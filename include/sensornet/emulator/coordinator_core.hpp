@@ -89,8 +89,8 @@ struct CoordinatorConfig {
   // Wall time between every peer being ready and the first announcement: the last discovery
   // settles (the others' readers match the coordinator's writers).
   std::chrono::nanoseconds settle = std::chrono::milliseconds(100);
-  // `sensornet conform scheduler`: the first copy of each operator command goes unanswered, as
-  // a lost one would, so that a scheduler under test must write it again.
+  // `sensornet conform scheduler`: the first copy of each command goes unanswered, as a lost
+  // one would, so that a scheduler under test must write it again.
   bool drop_first_command_copy = false;
 };
 

@@ -227,14 +227,113 @@ TEST_F(ConformFusionCenter, AWrongModelFailsTheCostsAlone) {
 }
 #endif
 
+// `conform scheduler`: the coordinator leaves each command's first copy unanswered. Our own
+// `sensornet replan` and a scheduler written with the Python participant
+// (python_scheduler.py) keep every rule; that scheduler broken on purpose fails exactly the rule
+// it breaks.
+class ConformScheduler : public ConformSensor {
+ protected:
+  ProcessResult conformScheduler(std::vector<std::string> program) {
+    std::vector<std::string> argv = {testing::kLauncher,
+                                     "conform",
+                                     "scheduler",
+                                     "--scenario",
+                                     testing::kDefaultScenario,
+                                     "--episodes",
+                                     "4",
+                                     "--time-scale",
+                                     "2",
+                                     "--run-id",
+                                     run_id_,
+                                     "--dir",
+                                     (dir_ / "conform").string(),
+                                     "--"};
+    argv.insert(argv.end(), program.begin(), program.end());
+    return runProcess(argv, 300s);
+  }
+  // The rules that failed, by name.
+  static std::vector<std::string> failing(const std::string& table) {
+    std::vector<std::string> out;
+    for (const auto& [rule, verdict] : verdicts(table)) {
+      if (verdict == "FAIL") out.push_back(rule);
+    }
+    return out;
+  }
+};
+
+TEST_F(ConformScheduler, SensornetReplanKeepsEveryRule) {
+  const LeftoverGuard guard(run_id_);
+  const ProcessResult r =
+      conformScheduler({testing::kLauncher, "replan", "--run-id", "{run_id}", "--domain-id",
+                        "{domain_id}", "--surrogate", "info"});
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  const auto rules = verdicts(r.out);
+  EXPECT_EQ(rules.size(), 8u) << r.out;
+  EXPECT_EQ(failing(r.out), std::vector<std::string>{}) << r.out;
+  // The re-plan's version is the one the report records as asked by a command.
+  const nlohmann::json report = testing::readJson(dir_ / "conform" / "report.json");
+  std::uint32_t commanded = 0;
+  for (const nlohmann::json& v : report.at("schedule_versions")) {
+    if (v.value("command_id", std::uint64_t{0}) != 0) commanded = v.at("version");
+  }
+  ASSERT_GT(commanded, 1u) << report.at("schedule_versions").dump();
+  EXPECT_NE(r.out.find("versions " + std::to_string(commanded)), std::string::npos) << r.out;
+}
+
+#ifdef SENSORNET_PYTHON
+class ConformPythonScheduler : public ConformScheduler,
+                               public ::testing::WithParamInterface<
+                                   std::pair<std::string, std::vector<std::string>>> {
+ protected:
+  std::vector<std::string> pythonScheduler(const std::string& broken) const {
+    return {"/usr/bin/env",
+            std::string("PYTHONPATH=") + SENSORNET_PYTHON_PATH,
+            SENSORNET_PYTHON,
+            std::string(SENSORNET_SOURCE_DIR) + "/tests/integration/emulation/python_scheduler.py",
+            "--run-id",
+            "{run_id}",
+            "--domain-id",
+            "{domain_id}",
+            "--break",
+            broken};
+  }
+};
+
+TEST_P(ConformPythonScheduler, FailsExactlyTheRuleItBreaks) {
+  const LeftoverGuard guard(run_id_);
+  const auto& [broken, expected] = GetParam();
+  const ProcessResult r = conformScheduler(pythonScheduler(broken));
+  EXPECT_EQ(r.exit_code, expected.empty() ? 0 : 1) << r.out << r.err;
+  EXPECT_EQ(verdicts(r.out).size(), 8u) << r.out;
+  EXPECT_EQ(failing(r.out), expected)
+      << r.out << testing::readText(dir_ / "conform" / "participant.log");
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Breaks, ConformPythonScheduler,
+    ::testing::Values(std::pair{std::string("none"), std::vector<std::string>{}},
+                      std::pair{std::string("no-retry"), std::vector<std::string>{"retries"}},
+                      std::pair{std::string("launcher"), std::vector<std::string>{"by-right"}},
+                      std::pair{std::string("reuse-id"), std::vector<std::string>{"command-ids"}},
+                      std::pair{std::string("deaf"), std::vector<std::string>{"replies-read"}},
+                      std::pair{std::string("refused"), std::vector<std::string>{"accepted"}},
+                      std::pair{std::string("stay"), std::vector<std::string>{"leaving"}}),
+    [](const auto& info) {
+      std::string name = info.param.first;
+      std::erase(name, '-');
+      return name;
+    });
+#endif
+
 TEST_F(ConformSensor, BadInputIsOneLineAndExitTwo) {
   const ProcessResult r = conform({}, example("truth"), "4", "99");
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("--sensor"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("0 to "), std::string::npos) << r.err;
-  const ProcessResult role = runProcess({testing::kLauncher, "conform", "scheduler", "--", "true"});
+  const ProcessResult role = runProcess({testing::kLauncher, "conform", "router", "--", "true"});
   EXPECT_EQ(role.exit_code, 2) << role.err;
-  EXPECT_NE(role.err.find("the role `sensor` or `fusion-center`"), std::string::npos) << role.err;
+  EXPECT_NE(role.err.find("the role `sensor`, `fusion-center` or `scheduler`"), std::string::npos)
+      << role.err;
 }
 
 #endif
