@@ -201,9 +201,10 @@ RuleCheck repliesRead(const Exchanges& exchanges) {
       return secondsSince(e.reply->received_ns, c->received_ns) > kReplySlackS;
     });
     if (late != e.copies.end() && first.empty()) {
-      first = fmt::format("{}: written again {:.3f} s after its reply ({} copies after it)",
-                          named(**late), secondsSince(e.reply->received_ns, (*late)->received_ns),
-                          e.copies.end() - late);
+      first =
+          fmt::format("{}: written again {:.3f} s after its reply ({} after it)", named(**late),
+                      secondsSince(e.reply->received_ns, (*late)->received_ns),
+                      plural(static_cast<std::size_t>(e.copies.end() - late), "copy", "copies"));
     }
   }
   // Unanswered commands fail `retries`; with no reply there is nothing more to read.

@@ -230,7 +230,8 @@ TEST_F(ConformFusionCenter, AWrongModelFailsTheCostsAlone) {
 // `conform scheduler`: the coordinator leaves each command's first copy unanswered. Our own
 // `sensornet replan` and a scheduler written with the Python participant
 // (python_scheduler.py) keep every rule; that scheduler broken on purpose fails exactly the rule
-// it breaks.
+// it breaks (and writing in the launcher's partition also the run's: a refusal by right is a
+// command_refused fault, and the run is degraded).
 class ConformScheduler : public ConformSensor {
  protected:
   ProcessResult conformScheduler(std::vector<std::string> program) {
@@ -240,7 +241,7 @@ class ConformScheduler : public ConformSensor {
                                      "--scenario",
                                      testing::kDefaultScenario,
                                      "--episodes",
-                                     "4",
+                                     "10",
                                      "--time-scale",
                                      "2",
                                      "--run-id",
@@ -270,11 +271,11 @@ TEST_F(ConformScheduler, SensornetReplanKeepsEveryRule) {
   const auto rules = verdicts(r.out);
   EXPECT_EQ(rules.size(), 8u) << r.out;
   EXPECT_EQ(failing(r.out), std::vector<std::string>{}) << r.out;
-  // The re-plan's version is the one the report records as asked by a command.
+  // The reply names the first version the report records as asked by a command.
   const nlohmann::json report = testing::readJson(dir_ / "conform" / "report.json");
   std::uint32_t commanded = 0;
   for (const nlohmann::json& v : report.at("schedule_versions")) {
-    if (v.value("command_id", std::uint64_t{0}) != 0) commanded = v.at("version");
+    if (v.value("command_id", std::uint64_t{0}) != 0 && commanded == 0) commanded = v.at("version");
   }
   ASSERT_GT(commanded, 1u) << report.at("schedule_versions").dump();
   EXPECT_NE(r.out.find("versions " + std::to_string(commanded)), std::string::npos) << r.out;
@@ -313,13 +314,14 @@ INSTANTIATE_TEST_SUITE_P(
     Breaks, ConformPythonScheduler,
     ::testing::Values(std::pair{std::string("none"), std::vector<std::string>{}},
                       std::pair{std::string("no-retry"), std::vector<std::string>{"retries"}},
-                      std::pair{std::string("launcher"), std::vector<std::string>{"by-right"}},
+                      // A refusal by right is a fault of the run (command_refused): degraded.
+                      std::pair{std::string("launcher"), std::vector<std::string>{"by-right", "run"}},
                       std::pair{std::string("reuse-id"), std::vector<std::string>{"command-ids"}},
                       std::pair{std::string("deaf"), std::vector<std::string>{"replies-read"}},
                       std::pair{std::string("refused"), std::vector<std::string>{"accepted"}},
                       std::pair{std::string("stay"), std::vector<std::string>{"leaving"}}),
-    [](const auto& info) {
-      std::string name = info.param.first;
+    [](const auto& param_info) {
+      std::string name = param_info.param.first;
       std::erase(name, '-');
       return name;
     });

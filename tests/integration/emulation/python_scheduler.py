@@ -1,13 +1,14 @@
 """A scheduler written from docs/wire-protocol.md ("Commands and replies") with the Python
 participant, for `sensornet conform scheduler` (ConformScheduler.* in conform_test.cpp): once
 the first episode is announced it asks for a re-plan with the info surrogate, then for the
-run's status, each Command written again every 2 s until its reply, and leaves. --break makes
+run's status, each Command written again every 2 s until its reply, and leaves (also on
+RUN_SHUTDOWN). --break makes
 it break one rule on purpose:
 
   no-retry    writes each command once and waits for its reply in vain  -> retries
   launcher    writes in P/launcher, the launcher's partition            -> by-right
   reuse-id    gives the second command the first one's id               -> command-ids
-  deaf        writes every command four times, 2 s apart, replies or not -> replies-read
+  deaf        writes every command three times, 2 s apart, replies or not -> replies-read
   refused     asks for a surrogate that does not exist                  -> accepted
   stay        does not leave after its commands                         -> leaving
 """
@@ -54,7 +55,7 @@ def main():
         give_up = time.monotonic() + 20
         while time.monotonic() < give_up:
             resend_due = time.monotonic() - written >= RESEND_S
-            wanted = copies < 4 if args.broken == "deaf" else reply is None
+            wanted = copies < 3 if args.broken == "deaf" else reply is None
             if wanted and resend_due and (copies == 0 or args.broken != "no-retry"):
                 commands.write(command)
                 copies, written = copies + 1, time.monotonic()
@@ -63,8 +64,11 @@ def main():
                     reply = reply or r
             if reply is not None and not wanted:
                 break
-            if args.broken == "no-retry" and time.monotonic() - written > 8:
+            if args.broken == "no-retry" and time.monotonic() - written > 3:
                 break
+            if any(c["command"] == "RUN_SHUTDOWN" for c in controls.take()):
+                print("the run shut down", flush=True)
+                return
             time.sleep(0.01)
         print(f"command {command_id} ({ask['kind']}): {copies} copies, reply {reply}", flush=True)
 
@@ -76,3 +80,4 @@ def main():
 
 if __name__ == "__main__":
     main()
+
