@@ -308,6 +308,17 @@ void nameSilentExternals(const std::vector<int>& external, bool external_fusion_
   }
 }
 
+// A child that failed by itself says why in its log's last error line (a full disk, a file it
+// could not write): the fault names that cause, not only the exit status.
+void nameFailureCauses(const ProcessGroup& group, std::vector<Fault>& faults) {
+  for (Fault& f : faults) {
+    if (f.kind != emulator::FaultKind::ProcessFailed) continue;
+    const auto log = group.logOf(f.process);
+    if (!log) continue;
+    if (const auto cause = lastErrorLine(*log)) f.detail += ": " + *cause;
+  }
+}
+
 // Every role's identity and one per sensor process of `plan`, each checked (security.hpp).
 void checkSecurityFiles(const CommandOptions& options, const LaunchPlan& plan) {
   std::vector<std::string> blocks;
@@ -470,6 +481,7 @@ int runLaunch(CommandOptions options) {
                  names.size() == 1 ? "it" : "them", how);
   }
   std::vector<Fault> faults = core.faults();
+  nameFailureCauses(group, faults);
   nameSilentExternals(external, options.external_fusion_center, progress, faults);
   // Every process has left: what the recorder still holds goes in now, so that a recording
   // that fell short (a full disk) is one of the run's faults. It is closed once the outcome is
@@ -502,9 +514,13 @@ int runLaunch(CommandOptions options) {
       options.external_fusion_center,
       plan.reference_report,
       progress.reportsRefused(),
-      scenario.stateDim()};
+      scenario.stateDim(),
+      plan.log_dir};
   const RunOutcome outcome = settleRun(end);
-  if (outcome.write_problem) {
+  if (outcome.written_to) {
+    std::fprintf(stderr, "sensornet: warning: %s; the report went to %s\n",
+                 outcome.write_problem->c_str(), outcome.written_to->c_str());
+  } else if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
   }
   if (recorder) {  // a recording that fell short is a fault (above); one that cannot close, a warning
@@ -533,12 +549,13 @@ int runLaunch(CommandOptions options) {
     }
   }
   if (!options.no_html) {  // a page that cannot be written is a warning, never an exit code
-    if (const auto problem = sensornet::report::writePageBeside(plan.report_path)) {
+    if (const auto problem =
+            sensornet::report::writePageBeside(outcome.written_to.value_or(plan.report_path))) {
       std::fprintf(stderr, "sensornet: warning: %s\n", problem->c_str());
     }
   }
   if (options.json) {
-    printOutcomeJson(outcome, plan.report_path);
+    printOutcomeJson(outcome, plan.report_path);  // each says where the report went
   } else {
     printOutcome(outcome, plan.report_path);
   }

@@ -65,30 +65,33 @@ std::pair<int, fs::path> temporaryBeside(const fs::path& path) {
   return {fd, fs::path(name)};
 }
 
-bool writeAll(int fd, const std::string& text) {
+// 0, or the errno of the write that failed (ENOSPC for one that took nothing: a full disk).
+int writeAll(int fd, const char* data, std::size_t size) {
   std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+  while (done < size) {
+    const ssize_t n = ::write(fd, data + done, size - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
+    if (n < 0) return errno;
+    if (n == 0) return ENOSPC;
     done += static_cast<std::size_t>(n);
   }
-  return true;
+  return 0;
 }
 
 // An output stream buffer over a file descriptor: what is written goes to the file in 64 KiB
-// writes; failed() says whether any write failed.
+// writes; error() is the errno of the first write that failed (0: none), so that the cause told
+// is the disk's own, not whatever errno holds by the time the stream is checked.
 class DescriptorBuffer : public std::streambuf {
  public:
   explicit DescriptorBuffer(int fd) : fd_(fd), buffer_(1 << 16) {
     setp(buffer_.data(), buffer_.data() + buffer_.size());
   }
-  [[nodiscard]] bool failed() const { return failed_; }
+  [[nodiscard]] int error() const { return error_; }
   int sync() override {
     const auto size = static_cast<std::size_t>(pptr() - pbase());
-    if (size > 0 && !writeAll(fd_, std::string(pbase(), size))) failed_ = true;
+    if (size > 0 && error_ == 0) error_ = writeAll(fd_, pbase(), size);
     setp(buffer_.data(), buffer_.data() + buffer_.size());
-    return failed_ ? -1 : 0;
+    return error_ != 0 ? -1 : 0;
   }
   int_type overflow(int_type c) override {
     if (sync() != 0) return traits_type::eof();
@@ -99,7 +102,7 @@ class DescriptorBuffer : public std::streambuf {
  private:
   int fd_;
   std::vector<char> buffer_;
-  bool failed_ = false;
+  int error_ = 0;
 };
 
 }  // namespace
@@ -137,36 +140,39 @@ void checkOutputFile(const fs::path& path, const std::string& option) {
   }
 }
 
-void replaceFileAtomically(const fs::path& path, const std::string& text) {
-  replaceFileAtomically(path, [&text](std::ostream& out) { out << text; });
+void replaceFileAtomically(const fs::path& path, const std::string& text,
+                           const std::string& what) {
+  replaceFileAtomically(path, [&text](std::ostream& out) { out << text; }, what);
 }
 
-void replaceFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+void replaceFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write,
+                           const std::string& what) {
+  const std::string named = what.empty() ? path.string() : "the " + what + " " + path.string();
   const std::optional<mode_t> existing = typeAt(path);
   if (existing && !S_ISREG(*existing)) {
-    throw std::runtime_error("will not replace " + path.string() + ": it is " + kindOf(*existing) +
+    throw std::runtime_error("will not replace " + named + ": it is " + kindOf(*existing) +
                              ", not a regular file");
   }
   auto [fd, name] = temporaryBeside(path);
   if (fd < 0) {
-    throw std::runtime_error("cannot create a temporary file beside " + path.string() + ": " +
-                             std::strerror(errno));
+    throw std::runtime_error("cannot write " + named + ": " + std::strerror(errno));
   }
   Descriptor file(fd);
   const mode_t mode = existing ? (*existing & 07777) : 0644;
-  bool streamed = ::fchmod(file.get(), mode) == 0;
-  if (streamed) {
+  int error = ::fchmod(file.get(), mode) == 0 ? 0 : errno;
+  if (error == 0) {
     DescriptorBuffer buffer(file.get());
     std::ostream out(&buffer);
     write(out);
     out.flush();
-    streamed = !buffer.failed() && static_cast<bool>(out);
+    error = buffer.error() != 0 ? buffer.error() : (out ? 0 : EIO);
   }
-  const bool written = streamed && ::fsync(file.get()) == 0 && file.close() == 0;
-  if (!written || ::rename(name.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
+  if (error == 0 && ::fsync(file.get()) != 0) error = errno;
+  if (error == 0 && file.close() != 0) error = errno;
+  if (error == 0 && ::rename(name.c_str(), path.c_str()) != 0) error = errno;
+  if (error != 0) {
     ::unlink(name.c_str());
-    throw std::runtime_error("cannot write " + path.string() + ": " + reason);
+    throw std::runtime_error("cannot write " + named + ": " + std::strerror(error));
   }
 }
 

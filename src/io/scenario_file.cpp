@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/io/output_file.hpp"
 #include "sensornet/io/yaml_text.hpp"
 #include "scenario_network.hpp"
 #include "yaml_reader.hpp"
@@ -356,13 +357,6 @@ nlohmann::json scheduleToJson(const RateSchedule& schedule) {
           {"rates", std::move(rows)}};
 }
 
-namespace {
-
-// A write refused for want of room, not because of the path.
-bool outOfSpace(int error) { return error == ENOSPC || error == EDQUOT || error == EFBIG; }
-
-}  // namespace
-
 void writeJsonFile(const std::string& path, const nlohmann::json& doc, const std::string& what) {
   writeJsonFile(path, what, [&doc](std::ostream& out) { out << doc.dump(2) << '\n'; });
 }
@@ -377,31 +371,15 @@ void writeJsonFile(const std::string& path, const std::string& what,
         path, "",
         "a regular file for the " + what + " (it exists and is a device, FIFO, directory or link)");
   }
-  // Write beside the target and rename, so a reader never sees half a file.
-  const std::string temporary = path + ".tmp" + std::to_string(::getpid());
-  std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-  if (!out) {
-    const int error = errno;
-    if (!outOfSpace(error)) throw InputError(path, "", "a writable path for the " + what);
-    throw std::runtime_error("cannot write the " + what + " " + path + ": " + std::strerror(error));
+  // A path where no file can be made is bad input; one whose disk refuses the bytes (full, a
+  // size limit) is not, and the error says the disk's own cause.
+  if (const auto problem = outputFileProblem(path)) {
+    const bool full = problem->find(std::strerror(ENOSPC)) != std::string::npos ||
+                      problem->find(std::strerror(EDQUOT)) != std::string::npos;
+    if (!full) throw InputError(path, "", "a writable path for the " + what + "; it " + *problem);
   }
-  errno = 0;
-  write(out);
-  out.flush();
-  int error = out ? 0 : (errno != 0 ? errno : EIO);
-  out.close();
-  if (error == 0 && out.fail()) error = errno != 0 ? errno : EIO;
-  if (error != 0) {
-    // The path was fine (the temporary was made): the disk or a limit refused the bytes. Not
-    // bad input; and no half-written temporary stays behind.
-    std::remove(temporary.c_str());
-    throw std::runtime_error("cannot write the " + what + " " + path + ": " +
-                             std::strerror(error));
-  }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    std::remove(temporary.c_str());
-    throw InputError(path, "", "a writable path for the " + what + " (rename failed)");
-  }
+  // Beside the target, then renamed over it: a reader never sees half a file.
+  replaceFileAtomically(path, write, what);
 }
 
 void writeScheduleFile(const std::string& path, const RateSchedule& schedule,

@@ -217,6 +217,18 @@ std::vector<ChildExit> ProcessGroup::stop(const std::vector<std::string>& names,
   return ended;
 }
 
+std::optional<std::string> lastErrorLine(const std::filesystem::path& path) {
+  constexpr std::string_view kMark = ": error: ";
+  std::ifstream in(path);
+  std::optional<std::string> last;
+  for (std::string line; std::getline(in, line);) {
+    if (const std::size_t at = line.find(kMark); at != std::string::npos) {
+      last = line.substr(at + kMark.size());
+    }
+  }
+  return last;
+}
+
 std::string lastLines(const std::filesystem::path& path, std::size_t count) {
   std::ifstream in(path);
   std::deque<std::string> lines;

@@ -245,8 +245,10 @@ std::string meetsText(std::optional<bool> meets) {
 // The arrival mode of the run (the report's "arrivals"), and under timetables what the realized
 // cost line printed before it does not say: its bracket is about Poisson arrivals. A report
 // without the key (a rebuilt one, an older fusion center) says nothing of the mode.
-std::string arrivalsLine(const std::optional<report::ArrivalsRecord>& arrivals) {
-  const std::string mode = arrivals ? arrivals->mode : "not reported";
+std::string arrivalsLine(const std::optional<report::ArrivalsRecord>& arrivals, bool rebuilt) {
+  const std::string mode = arrivals ? arrivals->mode
+                           : rebuilt ? "not known (the episode log keeps no arrival mode)"
+                                     : "not reported";
   if (mode != "timetable") return "arrivals: " + mode;
   return "arrivals: timetable (deterministic instants, the same every episode): the bracket "
          "[info, cov] bounds the Poisson mean of the schedule, not this cost; meets_bracket only "
@@ -305,16 +307,28 @@ std::string measurementsLine(const SummaryRecord& summary) {
 
 // The report as the launcher writes it: over the fusion center's file, atomically, with
 // per_episode streamed in from the episode log when there is one.
-void writeSettled(const RunEnd& end, const RunRecord& run, bool logged) {
+void writeSettled(const RunEnd& end, const RunRecord& run, bool logged, const fs::path& path) {
   const json doc = report::encode(run);
   if (logged) {
-    replaceFileAtomically(end.report_path, [&](std::ostream& out) {
+    replaceFileAtomically(path, [&](std::ostream& out) {
       sensornet::report::writeReportWithLog(out, doc, sensornet::report::episodeLogPath(end.report_path), 2);
       out << '\n';
     });
   } else {
-    replaceFileAtomically(end.report_path, doc.dump(2) + "\n");
+    replaceFileAtomically(path, doc.dump(2) + "\n");
   }
+}
+
+// Where the report goes when its own path refuses it: the fallback folder (the logs'), unless
+// that is the report's own folder, then the system's temporary folder.
+fs::path fallbackPath(const RunEnd& end) {
+  std::error_code ignored;
+  const fs::path folder = end.report_path.parent_path().empty() ? fs::path(".")
+                                                                : end.report_path.parent_path();
+  const bool same = !end.fallback_dir.empty() && fs::equivalent(end.fallback_dir, folder, ignored);
+  const fs::path dir =
+      end.fallback_dir.empty() || same ? fs::temp_directory_path() : end.fallback_dir;
+  return dir / (end.run_id + "-" + end.report_path.filename().string());
 }
 
 }  // namespace
@@ -375,9 +389,17 @@ RunOutcome settleRun(const RunEnd& end) {
   }
   if (outcome.amended) {
     try {
-      writeSettled(end, run, logged);
+      writeSettled(end, run, logged, end.report_path);
     } catch (const std::exception& e) {
+      // Nothing the run measured is lost for a full disk there: the report goes elsewhere.
       outcome.write_problem = e.what();
+      const fs::path elsewhere = fallbackPath(end);
+      try {
+        writeSettled(end, run, logged, elsewhere);
+        outcome.written_to = elsewhere;
+      } catch (const std::exception& again) {
+        *outcome.write_problem += std::string("; nor elsewhere: ") + again.what();
+      }
     }
   }
   outcome.report = std::move(run);
@@ -423,7 +445,7 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
     std::printf("realized cost: not measured (no complete episode)\n");
   }
   if (const std::string line = neesLine(summary); !line.empty()) std::printf("%s\n", line.c_str());
-  std::printf("%s\n", arrivalsLine(run.arrivals).c_str());
+  std::printf("%s\n", arrivalsLine(run.arrivals, outcome.rebuilt).c_str());
   std::printf("%s\n", measurementsLine(summary).c_str());
   const auto ms = [](std::optional<double> seconds) {
     return seconds ? std::optional<double>(1e3 * *seconds) : std::nullopt;
@@ -435,10 +457,15 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
     std::printf("latency publish-to-fusion%s: median %s ms, p99 %s ms\n", which,
                 shown(ms(run.latency_s->median)).c_str(), shown(ms(run.latency_s->p99)).c_str());
   } else {
-    std::printf("latency publish-to-fusion: %s\n",
-                run.external && run.external->fusion_center
-                    ? "not reported by the external fusion center"
-                    : "not measured (no measurement arrived)");
+    // Only a report of the fusion center's own keeps latencies: say why there are none.
+    const char* why = run.external && run.external->fusion_center
+                          ? "not reported by the external fusion center"
+                      : outcome.rebuilt
+                          ? "not known (the fusion center wrote no report, and the episode log "
+                            "it was rebuilt from keeps no latencies)"
+                      : summary.received > 0 ? "not reported"
+                                             : "not measured (no measurement arrived)";
+    std::printf("latency publish-to-fusion: %s\n", why);
   }
   if (delayed) {
     std::printf("emulated network delay: mean %s ms, largest %s ms (emulated time)\n",
@@ -447,7 +474,11 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   for (const sensornet::report::RequirementCheck& check : outcome.checks) {
     std::printf("%s\n", sensornet::report::describe(check).c_str());
   }
-  if (outcome.write_problem) {
+  if (outcome.written_to) {
+    std::printf("report: %s%s, not at its path (%s)\n", outcome.written_to->c_str(),
+                outcome.rebuilt ? " (rebuilt from the episode log)" : "",
+                outcome.write_problem->c_str());
+  } else if (outcome.write_problem) {
     std::printf("report: NOT WRITTEN: %s\n", outcome.write_problem->c_str());
   } else {
     std::printf("report: %s%s\n", report_path.c_str(),
@@ -468,7 +499,7 @@ void printOutcomeJson(const RunOutcome& outcome, const fs::path& report_path) {
   line["arrivals"] = run.arrivals ? json({{"mode", run.arrivals->mode},
                                           {"bracket_note", run.arrivals->bracket_note}})
                                   : json();
-  line["report"] = report_path.string();
+  line["report"] = outcome.written_to.value_or(report_path).string();
   if (outcome.rebuilt && run.rebuilt_from) line["rebuilt_from"] = *run.rebuilt_from;
   if (outcome.write_problem) line["report_error"] = *outcome.write_problem;
   if (!outcome.checks.empty()) line["requirements"] = sensornet::report::toJson(outcome.checks);

@@ -25,12 +25,15 @@ namespace sensornet {
 void checkOutputFile(const std::filesystem::path& path, const std::string& option);
 
 // Writes `text` to a temporary file beside `path`, flushes it to disk and renames it over
-// `path`. Throws std::runtime_error (naming the path) when `path` exists and is not a regular
-// file, or when writing fails; the old file is then left as it was.
-void replaceFileAtomically(const std::filesystem::path& path, const std::string& text);
+// `path`. Throws std::runtime_error when `path` exists and is not a regular file, or when writing
+// fails ("cannot write the <what> <path>: No space left on device": the errno of the write that
+// failed); the old file is then left as it was, and no temporary file stays behind.
+void replaceFileAtomically(const std::filesystem::path& path, const std::string& text,
+                           const std::string& what = {});
 // The same with the text written by `write` (a report too large to hold: streamed).
 void replaceFileAtomically(const std::filesystem::path& path,
-                           const std::function<void(std::ostream&)>& write);
+                           const std::function<void(std::ostream&)>& write,
+                           const std::string& what = {});
 
 // Removes `path` if it is a regular file (a stale result); leaves anything else alone.
 void removeRegularFile(const std::filesystem::path& path);

@@ -77,5 +77,8 @@ class ProcessGroup {
 
 // The last `count` lines of a text file ("" when it cannot be read).
 [[nodiscard]] std::string lastLines(const std::filesystem::path& path, std::size_t count);
+// What a program of ours said last on failing: the text after "error: " of the last line of its
+// log that holds one ("cannot write ...: No space left on device"); nullopt when none does.
+[[nodiscard]] std::optional<std::string> lastErrorLine(const std::filesystem::path& path);
 
 }  // namespace sensornet::launcher

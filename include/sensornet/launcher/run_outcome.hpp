@@ -44,6 +44,9 @@ struct RunEnd {
   std::filesystem::path reference_report;
   std::uint64_t reports_refused = 0;  // external Reports that did not fit the scenario
   int state_dim = 0;  // n: the NEES band of a rebuilt report (0: none)
+  // Where the report goes when report_path refuses it (a full disk): the log folder; empty, or
+  // the report's own folder: the system's temporary folder.
+  std::filesystem::path fallback_dir;
 };
 
 struct RunOutcome {
@@ -53,7 +56,8 @@ struct RunOutcome {
   int exit_code = 1;
   bool amended = false;  // the launcher rewrote the report
   bool rebuilt = false;  // ... from the episode log, the fusion center's being missing
-  std::optional<std::string> write_problem;  // the amended report could not be written
+  std::optional<std::string> write_problem;  // the amended report could not be written there
+  std::optional<std::filesystem::path> written_to;  // ... and was written here instead
   std::vector<sensornet::report::RequirementCheck> checks;  // of RunEnd::requirements, in order
 };
 

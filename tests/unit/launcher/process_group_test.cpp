@@ -40,6 +40,24 @@ TEST(ProcessGroup, ReportsTheExitStatusAndTheLog) {
   EXPECT_EQ(lastLines(*group.logOf("three"), 1), "hello\n");
 }
 
+// A program of ours says why it failed in an "error: " line; the last such line is the cause.
+TEST(ProcessGroup, TheLastErrorLineOfALogIsItsCause) {
+  ScratchDir dir;
+  ProcessGroup group;
+  group.start(shell("full",
+                    "echo '[x] info: error: not at the start'; echo 'x: error: first' >&2; "
+                    "echo 'fusion_center: error: cannot write r.json: No space left on device' "
+                    ">&2; echo done; exit 1",
+                    dir));
+  ASSERT_TRUE(group.waitFor("full", 10s).has_value());
+  EXPECT_EQ(lastErrorLine(*group.logOf("full")),
+            std::optional<std::string>("cannot write r.json: No space left on device"));
+  group.start(shell("fine", "echo all well", dir));
+  ASSERT_TRUE(group.waitFor("fine", 10s).has_value());
+  EXPECT_EQ(lastErrorLine(*group.logOf("fine")), std::nullopt);
+  EXPECT_EQ(lastErrorLine(dir.file("no-such.log")), std::nullopt);
+}
+
 TEST(ProcessGroup, AProgramThatCannotStartExitsWith127) {
   ScratchDir dir;
   ProcessGroup group;

@@ -250,11 +250,13 @@ TEST(SettleRun, CleanExternalFusionCenterCompletes) {
   EXPECT_TRUE(writtenRecord(path).faults.empty());
 }
 
-TEST(SettleRun, AReportPathThatIsNoFileIsNotWrittenThrough) {
+TEST(SettleRun, AReportPathThatIsNoFileIsNotWrittenThroughButBesideTheLogs) {
   ScratchDir dir;
   const std::filesystem::path path = dir.file("report.json");
   std::filesystem::create_directory(path);  // the fusion center could write nothing there
   RunEnd end = endOf(path);
+  end.fallback_dir = dir.file("logs");
+  std::filesystem::create_directory(end.fallback_dir);
   end.faults.push_back(
       {FaultKind::ProcessFailed, kFusionCenter, {}, {0, 0.0}, "exited with status 1"});
 
@@ -264,6 +266,38 @@ TEST(SettleRun, AReportPathThatIsNoFileIsNotWrittenThrough) {
   ASSERT_TRUE(outcome.write_problem.has_value());
   EXPECT_NE(outcome.write_problem->find(path.string()), std::string::npos);
   EXPECT_TRUE(std::filesystem::is_directory(path));
+  // Nothing is lost: the report is whole beside the logs, and says the same.
+  ASSERT_TRUE(outcome.written_to.has_value());
+  EXPECT_EQ(*outcome.written_to, end.fallback_dir / (std::string(kRun) + "-report.json"));
+  EXPECT_EQ(writtenRecord(*outcome.written_to).status, RunStatus::Failed);
+}
+
+// The fusion center died before its report (a full disk), and its path refuses the launcher's
+// too: the report rebuilt from the episode log goes beside the logs with every logged episode;
+// when the logs share the report's folder, to the system's temporary folder.
+TEST(SettleRun, AReportRefusedWhereAskedGoesElsewhereWithEveryLoggedEpisode) {
+  ScratchDir dir;
+  const std::filesystem::path path = dir.file("report.json");
+  writeFusionReport(path, kRun, "completed", {entry(0, 2.0), entry(1, 3.0), entry(2, 2.5)});
+  std::filesystem::remove(path);
+  std::filesystem::create_directory(path);  // refuses a file; the episode log beside it stays
+  RunEnd end = endOf(path);
+  end.faults.push_back(
+      {FaultKind::ProcessFailed, kFusionCenter, {}, {2, 0.0}, "exited with status 1"});
+  for (const bool logs_beside_the_report : {false, true}) {
+    end.fallback_dir = logs_beside_the_report ? dir.file("") : dir.file("logs");
+    std::filesystem::create_directories(end.fallback_dir);
+    const RunOutcome outcome = settleRun(end);
+    ASSERT_TRUE(outcome.written_to.has_value()) << outcome.write_problem.value_or("");
+    EXPECT_TRUE(outcome.rebuilt);
+    const std::filesystem::path folder = logs_beside_the_report
+                                             ? std::filesystem::temp_directory_path()
+                                             : end.fallback_dir;
+    EXPECT_EQ(outcome.written_to->parent_path(), folder);
+    EXPECT_EQ(episodesOf(writtenRecord(*outcome.written_to)),
+              (std::vector<std::uint32_t>{0, 1, 2}));
+    std::filesystem::remove(*outcome.written_to);
+  }
 }
 
 }  // namespace
