@@ -27,6 +27,7 @@
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/output_path.hpp"
 #include "sensornet/io/scenario_file.hpp"
+#include "sensornet/core/input_error.hpp"
 #include "sensornet/report/report_files.hpp"
 
 // The fusion center's wiring: DDS endpoints, codecs from wire types to the events of
@@ -43,6 +44,7 @@ using nlohmann::json;
 struct ServeOptions {
   wire::RunOptions run;
   std::string report_path;
+  std::string report_fallback;  // --report-fallback: where a report its path refuses goes
   emulator::FusionCenterConfig core;  // its lag, stall and keep-up limits
   bool json = false;
   bool resume = false;           // restarted by the launcher: go on from the episode log
@@ -173,9 +175,12 @@ class FusionCenter {
     }
   }
 
+  // Until none is left: carrying one out may make more (a refused write's fault).
   void carryOut() {
-    for (emulator::FusionAction& action : core_.takeActions()) {
-      std::visit([this](auto& a) { carryOut(a); }, action);
+    for (auto actions = core_.takeActions(); !actions.empty(); actions = core_.takeActions()) {
+      for (emulator::FusionAction& action : actions) {
+        std::visit([this](auto& a) { carryOut(a); }, action);
+      }
     }
   }
   void carryOut(const emulator::PublishReport& a) {
@@ -197,8 +202,15 @@ class FusionCenter {
     (void)dds_.state_writer.write(
         wire::fusionStateSample(options_.run.run_id, a, values, wallNowNs()));
   }
+  // A log the disk refuses (full) costs its later lines, not the run: the core holds them.
   void carryOut(const emulator::AppendEpisodeLog& a) {
-    if (episode_log_) episode_log_->append(a.entry);
+    if (!episode_log_) return;
+    try {
+      episode_log_->append(a.entry);
+    } catch (const std::exception& e) {
+      episode_log_.reset();
+      core_.onEpisodeLogRefused(a.entry, e.what());
+    }
   }
   // Kept by the core for the report, and in the fault log for a restarted fusion center. A
   // fault log that cannot take it costs only what a restart would have carried over: a warning.
@@ -211,24 +223,40 @@ class FusionCenter {
     }
   }
   static void carryOut(const emulator::LogLine& a) { spdlog::log(a.level, "{}", a.text); }
+  void writeReport(const std::string& path, const json& doc) {
+    writeJsonFile(path, "run report", [&](std::ostream& out) {
+      core_.report().write(out, doc, 2);
+      out << '\n';
+    });
+  }
   void carryOut(const emulator::WriteFinalReport& a) {
+    json doc = a.doc;
     if (!options_.report_path.empty()) {
-      writeJsonFile(options_.report_path, "run report", [&](std::ostream& out) {
-        core_.report().write(out, a.doc, 2);
-        out << '\n';
-      });
-      spdlog::info("report written to {}", options_.report_path);
+      std::string written = options_.report_path;
+      try {
+        writeReport(options_.report_path, a.doc);
+      } catch (const InputError&) {
+        throw;
+      } catch (const std::exception& e) {  // a full disk: nothing the run measured is lost
+        written = sensornet::report::fallbackReportPath(options_.report_path,
+                                                        options_.run.run_id,
+                                                        options_.report_fallback)
+                      .string();
+        doc = core_.reportRefused(a, e.what(), written).doc;
+        writeReport(written, doc);
+      }
+      spdlog::info("report written to {}", written);
       if (options_.page) {
-        if (const auto problem = sensornet::report::writePageBeside(options_.report_path)) {
+        if (const auto problem = sensornet::report::writePageBeside(written)) {
           spdlog::warn("{}", *problem);
         } else {
           spdlog::info("report page written to {}",
-                       sensornet::report::pagePathBeside(options_.report_path).string());
+                       sensornet::report::pagePathBeside(written).string());
         }
       }
     }
     if (options_.json) {
-      core_.report().write(std::cout, a.doc, -1);
+      core_.report().write(std::cout, doc, -1);
       std::cout << std::endl;
     }
   }
@@ -268,6 +296,10 @@ Subcommand addServeCommand(CLI::App& app) {
   CLI::Option* report = cmd->add_option("--report", options->report_path,
                   "final report (JSON) written when the run shuts down (missing folders are made "
                   "at start); the episode log goes beside it");
+  cmd->add_option("--report-fallback", options->report_fallback,
+                  "where the report goes when the disk of --report refuses it (full): "
+                  "DIR/<run id>-<report's name>, with a write_failed fault that says so (the "
+                  "launcher gives its log folder; default: the system's temporary folder)");
   cmd->add_option("--lag", options->core.lag_s,
                   "wall seconds a measurement may take to arrive before it is fused (a later "
                   "one is still fused in order: the episode is re-fused at its end)")

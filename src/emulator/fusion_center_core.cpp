@@ -616,7 +616,7 @@ void FusionCenterCore::finishRestarted(std::uint32_t episode, std::int64_t now) 
                                    : result.bracket;
   }
   const json entry = episodeEntry(result);
-  emit<AppendEpisodeLog>(entry);
+  if (!episode_log_refused_) emit<AppendEpisodeLog>(entry);
   report_->add(entry);
   const std::vector<int> lacking = sensorsLackingWriters();
   answered_without_.insert(lacking.begin(), lacking.end());
@@ -691,7 +691,7 @@ void FusionCenterCore::finishEpisode(std::uint32_t number, OpenEpisode& open,
   traceCovariance(*open.fusion, result);
   report_->addLatencies(result.latencies_s);
   const json entry = episodeEntry(result);
-  emit<AppendEpisodeLog>(entry);
+  if (!episode_log_refused_) emit<AppendEpisodeLog>(entry);
   report_->add(entry);
   if (resumed_) resumed_->noteFused(number);
   const RunSummary s = report_->summary();
@@ -834,8 +834,35 @@ RunStatus FusionCenterCore::finish(const std::optional<RunEnd>& end,
   }
   while (!restarted_.empty()) finishRestarted(restarted_.begin()->first, now);
   const RunStatus status = report::decideRunStatus(gatherStatusEvidence(end, rejected_by_inputs));
-  emit<WriteFinalReport>(status, finalReport(status, written_at));
+  emit<WriteFinalReport>(status, finalReport(status, written_at), written_at);
   return status;
+}
+
+void FusionCenterCore::onEpisodeLogRefused(const json& entry, const std::string& why) {
+  if (episode_log_refused_ || !report_) return;
+  episode_log_refused_ = true;
+  report_->holdFrom(entry);
+  const auto episode = entry.value("episode", std::uint32_t{0});
+  const std::string detail =
+      why + "; episode " + std::to_string(episode) +
+      " and later ones are in the report only (a restarted fusion center would not resume them)";
+  log(spdlog::level::err, detail);
+  recordFault(
+      faultEntry(FaultKind::WriteFailed, kProcess, std::nullopt, episode, std::nullopt, detail));
+}
+
+WriteFinalReport FusionCenterCore::reportRefused(const WriteFinalReport& refused,
+                                                 const std::string& why,
+                                                 const std::filesystem::path& elsewhere) {
+  const std::string detail = why + "; the report is at " + elsewhere.string();
+  log(spdlog::level::err, detail);
+  recordFault(
+      faultEntry(FaultKind::WriteFailed, kProcess, std::nullopt, std::nullopt, std::nullopt, detail));
+  report::StatusEvidence evidence;
+  evidence.earlier = refused.status;
+  evidence.faults = faults_.size();
+  const RunStatus status = report::decideRunStatus(evidence);
+  return {status, finalReport(status, refused.written_at), refused.written_at};
 }
 
 // The one fault of episodes still open at the run's end: which episodes, which sensors they

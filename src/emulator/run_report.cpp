@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <deque>
 #include <map>
 #include <stdexcept>
 
@@ -152,8 +153,13 @@ RunReport::RunReport(std::string run_id, std::string scenario_digest, int sensor
       episode_log_(std::move(episode_log)),
       sensor_totals_(static_cast<std::size_t>(std::max(sensor_count, 0))) {}
 
+void RunReport::holdFrom(const json& entry) {
+  if (!holding_) episodes_.push_back(entry);
+  holding_ = true;
+}
+
 void RunReport::add(const json& e) {
-  if (!episode_log_) episodes_.push_back(e);
+  if (!episode_log_ || holding_) episodes_.push_back(e);
   ++episode_count_;
   const json none = json::array();
   // An entry's per-sensor values onto the totals (an entry may list fewer or more sensors).
@@ -487,15 +493,23 @@ json RunReport::toJson(const std::string& status, const json& faults,
 }
 
 void RunReport::forEachEpisode(const std::function<void(const json&)>& each) const {
-  if (!episode_log_) {  // as from a log: in episode order, the first of repeated ones
-    std::map<std::uint32_t, const json*> by_episode;
-    for (const json& entry : episodes_) {
-      by_episode.emplace(entry.at("episode").get<std::uint32_t>(), &entry);
-    }
-    for (const auto& [episode, entry] : by_episode) each(*entry);
+  if (episode_log_ && episodes_.empty()) {
+    forEachReportedEpisode(*episode_log_, each);
     return;
   }
-  forEachReportedEpisode(*episode_log_, each);
+  // As from a log: in episode order, the first of repeated ones (the log's before those held).
+  std::deque<json> logged;
+  std::map<std::uint32_t, const json*> by_episode;
+  if (episode_log_) {
+    forEachReportedEpisode(*episode_log_, [&](const json& entry) {
+      logged.push_back(entry);
+      by_episode.emplace(entry.at("episode").get<std::uint32_t>(), &logged.back());
+    });
+  }
+  for (const json& entry : episodes_) {
+    by_episode.emplace(entry.at("episode").get<std::uint32_t>(), &entry);
+  }
+  for (const auto& [episode, entry] : by_episode) each(*entry);
 }
 
 void RunReport::write(std::ostream& out, const json& doc, int indent) const {

@@ -84,8 +84,10 @@ LaunchPlan planLaunch(const LaunchOptions& options, const PlanContext& context) 
       plan.default_report ? plan.log_dir / "report.json" : fs::absolute(options.report_path);
 
   if (!options.external_fusion_center) {
+    // A report its disk refuses (full) goes beside the logs (report_files.hpp).
     std::vector<std::string> serve = {context.programs.fusion_center, "serve", "--report",
-                                      plan.report_path.string()};
+                                      plan.report_path.string(), "--report-fallback",
+                                      plan.log_dir.string()};
     if (!options.metrics_address.empty()) add(serve, kMetricsFlag, options.metrics_address);
     plan.children.push_back(
         childSpec(kFusionCenter, serve, context, SecurityRole::FusionCenter, plan.log_dir));

@@ -319,16 +319,15 @@ void writeSettled(const RunEnd& end, const RunRecord& run, bool logged, const fs
   }
 }
 
-// Where the report goes when its own path refuses it: the fallback folder (the logs'), unless
-// that is the report's own folder, then the system's temporary folder.
 fs::path fallbackPath(const RunEnd& end) {
-  std::error_code ignored;
-  const fs::path folder = end.report_path.parent_path().empty() ? fs::path(".")
-                                                                : end.report_path.parent_path();
-  const bool same = !end.fallback_dir.empty() && fs::equivalent(end.fallback_dir, folder, ignored);
-  const fs::path dir =
-      end.fallback_dir.empty() || same ? fs::temp_directory_path() : end.fallback_dir;
-  return dir / (end.run_id + "-" + end.report_path.filename().string());
+  return report::fallbackReportPath(end.report_path, end.run_id, end.fallback_dir);
+}
+
+// A file of the run was refused (write_failed): the episode log may lack episodes the report
+// holds, so per_episode comes from the report itself.
+bool someWriteFailed(const RunRecord& run) {
+  return std::any_of(run.faults.begin(), run.faults.end(),
+                     [](const FaultRecord& f) { return f.kind == emulator::FaultKind::WriteFailed; });
 }
 
 }  // namespace
@@ -338,7 +337,7 @@ RunOutcome settleRun(const RunEnd& end) {
   ReportSeen seen;
   const fs::path log = sensornet::report::episodeLogPath(end.report_path);
   std::error_code missing;
-  const bool logged = fs::is_regular_file(log, missing);
+  bool logged = fs::is_regular_file(log, missing);
   std::optional<RunRecord> read;
   if (end.external_fusion_center) {  // no process of ours wrote one: the Reports make it
     read = externalReport(end, logged);
@@ -346,6 +345,27 @@ RunOutcome settleRun(const RunEnd& end) {
     outcome.amended = true;
   } else {
     read = readRunReport(end.report_path, end.run_id, logged, seen.problem);
+    fs::path read_from = end.report_path;
+    if (!read) {  // the fusion center's report where a full disk made it go
+      const fs::path elsewhere = fallbackPath(end);
+      std::string ignored;
+      if (fs::is_regular_file(elsewhere, missing)) {
+        read = readRunReport(elsewhere, end.run_id, false, ignored);
+      }
+      if (read) {
+        read_from = elsewhere;
+        outcome.written_to = elsewhere;
+        outcome.write_problem = "the fusion center could not write it there (its write_failed "
+                                "fault says why)";
+      }
+    }
+    if (read && logged && someWriteFailed(*read)) {
+      std::string ignored;
+      if (auto whole = readRunReport(read_from, end.run_id, false, ignored)) {
+        read = std::move(whole);
+        logged = false;
+      }
+    }
     seen.readable = read.has_value();
     if (!read) {
       read = rebuildReport(end, logged);

@@ -171,6 +171,18 @@ ReportFile readReport(const std::filesystem::path& path, EpisodeEntries entries)
 }
 
 
+std::filesystem::path fallbackReportPath(const std::filesystem::path& report_path,
+                                         const std::string& run_id,
+                                         const std::filesystem::path& fallback_dir) {
+  namespace fs = std::filesystem;
+  std::error_code ignored;
+  const fs::path folder =
+      report_path.parent_path().empty() ? fs::path(".") : report_path.parent_path();
+  const bool usable = !fallback_dir.empty() && !fs::equivalent(fallback_dir, folder, ignored);
+  const fs::path dir = usable ? fallback_dir : fs::temp_directory_path();
+  return dir / (run_id + "-" + report_path.filename().string());
+}
+
 std::filesystem::path episodeLogPath(const std::filesystem::path& report_path) {
   std::filesystem::path log = report_path;
   if (log.extension() == ".json") return log.replace_extension(".jsonl");

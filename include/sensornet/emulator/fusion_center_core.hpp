@@ -155,6 +155,7 @@ struct RecordFault {
 struct WriteFinalReport {
   RunStatus status = RunStatus::Completed;
   nlohmann::json doc;  // without per_episode: RunReport::write streams it in (report())
+  std::string written_at;
 };
 using FusionAction =
     std::variant<PublishReport, PublishState, AppendEpisodeLog, RecordFault, LogLine, WriteFinalReport>;
@@ -181,6 +182,14 @@ class FusionCenterCore {
   // stops this one: the run ends interrupted with that death as its cause, recorded here since
   // no launcher is left to add it to the report (issue 31).
   void onLauncherGone(const std::string& detail, std::int64_t now);
+  // The episode log refused `entry` (a full disk, `why` says so): a write_failed fault; this
+  // entry and every later one are held for the report instead, and no more are logged.
+  void onEpisodeLogRefused(const nlohmann::json& entry, const std::string& why);
+  // After finish(): the report's path refused `refused` (a full disk, `why`); it goes to
+  // `elsewhere` instead, with a write_failed fault that says so (the run at least degraded).
+  [[nodiscard]] WriteFinalReport reportRefused(const WriteFinalReport& refused,
+                                               const std::string& why,
+                                               const std::filesystem::path& elsewhere);
   // The main loop's turn: its own stalls, fusion up to the watermark, episodes closed or timed out.
   void tick(std::int64_t now);
   // The run ended (`end`) or was stopped by a signal (nullopt): what is open is closed, the
@@ -283,6 +292,7 @@ class FusionCenterCore {
   // still owed. When they were last heard dates the death better than the notice.
   std::map<int, std::int64_t> silent_from_ns_;
   bool launcher_gone_ = false;           // onLauncherGone: the run's cause is the launcher's death
+  bool episode_log_refused_ = false;     // onEpisodeLogRefused: entries are held, not logged
   std::size_t restart_fault_ = 0;        // resumed: where this life's restart fault is in faults_
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)

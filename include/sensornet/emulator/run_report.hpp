@@ -149,6 +149,9 @@ class RunReport {
 
   // An episode entry (episodeEntry, or a line read back from the log).
   void add(const nlohmann::json& entry);
+  // The episode log refused `entry` (added already; a full disk): it and every entry added from
+  // now on are held here, and `per_episode` is the log's entries followed by these.
+  void holdFrom(const nlohmann::json& entry);
   // Publish-to-fusion latencies, for the run's median and p99 (without them, the summary uses
   // the median of the episodes' medians).
   void addLatencies(const std::vector<double>& latencies_s);
@@ -180,7 +183,9 @@ class RunReport {
   int sensor_count_;
   int state_dim_;
   std::optional<std::filesystem::path> episode_log_;
-  std::vector<nlohmann::json> episodes_;  // without an episode log only
+  // Without an episode log: every entry; with one: those it refused (holdFrom) and later ones.
+  std::vector<nlohmann::json> episodes_;
+  bool holding_ = false;
   // Running sums over every episode (counts) and over complete ones (statistics).
   std::uint32_t episode_count_ = 0;
   std::uint32_t complete_count_ = 0;

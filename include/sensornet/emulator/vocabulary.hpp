@@ -51,6 +51,9 @@ enum class FaultKind {
   ReportInvalid,      // the report says something the launcher cannot believe
   SensorDied,         // a sensor's process died (the failure policy then acts)
   RecordingIncomplete,  // --record could not write everything (a full disk): the file is short
+  // A file of the run could not be written (a full disk): the detail names the file and the
+  // cause, and where what it should have held went instead.
+  WriteFailed,
 };
 
 // Why a sample on the wire was refused: counted by reason in the report's `rejected`, never
@@ -113,7 +116,7 @@ struct Words<emulator::RunStatus> {
 template <>
 struct Words<emulator::FaultKind> {
   using F = emulator::FaultKind;
-  static constexpr std::array<WordOf<F>, 23> kTable{{{F::Stall, "stall"},
+  static constexpr std::array<WordOf<F>, 24> kTable{{{F::Stall, "stall"},
                                                      {F::Lost, "lost"},
                                                      {F::Overload, "overload"},
                                                      {F::SensorLag, "sensor_lag"},
@@ -136,7 +139,8 @@ struct Words<emulator::FaultKind> {
                                                      {F::ReportInvalid, "report_invalid"},
                                                      {F::SensorDied, "sensor_died"},
                                                      {F::RecordingIncomplete,
-                                                      "recording_incomplete"}}};
+                                                      "recording_incomplete"},
+                                                     {F::WriteFailed, "write_failed"}}};
 };
 
 template <>

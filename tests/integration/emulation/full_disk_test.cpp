@@ -1,9 +1,10 @@
-// A full disk where the report goes (issue 49): the report's folder is a 12 KiB tmpfs, which
-// takes the episode log of six episodes but not the report. Every closing line must say the
-// truth: the fault names the cause and the file (not only "exited with status 1"), the latency
-// is not called unmeasured while measurements arrived, and the report is written beside the
-// logs, where the closing line says, with every measurement accounted for. The test needs to
-// mount a tmpfs (root with CAP_SYS_ADMIN) and skips where it cannot; it always unmounts.
+// A full disk where the report goes (issue 49): the report's folder is a small tmpfs. At 12 KiB
+// it takes the episode log of six episodes but not the report; at 4 KiB not even the whole log.
+// Either way nothing the run measured is lost and every closing line says the truth: a
+// write_failed fault names the file and the cause (the run is degraded, exit 3: every episode
+// ran, a file is not where it was asked for), the latency is measured, and the report is beside
+// the logs, where the closing line says, with all six episodes and every measurement accounted
+// for. The test mounts a tmpfs (root with CAP_SYS_ADMIN), skips where it cannot, always unmounts.
 
 #include <gtest/gtest.h>
 #include <sys/mount.h>
@@ -14,6 +15,7 @@
 #include <string>
 
 #include "launch_fixture.hpp"
+#include "sensornet/report/report_files.hpp"
 
 namespace sensornet {
 namespace {
@@ -47,48 +49,65 @@ class SmallDisk {
   std::string error_;
 };
 
-class DiskFull : public testing::LaunchTest {};
+class DiskFull : public testing::LaunchTest {
+ protected:
+  // Six episodes with the report on a tmpfs of `kib` KiB: the launch's result and its report.
+  void runOnDiskOf(int kib, bool log_refused) {
+    const LeftoverGuard guard(run_id_);
+    const fs::path full = dir_ / "full";
+    const SmallDisk disk(full, kib);
+    if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here: " << disk.error();
+    const fs::path logs = dir_ / "logs";
+    const fs::path asked = full / "report.json";
+    const ProcessResult r = runProcess(launchArgs(6, "4", asked, logs), 120s);
 
-TEST_F(DiskFull, TheReportsFolderFillingUpIsToldTruthfullyAndNothingIsLost) {
-  const LeftoverGuard guard(run_id_);
-  const fs::path full = dir_ / "full";
-  const SmallDisk disk(full, 12);
-  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here: " << disk.error();
-  const fs::path logs = dir_ / "logs";
-  const ProcessResult r = runProcess(launchArgs(6, "4", full / "report.json", logs), 120s);
+    EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+    EXPECT_NE(r.out.find("fault: write_failed in fusion_center"), std::string::npos) << r.out;
+    EXPECT_NE(
+        r.out.find("cannot write the run report " + asked.string() + ": No space left on device"),
+        std::string::npos)
+        << r.out;
+    EXPECT_EQ(r.out.find("process_failed"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("latency publish-to-fusion: median "), std::string::npos) << r.out;
 
-  // The fusion center could not write its report: it failed, and the fault says why and where.
-  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
-  EXPECT_NE(r.out.find("fault: process_failed in fusion_center: exited with status 1: cannot "
-                       "write the run report " +
-                       (full / "report.json").string() + ": No space left on device"),
-            std::string::npos)
-      << r.out;
-  // Measurements arrived: their latency is not known, not "not measured".
-  EXPECT_EQ(r.out.find("no measurement arrived"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("latency publish-to-fusion: not known"), std::string::npos) << r.out;
-
-  // The report is beside the logs, as the closing line says, whole.
-  const fs::path elsewhere = logs / (run_id_ + "-report.json");
-  EXPECT_NE(r.out.find("report: " + elsewhere.string()), std::string::npos) << r.out;
-  EXPECT_FALSE(fs::exists(full / "report.json"));
-  const nlohmann::json report = testing::readJson(elsewhere);
-  EXPECT_EQ(report.at("status"), "failed");
-  // Every measurement sent is accounted for, recomputed from the episodes themselves.
-  ASSERT_EQ(report.at("per_episode").size(), 6u) << report.dump(1).substr(0, 2000);
-  std::uint64_t sent = 0, received = 0, lost = 0;
-  for (const nlohmann::json& e : report.at("per_episode")) {
-    for (const auto& n : e.at("sent")) sent += n.get<std::uint64_t>();
-    for (const auto& n : e.at("received")) received += n.get<std::uint64_t>();
-    for (const auto& n : e.at("lost")) lost += n.get<std::uint64_t>();
+    // The report is beside the logs, as the closing line says, whole.
+    const fs::path elsewhere = logs / (run_id_ + "-report.json");
+    EXPECT_NE(r.out.find("report: " + elsewhere.string() + ", not at its path"), std::string::npos)
+        << r.out;
+    EXPECT_FALSE(fs::exists(asked));
+    const nlohmann::json report = testing::readJson(elsewhere);
+    EXPECT_EQ(report.at("status"), "degraded");
+    std::size_t refused_log = 0;
+    for (const nlohmann::json& f : report.at("faults")) {
+      if (f.at("kind") == "write_failed" &&
+          f.at("detail").get<std::string>().find(
+              sensornet::report::episodeLogPath(asked).string()) != std::string::npos) {
+        ++refused_log;
+      }
+    }
+    EXPECT_EQ(refused_log, log_refused ? 1u : 0u) << report.at("faults").dump(1);
+    // Every episode, and every measurement sent accounted for, recomputed from the episodes.
+    ASSERT_EQ(report.at("per_episode").size(), 6u) << report.at("faults").dump(1);
+    std::uint64_t sent = 0, received = 0, lost = 0;
+    for (std::size_t k = 0; k < 6; ++k) {
+      const nlohmann::json& e = report.at("per_episode").at(k);
+      EXPECT_EQ(e.at("episode"), k);
+      for (const auto& n : e.at("sent")) sent += n.get<std::uint64_t>();
+      for (const auto& n : e.at("received")) received += n.get<std::uint64_t>();
+      for (const auto& n : e.at("lost")) lost += n.get<std::uint64_t>();
+    }
+    EXPECT_GT(sent, 0u);
+    EXPECT_EQ(sent, received + lost);
+    EXPECT_NE(r.out.find("measurements: " + std::to_string(sent) + " sent, " +
+                         std::to_string(received) + " received"),
+              std::string::npos)
+        << r.out;
   }
-  EXPECT_GT(sent, 0u);
-  EXPECT_EQ(sent, received + lost);
-  EXPECT_NE(r.out.find("measurements: " + std::to_string(sent) + " sent, " +
-                       std::to_string(received) + " received"),
-            std::string::npos)
-      << r.out;
-}
+};
+
+TEST_F(DiskFull, AReportItsFolderCannotTakeGoesBesideTheLogs) { runOnDiskOf(12, false); }
+
+TEST_F(DiskFull, AnEpisodeLogCutShortLosesNoEpisode) { runOnDiskOf(4, true); }
 
 }  // namespace
 }  // namespace sensornet

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -273,6 +275,33 @@ TEST(RunReport, RebuildsTheSameReportFromItsEpisodeLog) {
   EXPECT_EQ(rebuilt.at("summary"), original.at("summary"));
   EXPECT_EQ(rebuilt.at("sensors"), original.at("sensors"));
   EXPECT_EQ(rebuilt.at("summary").at("episodes_incomplete"), 1);
+}
+
+// A full disk refuses the episode log from episode 2 on: the report holds episodes 2 and 3 itself,
+// and per_episode is every episode once, in order, equal to a report that kept them all.
+TEST(RunReport, HoldsWhatTheEpisodeLogRefusedAndReportsEveryEpisode) {
+  const ScratchDir scratch;
+  const std::filesystem::path log_path = scratch.path() / "report.jsonl";
+  RunReport logged("r", "d", 2, 3, log_path);
+  RunReport in_memory("r", "d", 2, 3);
+  {
+    EpisodeLog log(log_path);
+    for (std::uint32_t i = 0; i < 4; ++i) {
+      const nlohmann::json entry = episodeEntry(episodeWith(i, 2.0 + i, 1.0, i != 1));
+      logged.add(entry);
+      in_memory.add(entry);
+      if (i < 2) log.append(entry);
+      if (i == 2) logged.holdFrom(entry);  // refused: the core holds it, and what follows
+    }
+  }
+  const nlohmann::json doc =
+      logged.toJsonWithoutEpisodes("degraded", nlohmann::json::array(), nlohmann::json::array());
+  std::ostringstream written;
+  logged.write(written, doc, -1);
+  const nlohmann::json expected =
+      in_memory.toJson("degraded", nlohmann::json::array(), nlohmann::json::array());
+  EXPECT_EQ(nlohmann::json::parse(written.str()).at("per_episode"), expected.at("per_episode"));
+  EXPECT_EQ(readEpisodeLog(log_path).size(), 2u);
 }
 
 // A restarted fusion center: the log it died with (episodes 0, 2 and 3 finished, 1 was still

@@ -59,7 +59,7 @@ TEST(LaunchPlan, ByDefaultFusionCenterThenOneAgentPerSensorThenCoordinator) {
   EXPECT_EQ(plan.report_path, "/scratch/run-7/report.json");
   EXPECT_EQ(child(plan, "fusion_center").argv,
             (Argv{"/bin/fusion_center", "serve", "--report", "/scratch/run-7/report.json",
-                  "--run-id", "run-7"}));
+                  "--report-fallback", "/scratch/run-7", "--run-id", "run-7"}));
   EXPECT_EQ(child(plan, "sensor_agent-1").argv,
             (Argv{"/bin/sensor_agent", "--sensors", "1", "--run-id", "run-7"}));
   EXPECT_EQ(child(plan, "sensor_agent-1").log_path, "/scratch/run-7/sensor_agent-1.log");
