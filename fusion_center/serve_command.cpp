@@ -229,6 +229,24 @@ class FusionCenter {
       out << '\n';
     });
   }
+  // The report its path refused (`why`) where the fallbacks take it (report_files.hpp), with
+  // the fault that says so in `doc`; throws when none does.
+  std::string writeElsewhere(const emulator::WriteFinalReport& a, const std::string& why,
+                             json& doc) {
+    std::string problems = why;
+    for (const auto& path : sensornet::report::fallbackReportPaths(
+             options_.report_path, options_.run.run_id, options_.report_fallback)) {
+      try {
+        const emulator::WriteFinalReport again = core_.reportRefused(a, problems, path);
+        writeReport(path.string(), again.doc);
+        doc = again.doc;
+        return path.string();
+      } catch (const std::exception& e) {
+        problems += std::string("; nor ") + e.what();
+      }
+    }
+    throw std::runtime_error(problems);
+  }
   void carryOut(const emulator::WriteFinalReport& a) {
     json doc = a.doc;
     if (!options_.report_path.empty()) {
@@ -238,12 +256,7 @@ class FusionCenter {
       } catch (const InputError&) {
         throw;
       } catch (const std::exception& e) {  // a full disk: nothing the run measured is lost
-        written = sensornet::report::fallbackReportPath(options_.report_path,
-                                                        options_.run.run_id,
-                                                        options_.report_fallback)
-                      .string();
-        doc = core_.reportRefused(a, e.what(), written).doc;
-        writeReport(written, doc);
+        written = writeElsewhere(a, e.what(), doc);
       }
       spdlog::info("report written to {}", written);
       if (options_.page) {

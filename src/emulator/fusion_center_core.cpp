@@ -856,8 +856,14 @@ WriteFinalReport FusionCenterCore::reportRefused(const WriteFinalReport& refused
                                                  const std::filesystem::path& elsewhere) {
   const std::string detail = why + "; the report is at " + elsewhere.string();
   log(spdlog::level::err, detail);
-  recordFault(
-      faultEntry(FaultKind::WriteFailed, kProcess, std::nullopt, std::nullopt, std::nullopt, detail));
+  report::FaultRecord fault =
+      faultEntry(FaultKind::WriteFailed, kProcess, std::nullopt, std::nullopt, std::nullopt, detail);
+  if (report_refused_fault_) {  // a fallback refused it too: one fault, saying where it went
+    faults_[*report_refused_fault_] = std::move(fault);
+  } else {
+    report_refused_fault_ = faults_.size();
+    recordFault(std::move(fault));
+  }
   report::StatusEvidence evidence;
   evidence.earlier = refused.status;
   evidence.faults = faults_.size();

@@ -319,8 +319,8 @@ void writeSettled(const RunEnd& end, const RunRecord& run, bool logged, const fs
   }
 }
 
-fs::path fallbackPath(const RunEnd& end) {
-  return report::fallbackReportPath(end.report_path, end.run_id, end.fallback_dir);
+std::vector<fs::path> fallbackPaths(const RunEnd& end) {
+  return report::fallbackReportPaths(end.report_path, end.run_id, end.fallback_dir);
 }
 
 // A file of the run was refused (write_failed): the episode log may lack episodes the report
@@ -346,12 +346,10 @@ RunOutcome settleRun(const RunEnd& end) {
   } else {
     read = readRunReport(end.report_path, end.run_id, logged, seen.problem);
     fs::path read_from = end.report_path;
-    if (!read) {  // the fusion center's report where a full disk made it go
-      const fs::path elsewhere = fallbackPath(end);
+    for (const fs::path& elsewhere : fallbackPaths(end)) {  // where a full disk made it go
       std::string ignored;
-      if (fs::is_regular_file(elsewhere, missing)) {
-        read = readRunReport(elsewhere, end.run_id, false, ignored);
-      }
+      if (read || !fs::is_regular_file(elsewhere, missing)) continue;
+      read = readRunReport(elsewhere, end.run_id, false, ignored);
       if (read) {
         read_from = elsewhere;
         outcome.written_to = elsewhere;
@@ -413,12 +411,15 @@ RunOutcome settleRun(const RunEnd& end) {
     } catch (const std::exception& e) {
       // Nothing the run measured is lost for a full disk there: the report goes elsewhere.
       outcome.write_problem = e.what();
-      const fs::path elsewhere = fallbackPath(end);
-      try {
-        writeSettled(end, run, logged, elsewhere);
-        outcome.written_to = elsewhere;
-      } catch (const std::exception& again) {
-        *outcome.write_problem += std::string("; nor elsewhere: ") + again.what();
+      outcome.written_to.reset();
+      for (const fs::path& elsewhere : fallbackPaths(end)) {
+        try {
+          writeSettled(end, run, logged, elsewhere);
+          outcome.written_to = elsewhere;
+          break;
+        } catch (const std::exception& again) {
+          *outcome.write_problem += std::string("; nor ") + again.what();
+        }
       }
     }
   }

@@ -171,16 +171,21 @@ ReportFile readReport(const std::filesystem::path& path, EpisodeEntries entries)
 }
 
 
-std::filesystem::path fallbackReportPath(const std::filesystem::path& report_path,
-                                         const std::string& run_id,
-                                         const std::filesystem::path& fallback_dir) {
+std::vector<std::filesystem::path> fallbackReportPaths(const std::filesystem::path& report_path,
+                                                       const std::string& run_id,
+                                                       const std::filesystem::path& fallback_dir) {
   namespace fs = std::filesystem;
-  std::error_code ignored;
   const fs::path folder =
       report_path.parent_path().empty() ? fs::path(".") : report_path.parent_path();
-  const bool usable = !fallback_dir.empty() && !fs::equivalent(fallback_dir, folder, ignored);
-  const fs::path dir = usable ? fallback_dir : fs::temp_directory_path();
-  return dir / (run_id + "-" + report_path.filename().string());
+  const std::string name = run_id + "-" + report_path.filename().string();
+  std::vector<fs::path> paths;
+  for (const fs::path& dir : {fallback_dir, fs::temp_directory_path()}) {
+    std::error_code ignored;
+    if (dir.empty() || fs::equivalent(dir, folder, ignored)) continue;
+    if (!paths.empty() && fs::equivalent(dir, paths.front().parent_path(), ignored)) continue;
+    paths.push_back(dir / name);
+  }
+  return paths;
 }
 
 std::filesystem::path episodeLogPath(const std::filesystem::path& report_path) {

@@ -187,6 +187,7 @@ class FusionCenterCore {
   void onEpisodeLogRefused(const nlohmann::json& entry, const std::string& why);
   // After finish(): the report's path refused `refused` (a full disk, `why`); it goes to
   // `elsewhere` instead, with a write_failed fault that says so (the run at least degraded).
+  // Called again for the next place to try, the one fault says the newer place.
   [[nodiscard]] WriteFinalReport reportRefused(const WriteFinalReport& refused,
                                                const std::string& why,
                                                const std::filesystem::path& elsewhere);
@@ -293,6 +294,7 @@ class FusionCenterCore {
   std::map<int, std::int64_t> silent_from_ns_;
   bool launcher_gone_ = false;           // onLauncherGone: the run's cause is the launcher's death
   bool episode_log_refused_ = false;     // onEpisodeLogRefused: entries are held, not logged
+  std::optional<std::size_t> report_refused_fault_;  // reportRefused: its fault in faults_
   std::size_t restart_fault_ = 0;        // resumed: where this life's restart fault is in faults_
   std::optional<ResumedRun> resumed_;    // with --resume
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)

@@ -31,12 +31,12 @@ inline constexpr const char* kPerEpisode = "per_episode";
 // what an earlier life of it saw stays in the report.
 [[nodiscard]] std::filesystem::path faultLogPath(const std::filesystem::path& report_path);
 // Where a report goes when its own path refuses it (a full disk there), so that nothing the run
-// measured is lost: `fallback_dir`/<run id>-<its name>, or the system's temporary folder when
-// `fallback_dir` is empty or the report's own folder. The fusion center and the launcher agree
-// on it.
-[[nodiscard]] std::filesystem::path fallbackReportPath(const std::filesystem::path& report_path,
-                                                       const std::string& run_id,
-                                                       const std::filesystem::path& fallback_dir);
+// measured is lost, in the order to try: `fallback_dir`/<run id>-<its name> (unless that is
+// the report's own folder), then the same in the system's temporary folder. The fusion center
+// and the launcher agree on them.
+[[nodiscard]] std::vector<std::filesystem::path> fallbackReportPaths(
+    const std::filesystem::path& report_path, const std::string& run_id,
+    const std::filesystem::path& fallback_dir);
 
 // Appends one JSON document per line, each line in one write(2) to the file itself, so that a
 // crash of the process loses no line it appended and tears none. A line the file cannot take
