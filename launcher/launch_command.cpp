@@ -518,8 +518,8 @@ int runLaunch(CommandOptions options) {
       plan.log_dir};
   const RunOutcome outcome = settleRun(end);
   if (outcome.written_to) {
-    std::fprintf(stderr, "sensornet: warning: %s; the report went to %s\n",
-                 outcome.write_problem->c_str(), outcome.written_to->c_str());
+    std::fprintf(stderr, "sensornet: warning: the report is at %s, not at its path: %s\n",
+                 outcome.written_to->c_str(), outcome.write_problem->c_str());
   } else if (outcome.write_problem) {
     std::fprintf(stderr, "sensornet: error: %s\n", outcome.write_problem->c_str());
   }

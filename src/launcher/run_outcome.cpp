@@ -353,8 +353,7 @@ RunOutcome settleRun(const RunEnd& end) {
       if (read) {
         read_from = elsewhere;
         outcome.written_to = elsewhere;
-        outcome.write_problem = "the fusion center could not write it there (its write_failed "
-                                "fault says why)";
+        outcome.write_problem = "the fusion center's write_failed fault says why";
       }
     }
     if (read && logged && someWriteFailed(*read)) {
