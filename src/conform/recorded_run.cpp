@@ -77,6 +77,7 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
     const dds::DecodedSample sample(*channel.type, m.data, where);
     const std::string topic = channel.type->topic;
     const auto at = static_cast<std::int64_t>(m.log_time_ns);
+    const auto written = static_cast<std::int64_t>(m.publish_time_ns);
     if (topic == "sensornet/Scenario") {
       wire::feedSample(run.inputs, sample.as<sensornet_Scenario>(), ignored);
     } else if (topic == "sensornet/Schedule") {
@@ -107,12 +108,13 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
     } else if (topic == "sensornet/Command") {
       const auto& s = sample.as<sensornet_Command>();
       run.commands.push_back({wire::commandOf(s, emulator::CommandSender::Operator),
-                              enumName(*channel.type, "kind", s.kind), channel.partition, at});
+                              enumName(*channel.type, "kind", s.kind), channel.partition,
+                              written});
     } else if (topic == "sensornet/CommandReply") {
       const auto& s = sample.as<sensornet_CommandReply>();
       if (dds::viewString(s.run_id) != run.run_id) return;
       run.replies.push_back({s.command_id, s.accepted, s.schedule_version,
-                             std::string(dds::viewString(s.reason)), at});
+                             std::string(dds::viewString(s.reason)), written});
     } else if (channel.sensor >= 0) {
       SensorTrace& trace = run.sensors[channel.sensor];
       if (topic == "sensornet/Measurement") {

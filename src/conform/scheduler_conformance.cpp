@@ -18,7 +18,7 @@ using namespace detail;
 
 constexpr const char* kSection = "commands-and-replies";
 
-// One command as the run saw it: its copies in receipt order and its first reply.
+// One command as the run saw it: its copies in the order written, and its first reply.
 struct Exchange {
   std::vector<const RecordedCommand*> copies;
   const RecordedReply* reply = nullptr;
@@ -46,9 +46,15 @@ Exchanges exchangesOf(const RecordedRun& run) {
     if (e.copies.empty()) out.order.push_back(c.command.command_id);
     e.copies.push_back(&c);
   }
+  for (auto& [id, e] : out.by_id) {  // in the order they were written
+    std::stable_sort(e.copies.begin(), e.copies.end(),
+                     [](const auto* a, const auto* b) { return a->written_ns < b->written_ns; });
+  }
   for (const RecordedReply& r : run.replies) {
     const auto e = out.by_id.find(r.command_id);
-    if (e != out.by_id.end() && e->second.reply == nullptr) e->second.reply = &r;
+    if (e == out.by_id.end()) continue;
+    const RecordedReply*& first = e->second.reply;
+    if (first == nullptr || r.written_ns < first->written_ns) first = &r;
   }
   return out;
 }
@@ -73,10 +79,10 @@ RuleCheck commands(const RecordedRun& run, const Exchanges& exchanges) {
   for (const auto& [kind, n] : kinds) {
     listed += fmt::format("{}{} {}", listed.empty() ? "" : ", ", n, kind);
   }
-  r.evidence = fmt::format("{} ({}), {} written, the first at +{:.3f} s",
+  r.evidence = fmt::format("{} ({}), {} written, the first at {:+.3f} s",
                            plural(exchanges.order.size(), "command", "commands"), listed,
                            plural(run.commands.size(), "copy", "copies"),
-                           secondsSince(run.first_ns, run.commands.front().received_ns));
+                           secondsSince(run.first_ns, run.commands.front().written_ns));
   return r;
 }
 
@@ -154,9 +160,9 @@ RuleCheck retries(const Exchanges& exchanges) {
   double shortest = 1e300, longest = 0.0;
   for (const std::uint64_t id : exchanges.order) {
     const Exchange& e = exchanges.by_id.at(id);
-    const std::int64_t until = e.reply != nullptr ? e.reply->received_ns : INT64_MAX;
-    for (std::size_t i = 1; i < e.copies.size() && e.copies[i]->received_ns <= until; ++i) {
-      const double gap = secondsSince(e.copies[i - 1]->received_ns, e.copies[i]->received_ns);
+    const std::int64_t until = e.reply != nullptr ? e.reply->written_ns : INT64_MAX;
+    for (std::size_t i = 1; i < e.copies.size() && e.copies[i]->written_ns <= until; ++i) {
+      const double gap = secondsSince(e.copies[i - 1]->written_ns, e.copies[i]->written_ns);
       shortest = std::min(shortest, gap);
       longest = std::max(longest, gap);
       if ((gap < kResendMinS || gap > kResendMaxS) && first.empty()) {
@@ -198,12 +204,12 @@ RuleCheck repliesRead(const Exchanges& exchanges) {
     if (e.reply == nullptr) continue;
     ++replied;
     const auto late = std::find_if(e.copies.begin(), e.copies.end(), [&](const auto* c) {
-      return secondsSince(e.reply->received_ns, c->received_ns) > kReplySlackS;
+      return secondsSince(e.reply->written_ns, c->written_ns) > kReplySlackS;
     });
     if (late != e.copies.end() && first.empty()) {
       first =
           fmt::format("{}: written again {:.3f} s after its reply ({} after it)", named(**late),
-                      secondsSince(e.reply->received_ns, (*late)->received_ns),
+                      secondsSince(e.reply->written_ns, (*late)->written_ns),
                       plural(static_cast<std::size_t>(e.copies.end() - late), "copy", "copies"));
     }
   }

@@ -94,7 +94,9 @@ struct RecordedCommand {
   emulator::CommandEvent command;  // sender: unused (the partition says it)
   std::string kind;                // the IDL's name, "COMMAND_REPLAN"
   std::string partition;           // "sensornet/<run id>/operator"
-  std::int64_t received_ns = 0;
+  // When its writer wrote it (the sample's source timestamp): a copy the middleware delivered
+  // late (a repair of a sample sent before the recorder matched) still counts when written.
+  std::int64_t written_ns = 0;
 };
 
 // A CommandReply as recorded (the coordinator answers each copy it hears of an answered command).
@@ -103,7 +105,7 @@ struct RecordedReply {
   bool accepted = false;
   std::uint32_t schedule_version = 0;
   std::string reason;
-  std::int64_t received_ns = 0;
+  std::int64_t written_ns = 0;  // the coordinator's source timestamp
 };
 
 struct RecordedRun {

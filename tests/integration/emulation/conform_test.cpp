@@ -71,6 +71,17 @@ class ConformSensor : public testing::LaunchTest {
     argv.insert(argv.end(), program.begin(), program.end());
     return runProcess(argv, 300s);
   }
+  // `sensornet conform ROLE` of `program` on `scenario`, at time scale 2.
+  ProcessResult conformAs(const std::string& role, const std::string& scenario,
+                          const std::string& episodes, const std::vector<std::string>& program) {
+    std::vector<std::string> argv = {testing::kLauncher, "conform",  role,
+                                     "--scenario",       scenario,   "--episodes",
+                                     episodes,           "--time-scale", "2",
+                                     "--run-id",         run_id_,    "--dir",
+                                     (dir_ / "conform").string(), "--"};
+    argv.insert(argv.end(), program.begin(), program.end());
+    return runProcess(argv, 300s);
+  }
   std::vector<std::string> example(const std::string& measure) const {
     return {SENSORNET_EXTERNAL_SENSOR_EXAMPLE,
             "--run-id",
@@ -170,23 +181,9 @@ TEST_F(ConformSensor, ASensorKilledMidRunFailsLeavingAndTheRun) {
 // C example given a wrong process noise (q 0.6 for the scenario's 0.5) fails the costs alone.
 class ConformFusionCenter : public ConformSensor {
  protected:
-  ProcessResult conformFusionCenter(const std::string& scenario, std::vector<std::string> program) {
-    std::vector<std::string> argv = {testing::kLauncher,
-                                     "conform",
-                                     "fusion-center",
-                                     "--scenario",
-                                     scenario,
-                                     "--episodes",
-                                     "3",
-                                     "--time-scale",
-                                     "2",
-                                     "--run-id",
-                                     run_id_,
-                                     "--dir",
-                                     (dir_ / "conform").string(),
-                                     "--"};
-    argv.insert(argv.end(), program.begin(), program.end());
-    return runProcess(argv, 300s);
+  ProcessResult conformFusionCenter(const std::string& scenario,
+                                    const std::vector<std::string>& program) {
+    return conformAs("fusion-center", scenario, "3", program);
   }
   std::vector<std::string> example(double q) const {
     std::vector<std::string> argv = {SENSORNET_EXTERNAL_FUSION_CENTER_EXAMPLE, "--run-id",
@@ -234,23 +231,8 @@ TEST_F(ConformFusionCenter, AWrongModelFailsTheCostsAlone) {
 // command_refused fault, and the run is degraded).
 class ConformScheduler : public ConformSensor {
  protected:
-  ProcessResult conformScheduler(std::vector<std::string> program) {
-    std::vector<std::string> argv = {testing::kLauncher,
-                                     "conform",
-                                     "scheduler",
-                                     "--scenario",
-                                     testing::kDefaultScenario,
-                                     "--episodes",
-                                     "10",
-                                     "--time-scale",
-                                     "2",
-                                     "--run-id",
-                                     run_id_,
-                                     "--dir",
-                                     (dir_ / "conform").string(),
-                                     "--"};
-    argv.insert(argv.end(), program.begin(), program.end());
-    return runProcess(argv, 300s);
+  ProcessResult conformScheduler(const std::vector<std::string>& program) {
+    return conformAs("scheduler", testing::kDefaultScenario, "10", program);
   }
   // The rules that failed, by name.
   static std::vector<std::string> failing(const std::string& table) {

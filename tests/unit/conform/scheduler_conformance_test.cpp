@@ -96,7 +96,7 @@ TEST_F(SchedulerConformanceTest, ACommandInAnotherPartitionOrOfTheLaunchersKindF
   run_.replies[1].accepted = false;
   expectOnlyFails("by-right");  // the refusal is by-right's to tell, not `accepted`'s
   run_.commands[2].partition = run_.commands[3].partition = "sensornet/sched";
-  run_.replies[1] = {12, true, 2, "", run_.replies[1].received_ns};
+  run_.replies[1] = {12, true, 2, "", run_.replies[1].written_ns};
   expectOnlyFails("by-right");  // heard by nobody, but recorded
   run_.commands[2].partition = run_.commands[3].partition = kOperator;
   run_.commands[2].command.kind = run_.commands[3].command.kind =
@@ -132,21 +132,21 @@ TEST_F(SchedulerConformanceTest, ACommandWrittenOnceAndNeverAgainFailsRetries) {
 }
 
 TEST_F(SchedulerConformanceTest, AResendTooSoonOrTooLateFailsRetries) {
-  run_.commands[1].received_ns = run_.commands[0].received_ns + kSecond / 10;
-  run_.replies[0].received_ns = run_.commands[1].received_ns + kSecond / 200;
+  run_.commands[1].written_ns = run_.commands[0].written_ns + kSecond / 10;
+  run_.replies[0].written_ns = run_.commands[1].written_ns + kSecond / 200;
   expectOnlyFails("retries");
-  run_.commands[1].received_ns = run_.commands[0].received_ns + 4 * kSecond;
-  run_.replies[0].received_ns = run_.commands[1].received_ns + kSecond / 200;
+  run_.commands[1].written_ns = run_.commands[0].written_ns + 4 * kSecond;
+  run_.replies[0].written_ns = run_.commands[1].written_ns + kSecond / 200;
   expectOnlyFails("retries");
 }
 
 TEST_F(SchedulerConformanceTest, CopiesAfterTheReplyFailRepliesRead) {
   RecordedCommand again = run_.commands[1];
-  again.received_ns = run_.replies[0].received_ns + 2 * kSecond;
+  again.written_ns = run_.replies[0].written_ns + 2 * kSecond;
   run_.commands.insert(run_.commands.begin() + 2, again);
   expectOnlyFails("replies-read");
   // One crossing its reply on the wire is no fault.
-  run_.commands[2].received_ns = run_.replies[0].received_ns + kSecond / 10;
+  run_.commands[2].written_ns = run_.replies[0].written_ns + kSecond / 10;
   for (const RuleCheck& r : checkScheduler(run_, facts_)) {
     EXPECT_TRUE(r.pass) << r.rule << ": " << r.evidence;
   }
