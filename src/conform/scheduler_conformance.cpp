@@ -17,6 +17,7 @@ namespace {
 using namespace detail;
 
 constexpr const char* kSection = "commands-and-replies";
+constexpr const char* kNoReply = "no reply came to judge by (see retries)";
 
 // One command as the run saw it: its copies in the order written, and its first reply.
 struct Exchange {
@@ -57,6 +58,16 @@ Exchanges exchangesOf(const RecordedRun& run) {
     if (first == nullptr || r.written_ns < first->written_ns) first = &r;
   }
   return out;
+}
+
+// A rule over the commands holds when there were some and no offence was found (`first`, the
+// first one); `fine` is its evidence then.
+RuleCheck conclude(RuleCheck r, const Exchanges& exchanges, std::string first, std::string fine) {
+  r.pass = first.empty() && !exchanges.order.empty();
+  r.evidence = !first.empty()            ? std::move(first)
+               : exchanges.order.empty() ? std::string("no Command to judge")
+                                         : std::move(fine);
+  return r;
 }
 
 // "command 1733... (COMMAND_REPLAN)"
@@ -109,11 +120,7 @@ RuleCheck byRight(const RecordedRun& run, const Exchanges& exchanges) {
     }
     if (!first.empty()) break;
   }
-  r.pass = first.empty() && !exchanges.order.empty();
-  r.evidence = !first.empty()            ? first
-               : exchanges.order.empty() ? std::string("no Command to judge")
-                                         : fmt::format("all in {}", operator_partition);
-  return r;
+  return conclude(std::move(r), exchanges, first, "all in " + operator_partition);
 }
 
 RuleCheck ids(const RecordedRun& run, const Exchanges& exchanges) {
@@ -142,12 +149,8 @@ RuleCheck ids(const RecordedRun& run, const Exchanges& exchanges) {
     }
     if (!first.empty()) break;
   }
-  r.pass = first.empty() && !exchanges.order.empty();
-  r.evidence = !first.empty()            ? first
-               : exchanges.order.empty() ? std::string("no Command to judge")
-                                         : fmt::format("{}, each of one content",
-                                                       plural(exchanges.order.size(), "id", "ids"));
-  return r;
+  return conclude(std::move(r), exchanges, first,
+                  plural(exchanges.order.size(), "id", "ids") + ", each of one content");
 }
 
 RuleCheck retries(const Exchanges& exchanges) {
@@ -175,20 +178,16 @@ RuleCheck retries(const Exchanges& exchanges) {
                           named(*e.copies[0]), plural(e.copies.size(), "copy", "copies"));
     }
   }
-  r.pass = first.empty() && !exchanges.order.empty();
-  r.evidence = !first.empty() ? first
-               : exchanges.order.empty()
-                   ? std::string("no Command to judge")
-                   : fmt::format(
-                         "{} answered after a resend; resent "
-                         "after {:.2f} to {:.2f} s",
-                         plural(exchanges.order.size(), "command", "commands"), shortest, longest);
-  if (r.pass && longest == 0.0) {
-    // Every first copy was lost before the recorder saw it too: the reply is the evidence.
-    r.evidence = plural(exchanges.order.size(), "command", "commands") +
-                 " answered, which the coordinator does only for a copy after the first";
-  }
-  return r;
+  const std::string commands = plural(exchanges.order.size(), "command", "commands");
+  // With no resend recorded, every first copy was lost before the recorder saw it too: the
+  // reply is the evidence.
+  return conclude(std::move(r), exchanges, first,
+                  longest == 0.0
+                      ? commands +
+                            " answered, which the coordinator does only for a copy after "
+                            "the first"
+                      : fmt::format("{} answered after a resend; resent after {:.2f} to {:.2f} s",
+                                    commands, shortest, longest));
 }
 
 RuleCheck repliesRead(const Exchanges& exchanges) {
@@ -214,13 +213,10 @@ RuleCheck repliesRead(const Exchanges& exchanges) {
     }
   }
   // Unanswered commands fail `retries`; with no reply there is nothing more to read.
-  r.pass = first.empty() && !exchanges.order.empty();
-  r.evidence = !first.empty()            ? first
-               : exchanges.order.empty() ? std::string("no Command to judge")
-               : replied == 0            ? std::string("no reply came to judge by (see retries)")
-                                         : fmt::format("no copy after the reply, for {}",
-                                                       plural(replied, "command", "commands"));
-  return r;
+  return conclude(std::move(r), exchanges, first,
+                  replied == 0
+                      ? kNoReply
+                      : "no copy after the reply, for " + plural(replied, "command", "commands"));
 }
 
 RuleCheck accepted(const Exchanges& exchanges) {
@@ -239,7 +235,6 @@ RuleCheck accepted(const Exchanges& exchanges) {
       first = fmt::format("{} refused: {}", named(*e.copies[0]), e.reply->reason);
     }
   }
-  r.pass = first.empty() && !exchanges.order.empty();
   std::string versions;
   for (const std::uint64_t id : exchanges.order) {
     const RecordedReply* reply = exchanges.by_id.at(id).reply;
@@ -247,13 +242,11 @@ RuleCheck accepted(const Exchanges& exchanges) {
       versions += (versions.empty() ? "" : ", ") + std::to_string(reply->schedule_version);
     }
   }
-  r.evidence = !first.empty()            ? first
-               : exchanges.order.empty() ? std::string("no Command to judge")
-               : answered == 0
-                   ? std::string("no reply came to judge by (see retries)")
-                   : fmt::format("{} accepted{}", plural(answered, "command", "commands"),
-                                 versions.empty() ? "" : "; versions " + versions);
-  return r;
+  return conclude(std::move(r), exchanges, first,
+                  answered == 0
+                      ? kNoReply
+                      : fmt::format("{} accepted{}", plural(answered, "command", "commands"),
+                                    versions.empty() ? "" : "; versions " + versions));
 }
 
 RuleCheck leaves(const RunFacts& facts) {

@@ -371,15 +371,21 @@ void writeJsonFile(const std::string& path, const std::string& what,
         path, "",
         "a regular file for the " + what + " (it exists and is a device, FIFO, directory or link)");
   }
-  // A path where no file can be made is bad input; one whose disk refuses the bytes (full, a
-  // size limit) is not, and the error says the disk's own cause.
-  if (const auto problem = outputFileProblem(path)) {
-    const bool full = problem->find(std::strerror(ENOSPC)) != std::string::npos ||
-                      problem->find(std::strerror(EDQUOT)) != std::string::npos;
-    if (!full) throw InputError(path, "", "a writable path for the " + what + "; it " + *problem);
+  // Beside the target, then renamed over it: a reader never sees half a file. When that fails,
+  // a path where no file can be made is bad input; a disk that refuses the bytes (full, a size
+  // limit) is not, and the error says the disk's own cause.
+  try {
+    replaceFileAtomically(path, write, what);
+  } catch (const std::runtime_error&) {
+    if (const auto problem = outputFileProblem(path)) {
+      const bool full = problem->find(std::strerror(ENOSPC)) != std::string::npos ||
+                        problem->find(std::strerror(EDQUOT)) != std::string::npos;
+      if (!full) {
+        throw InputError(path, "", "a writable path for the " + what + "; it " + *problem);
+      }
+    }
+    throw;
   }
-  // Beside the target, then renamed over it: a reader never sees half a file.
-  replaceFileAtomically(path, write, what);
 }
 
 void writeScheduleFile(const std::string& path, const RateSchedule& schedule,
