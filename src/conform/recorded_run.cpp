@@ -94,6 +94,7 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
         run.time_scale = control.time_scale;
       } else if (control.kind == emulator::ControlKind::RunShutdown && !run.shutdown_ns) {
         run.shutdown_ns = at;
+        run.shutdown_written_ns = written;
       }
     } else if (topic == "sensornet/Report" && channel.report != nullptr) {
       const auto& s = sample.as<sensornet_Report>();
@@ -130,7 +131,7 @@ RecordedRun readRecording(const McapReader& file, const std::string& source,
         const auto& s = sample.as<sensornet_SensorStatus>();
         const auto state = wire::sensorStateOf(s.state);
         if (static_cast<int>(s.sensor_id) != channel.sensor || !state) return;
-        trace.statuses.push_back({*state, s.schedule_version, at});
+        trace.statuses.push_back({*state, s.schedule_version, at, written});
       }
     }
   };

@@ -173,9 +173,11 @@ RuleCheck leaving(const RecordedRun& run, const SensorTrace& trace, const RunFac
     r.evidence = "the run recorded no RUN_SHUTDOWN";
     return r;
   }
+  // By when each was written: the recorder may get the sensor's answer before the shutdown it
+  // answers (two writers, two deliveries).
   const bool said_stopped = !trace.statuses.empty() &&
                             trace.statuses.back().state == SensorState::Stopped &&
-                            trace.statuses.back().received_ns >= *run.shutdown_ns;
+                            trace.statuses.back().written_ns >= run.shutdown_written_ns;
   r.evidence = said_stopped ? "SENSOR_STOPPED after RUN_SHUTDOWN"
                             : "no SENSOR_STOPPED after RUN_SHUTDOWN (last status: " +
                                   (trace.statuses.empty()

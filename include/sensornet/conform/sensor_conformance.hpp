@@ -68,6 +68,7 @@ struct SensorTrace {
     emulator::SensorState state = emulator::SensorState::Starting;
     std::uint32_t version = 0;
     std::int64_t received_ns = 0;
+    std::int64_t written_ns = 0;  // its source timestamp: when the sensor wrote it
   };
   std::vector<Sample> samples;
   std::vector<Tally> tallies;
@@ -115,6 +116,7 @@ struct RecordedRun {
   std::map<std::uint32_t, std::int64_t> starts_ns;  // EPISODE_START: the wall instant of time 0
   double time_scale = 1.0;
   std::optional<std::int64_t> shutdown_ns;  // RUN_SHUTDOWN's receipt
+  std::int64_t shutdown_written_ns = 0;      // ... and when the coordinator wrote it
   std::int64_t first_ns = 0;                // the recording's first message
   std::map<int, SensorTrace> sensors;       // the sensors asked for (written in their partitions)
   std::vector<RecordedReport> reports;      // in the run's partition, in receipt order

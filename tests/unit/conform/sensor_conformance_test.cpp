@@ -74,14 +74,16 @@ class SensorConformanceTest : public ::testing::Test {
     for (std::uint32_t k = 0; k < kEpisodes; ++k) run_.starts_ns[k] = kT0 + kSecond + k * period;
     run_.time_scale = 1.0;
     run_.shutdown_ns = kT0 + kSecond + kEpisodes * period;
+    run_.shutdown_written_ns = *run_.shutdown_ns;
 
     SensorTrace& trace = run_.sensors[kSensor];
-    trace.statuses.push_back({SensorState::Starting, 0, kT0 + kSecond / 10});
-    trace.statuses.push_back({SensorState::Ready, 1, kT0 + kSecond / 2});
+    trace.statuses.push_back({SensorState::Starting, 0, kT0 + kSecond / 10, kT0 + kSecond / 10});
+    trace.statuses.push_back({SensorState::Ready, 1, kT0 + kSecond / 2, kT0 + kSecond / 2});
     for (std::int64_t at = kT0 + kSecond; at < *run_.shutdown_ns; at += kSecond / 2) {
-      trace.statuses.push_back({SensorState::Running, 1, at});
+      trace.statuses.push_back({SensorState::Running, 1, at, at});
     }
-    trace.statuses.push_back({SensorState::Stopped, 2, *run_.shutdown_ns + kSecond / 100});
+    trace.statuses.push_back({SensorState::Stopped, 2, *run_.shutdown_ns + kSecond / 100,
+                              *run_.shutdown_ns + kSecond / 100});
     for (std::uint32_t k = 0; k < kEpisodes; ++k) {
       std::uint64_t seq = 0;
       for (const emulator::TimedArrival& a : emulator::sensorTimeline(
@@ -222,10 +224,20 @@ TEST_F(SensorConformanceTest, ASilenceLongerThanTheStatusPeriodFailsTheStatusRul
   expectOnlyFails("status-period");
 }
 
+// The recorder got the sensor's STOPPED before the RUN_SHUTDOWN it answers (two writers, two
+// deliveries): written after it, it is in order.
+TEST_F(SensorConformanceTest, AStoppedReceivedBeforeTheShutdownButWrittenAfterItLeaves) {
+  trace().statuses.back().received_ns = *run_.shutdown_ns - kSecond / 100;
+  for (const RuleCheck& r : checkSensor(run_, kSensor, facts_)) {
+    EXPECT_TRUE(r.pass) << r.rule << ": " << r.evidence;
+  }
+}
+
 TEST_F(SensorConformanceTest, LeavingWithoutStoppedOrBeingKilledFailsTheLeavingRule) {
   trace().statuses.pop_back();
   expectOnlyFails("leaving");
-  trace().statuses.push_back({SensorState::Stopped, 2, *run_.shutdown_ns + 1});
+  trace().statuses.push_back(
+      {SensorState::Stopped, 2, *run_.shutdown_ns + 1, *run_.shutdown_ns + 1});
   facts_.program_exit.reset();
   expectOnlyFails("leaving");
 }
