@@ -30,6 +30,8 @@
 #include "fault_schedule.hpp"
 #include "invariants.hpp"
 #include "support/background_process.hpp"
+#include "support/netns_hosts.hpp"
+#include "support/process.hpp"
 
 namespace sensornet::chaos {
 namespace {
@@ -53,6 +55,7 @@ struct Options {
   fs::path cache;  // clean runs' costs; default: <work>/clean
   bool keep = false;
   bool list = false;  // print the trials the seeds draw, run nothing
+  bool network = true;  // --no-network: process faults only, as drawn before network trials
 };
 
 std::string readText(const fs::path& path) {
@@ -164,6 +167,130 @@ std::vector<std::string> reapLeftovers(const std::string& run_id) {
   return lines;
 }
 
+// Network trials: the coordinator on host 1, the fusion center on host 2, the first half of the
+// sensors on host 3 ("edge-1"), the rest on host 4 ("edge-2").
+constexpr int kCoordinatorHost = 1;
+constexpr int kFusionHost = 2;
+int sensorHost(int host) { return 3 + host; }
+
+std::string hostsYaml(const Trial& t, const testing::NetnsHosts& hosts) {
+  std::string text = "hosts:\n";
+  const auto host = [&](int i, const std::string& name, const std::string& runs) {
+    text += "  - name: " + name + "\n    address: " + hosts.address(i) + "\n    exec: ip netns exec " +
+            hosts.ns(i) + "\n" + runs;
+  };
+  const int half = t.sensors / 2;
+  host(kCoordinatorHost, "control", "    coordinator: true\n");
+  host(kFusionHost, "fusion", "    fusion_center: true\n");
+  host(sensorHost(0), "edge-1", "    sensors: 0-" + std::to_string(half - 1) + "\n");
+  host(sensorHost(1), "edge-2",
+       "    sensors: " + std::to_string(half) + "-" + std::to_string(t.sensors - 1) + "\n");
+  return text;
+}
+
+using Argv = std::vector<std::string>;
+
+Argv inNamespace(const testing::NetnsHosts& hosts, int host, Argv command) {
+  Argv argv = {"/usr/bin/env", "ip", "netns", "exec", hosts.ns(host)};
+  argv.insert(argv.end(), command.begin(), command.end());
+  return argv;
+}
+
+// A network fault struck: the commands that heal it, and how it was made.
+struct Struck {
+  std::vector<Argv> heal;
+  std::string how;
+  std::string failed;  // the command that failed, and why (nothing was left applied)
+};
+
+// Strikes a network fault on the sensor host's link (iptables rules in the namespaces, the
+// link's state, a qdisc); every command that succeeded has its undoing in `heal`.
+Struck strikeNetwork(const PlannedFault& p, const testing::NetnsHosts& hosts) {
+  Struck out;
+  const int host = sensorHost(p.host);
+  const std::string address = hosts.address(host);
+  const auto run = [&](const Argv& apply, Argv heal) {
+    if (!out.failed.empty()) return false;
+    const testing::ProcessResult r = testing::runProcess(apply, std::chrono::seconds(10));
+    if (r.exit_code != 0) {
+      std::string command;
+      for (std::size_t i = 1; i < apply.size(); ++i) command += (i > 1 ? " " : "") + apply[i];
+      out.failed = command + ": " + r.err.substr(0, r.err.find('\n'));
+      return false;
+    }
+    if (!heal.empty()) out.heal.insert(out.heal.begin(), std::move(heal));
+    return true;
+  };
+  const auto rule = [&](int ns, const std::string& chain, Argv match) {
+    Argv insert = {"iptables", "-I", chain};
+    insert.insert(insert.end(), match.begin(), match.end());
+    Argv remove = insert;
+    remove[1] = "-D";
+    run(inNamespace(hosts, ns, insert), inNamespace(hosts, ns, remove));
+  };
+  char probability[32];
+  std::snprintf(probability, sizeof probability, "%.3f", p.loss);
+  switch (p.action) {
+    case Action::CutLink:
+      run({"/usr/bin/env", "ip", "link", "set", hosts.veth(host), "down"},
+          {"/usr/bin/env", "ip", "link", "set", hosts.veth(host), "up"});
+      out.how = "link down";
+      break;
+    case Action::FusionDeaf:
+      rule(kFusionHost, "INPUT", {"-s", address, "-j", "DROP"});
+      out.how = "iptables";
+      break;
+    case Action::HostDeaf:
+      rule(host, "INPUT", {"-s", hosts.address(kCoordinatorHost), "-j", "DROP"});
+      out.how = "iptables";
+      break;
+    case Action::LossBurst:
+      rule(host, "INPUT", {"-m", "statistic", "--mode", "random", "--probability", probability, "-j", "DROP"});
+      for (const int ns : {kCoordinatorHost, kFusionHost}) {
+        rule(ns, "INPUT",
+             {"-s", address, "-m", "statistic", "--mode", "random", "--probability", probability, "-j", "DROP"});
+      }
+      out.how = "iptables statistic";
+      break;
+    case Action::ReorderBurst: {
+      // netem where the kernel has it; else 30% of the packets through a 1 Mbit/s class of an
+      // HTB qdisc, chosen by iptables' statistic match: they queue behind one another and
+      // arrive after packets sent later through the fast class.
+      const Argv del = inNamespace(hosts, host, {"tc", "qdisc", "del", "dev", "eth0", "root"});
+      if (testing::runProcess(inNamespace(hosts, host, {"tc", "qdisc", "add", "dev", "eth0", "root",
+                                                         "netem", "delay", "10ms", "reorder", "50%"}),
+                              std::chrono::seconds(10))
+              .exit_code == 0) {
+        out.heal.push_back(del);
+        out.how = "netem";
+        break;
+      }
+      out.how = "htb";
+      run(inNamespace(hosts, host, {"tc", "qdisc", "add", "dev", "eth0", "root", "handle", "1:", "htb",
+                                    "default", "10", "r2q", "1000"}),
+          del);
+      run(inNamespace(hosts, host, {"tc", "class", "add", "dev", "eth0", "parent", "1:", "classid",
+                                    "1:10", "htb", "rate", "1gbit"}),
+          {});
+      run(inNamespace(hosts, host, {"tc", "class", "add", "dev", "eth0", "parent", "1:", "classid",
+                                    "1:20", "htb", "rate", "1mbit", "ceil", "1mbit"}),
+          {});
+      Argv classify = {"iptables", "-t", "mangle", "-I", "POSTROUTING", "-o", "eth0", "-m", "statistic",
+                       "--mode", "random", "--probability", "0.3", "-j", "CLASSIFY", "--set-class", "1:20"};
+      Argv unclassify = classify;
+      unclassify[3] = "-D";
+      run(inNamespace(hosts, host, classify), inNamespace(hosts, host, unclassify));
+      break;
+    }
+    default: out.failed = "not a network fault"; break;
+  }
+  if (!out.failed.empty()) {
+    for (const Argv& heal : out.heal) (void)testing::runProcess(heal, std::chrono::seconds(10));
+    out.heal.clear();
+  }
+  return out;
+}
+
 std::string uniqueRunId(std::uint64_t seed, const char* what) {
   char id[64];
   std::snprintf(id, sizeof id, "chaos-%d-%s-%llx", static_cast<int>(::getpid()), what,
@@ -209,6 +336,15 @@ struct PendingCont {
   Clock::time_point at;
 };
 
+struct PendingHeal {
+  std::vector<Argv> commands;
+  Clock::time_point at;
+};
+
+void heal(const PendingHeal& h) {
+  for (const Argv& command : h.commands) (void)testing::runProcess(command, std::chrono::seconds(10));
+}
+
 // Runs the trial's launch, strikes its faults when their moments come, and collects what the
 // invariants are checked on.
 TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
@@ -225,17 +361,30 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     r.faults.push_back(std::move(f));
   }
 
+  std::optional<testing::NetnsHosts> hosts;
+  std::vector<std::string> args =
+      launchArgs(o, scenarioPath(o, t, dir), t.episodes, t.time_scale, t.policy, t.run_seed, run_id, dir);
+  if (t.on_hosts) {
+    if (const auto why = testing::NetnsHosts::unavailable()) {
+      r.skipped = "a network trial, and " + *why;
+      return r;
+    }
+    hosts.emplace(4);
+    const fs::path file = dir / "hosts.yaml";
+    std::ofstream(file) << hostsYaml(t, *hosts);
+    args.insert(args.end(), {"--hosts", file.string()});
+  }
+
   const auto t0 = Clock::now();
-  testing::BackgroundProcess launcher(
-      launchArgs(o, scenarioPath(o, t, dir), t.episodes, t.time_scale, t.policy, t.run_seed, run_id, dir),
-      (dir / "launch.log").string());
+  testing::BackgroundProcess launcher(args, (dir / "launch.log").string());
   double stops = 0.0;
-  for (const PlannedFault& p : t.faults) stops += p.stop_s;
+  for (const PlannedFault& p : t.faults) stops += p.length_s;
   const double limit_s = 90.0 + 3.0 * t.episodes * t.episodeWallS() + stops;
 
   std::map<Target, Clock::time_point> first_seen = {{Target::Launcher, t0}};
   std::map<int, std::int64_t> starts;  // episode -> announced start (realtime ns)
   std::vector<PendingCont> conts;
+  std::vector<PendingHeal> heals;
   std::optional<int> exit_code;
   std::vector<bool> dead_agents(static_cast<std::size_t>(t.sensors), false);
   while (!exit_code && secondsSince(t0) < limit_s) {
@@ -266,7 +415,8 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
       const PlannedFault& p = f.planned;
       bool due = false;
       if (p.anchor == Anchor::Launch) {
-        const auto seen = first_seen.find(p.target);
+        const auto seen =
+            first_seen.find(p.target == Target::SensorHost ? Target::SensorAgent : p.target);
         due = seen != first_seen.end() &&
               std::chrono::duration<double>(Clock::now() - seen->second).count() >= p.offset_s;
       } else {
@@ -275,6 +425,19 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
               realtimeNs() >= start->second + static_cast<std::int64_t>(p.offset_s * 1e9);
       }
       if (!due) continue;
+      if (p.target == Target::SensorHost) {
+        f.at_s = secondsSince(t0);
+        f.logged_before = logLineCount(log);
+        const Struck struck = strikeNetwork(p, *hosts);
+        if (!struck.failed.empty()) {
+          f.note = "failed: " + struck.failed;
+          continue;
+        }
+        f.injected = true;
+        f.note = struck.how;
+        heals.push_back({struck.heal, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000))});
+        continue;
+      }
       std::optional<pid_t> pid;
       if (p.target == Target::Launcher) {
         pid = launcher.pid();
@@ -305,10 +468,18 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
       f.injected = true;
       f.note = "pid " + std::to_string(*pid);
       if (p.action == Action::Stop) {
-        conts.push_back({*pid, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.stop_s * 1000))});
+        conts.push_back({*pid, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000))});
       }
       if (p.target == Target::SensorAgent && p.action == Action::Kill) {
         dead_agents[static_cast<std::size_t>(f.agent)] = true;
+      }
+    }
+    for (auto it = heals.begin(); it != heals.end();) {
+      if (Clock::now() >= it->at) {
+        heal(*it);
+        it = heals.erase(it);
+      } else {
+        ++it;
       }
     }
     for (auto it = conts.begin(); it != conts.end();) {
@@ -322,6 +493,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     std::this_thread::sleep_for(kPoll);
   }
   for (const PendingCont& c : conts) ::kill(c.pid, SIGCONT);  // nothing stays stopped
+  for (const PendingHeal& h : heals) heal(h);                  // nor cut off
   if (!exit_code) {
     r.ended = false;
     ::kill(launcher.pid(), SIGCONT);
@@ -332,6 +504,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     if (!f.injected && f.note.empty()) f.note = "the run had ended";
   }
   r.leftovers = reapLeftovers(run_id);
+  hosts.reset();  // the namespaces, their links and rules go
   r.report_exists = fs::exists(dir / "report.json");
   json report = json::parse(readText(dir / "report.json"), nullptr, false);
   if (report.is_object()) r.report = std::move(report);
@@ -341,6 +514,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
 
 std::string outcomeLine(const TrialRecord& r, const std::vector<std::string>& violations) {
   std::string line = "seed " + std::to_string(r.trial.seed) + " [" + describe(r.trial) + "]";
+  if (!r.skipped.empty()) return line + ": SKIPPED (" + r.skipped + ")";
   std::string notes;
   for (const InjectedFault& f : r.faults) {
     char at[48];
@@ -348,6 +522,8 @@ std::string outcomeLine(const TrialRecord& r, const std::vector<std::string>& vi
     notes += (notes.empty() ? "" : ", ") +
              (f.injected ? std::string(at) + (f.planned.target == Target::SensorAgent
                                                    ? " (sensor_agent-" + std::to_string(f.agent) + ")"
+                                               : f.planned.target == Target::SensorHost
+                                                   ? " (" + f.note + ")"
                                                    : std::string())
                          : "not injected: " + f.note);
   }
@@ -362,7 +538,8 @@ std::string outcomeLine(const TrialRecord& r, const std::vector<std::string>& vi
 int usage(const std::string& why) {
   std::cerr << "chaos: " << why << "\n"
             << "usage: chaos (--seed S | --seeds S1,S2,... | --trials N [--first-seed S])\n"
-            << "             [--launcher PATH] [--source-dir DIR] [--work DIR] [--cache DIR] [--keep] [--list]\n";
+            << "             [--launcher PATH] [--source-dir DIR] [--work DIR] [--cache DIR] [--keep] [--list]\n"
+            << "             [--no-network]   # process faults only: the trials seeds drew before network faults\n";
   return 2;
 }
 
@@ -417,6 +594,8 @@ int main(int argc, char** argv) {
       o.keep = true;
     } else if (arg == "--list") {
       o.list = true;
+    } else if (arg == "--no-network") {
+      o.network = false;
     } else {
       return usage("unknown option " + arg);
     }
@@ -427,7 +606,7 @@ int main(int argc, char** argv) {
   if (o.seeds.empty()) return usage("no trial: give --seed, --seeds or --trials");
   if (o.list) {
     for (const std::uint64_t seed : o.seeds) {
-      std::cout << "seed " << seed << " [" << describe(drawTrial(seed)) << "]\n";
+      std::cout << "seed " << seed << " [" << describe(drawTrial(seed, o.network)) << "]\n";
     }
     return 0;
   }
@@ -449,15 +628,22 @@ int main(int argc, char** argv) {
   for (const int signal : {SIGINT, SIGTERM}) ::signal(signal, SIG_DFL);
 
   int violated = 0;
+  int skipped = 0;
   std::size_t injected = 0;
   std::map<std::string, int> kinds;
   for (const std::uint64_t seed : o.seeds) {
-    const Trial trial = drawTrial(seed);
+    const Trial trial = drawTrial(seed, o.network);
     const fs::path dir = o.work / ("trial-" + std::to_string(seed));
     std::error_code ignored;
     fs::remove_all(dir, ignored);
     const auto began = Clock::now();
     const TrialRecord record = runTrial(o, trial, dir);
+    if (!record.skipped.empty()) {
+      ++skipped;
+      std::cout << outcomeLine(record, {}) << std::endl;
+      fs::remove_all(dir, ignored);
+      continue;
+    }
     const std::vector<std::string> violations = checkInvariants(record);
     char took[32];
     std::snprintf(took, sizeof took, " (%.0f s)", secondsSince(began));
@@ -480,7 +666,9 @@ int main(int argc, char** argv) {
     std::cout << (first_kind ? "" : ", ") << n << " " << kind;
     first_kind = false;
   }
-  std::cout << "), " << violated << " with violations" << std::endl;
+  std::cout << "), " << violated << " with violations";
+  if (skipped > 0) std::cout << ", " << skipped << " skipped";
+  std::cout << std::endl;
   if (own_work && violated == 0 && !o.keep) {
     std::error_code ignored;
     fs::remove_all(o.work, ignored);  // the clean runs and the scratch folder too

@@ -39,6 +39,8 @@ class Stream {
   std::uint64_t state_;
 };
 
+void drawMoment(Stream& s, const Trial& t, PlannedFault& f);
+
 PlannedFault drawFault(Stream& s, const Trial& t) {
   PlannedFault f;
   // stop any process; kill a sensor agent, the fusion center, the coordinator; signal the
@@ -49,7 +51,7 @@ PlannedFault drawFault(Stream& s, const Trial& t) {
       f.action = Action::Stop;
       static constexpr int kWho[] = {15, 15, 25, 45};
       f.target = static_cast<Target>(s.weighted(kWho));
-      f.stop_s = s.uniform(0.5, 12.0);
+      f.length_s = s.uniform(0.5, 12.0);
       break;
     }
     case 1: f.action = Action::Kill; f.target = Target::SensorAgent; break;
@@ -60,6 +62,39 @@ PlannedFault drawFault(Stream& s, const Trial& t) {
     default: f.action = Action::Kill; f.target = Target::Launcher; break;
   }
   f.agent = s.between(0, t.sensors - 1);
+  drawMoment(s, t, f);
+  return f;
+}
+
+// A fault of a sensor host's link: cut, half deaf either way, lossy or reordering. Cuts and
+// partitions last 0.5-15 s, across the stall limits (10 s absorbed, 12 s); bursts 1-8 s.
+PlannedFault drawNetworkFault(Stream& s, const Trial& t) {
+  PlannedFault f;
+  f.target = Target::SensorHost;
+  static constexpr int kKinds[] = {30, 20, 15, 20, 15};
+  static constexpr Action kActions[] = {Action::CutLink, Action::FusionDeaf, Action::HostDeaf,
+                                        Action::LossBurst, Action::ReorderBurst};
+  f.action = kActions[s.weighted(kKinds)];
+  f.host = s.between(0, 1);
+  const bool burst = f.action == Action::LossBurst || f.action == Action::ReorderBurst;
+  f.length_s = burst ? s.uniform(1.0, 8.0) : s.uniform(0.5, 15.0);
+  if (f.action == Action::LossBurst) f.loss = s.uniform(0.1, 0.5);
+  drawMoment(s, t, f);
+  return f;
+}
+
+}  // namespace
+
+bool isNetworkFault(Action action) {
+  return action == Action::CutLink || action == Action::FusionDeaf || action == Action::HostDeaf ||
+         action == Action::LossBurst || action == Action::ReorderBurst;
+}
+
+int hostOf(const Trial& t, int agent) { return agent < t.sensors / 2 ? 0 : 1; }
+
+namespace {
+
+void drawMoment(Stream& s, const Trial& t, PlannedFault& f) {
   // When: in the target's first half second, in the last episode, or anywhere in between.
   static constexpr int kWhen[] = {20, 25, 55};
   switch (s.weighted(kWhen)) {
@@ -76,12 +111,11 @@ PlannedFault drawFault(Stream& s, const Trial& t) {
       f.offset_s = s.uniform(0.0, t.episodeWallS());
       break;
   }
-  return f;
 }
 
 }  // namespace
 
-Trial drawTrial(std::uint64_t seed) {
+Trial drawTrial(std::uint64_t seed, bool network) {
   Stream s(seed);
   Trial t;
   t.seed = seed;
@@ -103,6 +137,16 @@ Trial drawTrial(std::uint64_t seed) {
   static constexpr int kCounts[] = {45, 35, 20};
   const std::size_t count = 1 + s.weighted(kCounts);
   for (std::size_t i = 0; i < count; ++i) t.faults.push_back(drawFault(s, t));
+  // Network trials from a stream of their own, so that the process faults a seed drew before
+  // network faults existed stay what they were. A third of them strike the network alone.
+  Stream net(seed ^ 0x6e6574776f726bULL);
+  if (network && net.between(0, 99) < 40) {
+    t.on_hosts = true;
+    if (net.between(0, 2) == 0) t.faults.clear();
+    static constexpr int kNetworkCounts[] = {65, 35};
+    const std::size_t links = 1 + net.weighted(kNetworkCounts);
+    for (std::size_t i = 0; i < links; ++i) t.faults.push_back(drawNetworkFault(net, t));
+  }
   return t;
 }
 
@@ -112,6 +156,7 @@ const char* nameOf(Target target) {
     case Target::Coordinator: return "coordinator";
     case Target::FusionCenter: return "fusion_center";
     case Target::SensorAgent: return "sensor_agent";
+    case Target::SensorHost: return "sensor host";
   }
   return "?";
 }
@@ -122,6 +167,11 @@ const char* nameOf(Action action) {
     case Action::Kill: return "kill -9";
     case Action::Interrupt: return "SIGINT";
     case Action::Terminate: return "SIGTERM";
+    case Action::CutLink: return "cut";
+    case Action::FusionDeaf: return "fusion center deaf";
+    case Action::HostDeaf: return "host deaf";
+    case Action::LossBurst: return "loss";
+    case Action::ReorderBurst: return "reorder";
   }
   return "?";
 }
@@ -136,17 +186,30 @@ const char* nameOf(ScenarioKind kind) {
 }
 
 std::string describe(const PlannedFault& f) {
-  char text[160];
-  const std::string who = f.target == Target::SensorAgent
-                              ? std::string("sensor_agent-") + std::to_string(f.agent)
-                              : std::string(nameOf(f.target));
-  const std::string length =
-      f.action == Action::Stop ? " for " + std::to_string(f.stop_s).substr(0, 4) + " s" : "";
+  char text[200];
+  std::string what = nameOf(f.action);
+  std::string who = f.target == Target::SensorAgent
+                        ? std::string("sensor_agent-") + std::to_string(f.agent)
+                        : std::string(nameOf(f.target));
+  if (f.target == Target::SensorHost) {
+    const std::string host = "edge-" + std::to_string(f.host + 1);
+    what = f.action == Action::LossBurst ? "drop " + std::to_string(static_cast<int>(f.loss * 100 + 0.5)) + "% on"
+           : f.action == Action::ReorderBurst ? "reorder"
+           : f.action == Action::CutLink      ? "cut"
+           : f.action == Action::FusionDeaf   ? "deafen the fusion center to"
+                                              : "deafen";
+    who = f.action == Action::FusionDeaf ? host
+          : f.action == Action::HostDeaf ? host + " to the coordinator"
+                                         : host + "'s link";
+  }
+  const std::string length = f.action == Action::Stop || isNetworkFault(f.action)
+                                 ? " for " + std::to_string(f.length_s).substr(0, 4) + " s"
+                                 : "";
   if (f.anchor == Anchor::Launch) {
-    std::snprintf(text, sizeof text, "%s %s%s %.2f s after it started", nameOf(f.action),
+    std::snprintf(text, sizeof text, "%s %s%s %.2f s after it started", what.c_str(),
                   who.c_str(), length.c_str(), f.offset_s);
   } else {
-    std::snprintf(text, sizeof text, "%s %s%s %.2f s into episode %d", nameOf(f.action),
+    std::snprintf(text, sizeof text, "%s %s%s %.2f s into episode %d", what.c_str(),
                   who.c_str(), length.c_str(), f.offset_s, f.episode);
   }
   return text;
@@ -162,7 +225,7 @@ std::string describe(const Trial& t) {
                 t.episodes, t.time_scale, t.policy.c_str(),
                 static_cast<unsigned long long>(t.run_seed));
   std::string line = head;
-  line += ": ";
+  line += t.on_hosts ? " on 4 hosts: " : ": ";
   for (std::size_t i = 0; i < t.faults.size(); ++i) {
     line += (i == 0 ? "" : "; ") + describe(t.faults[i]);
   }

@@ -82,9 +82,16 @@ std::set<int> killedSensors(const TrialRecord& r) {
   return sensors;
 }
 
-bool longStop(const TrialRecord& r) {
+// A process stopped, or a sensor host cut off from the fusion center, for longer than the
+// stall limits absorb.
+bool silences(const PlannedFault& p) {
+  return p.action == Action::Stop || p.action == Action::CutLink || p.action == Action::FusionDeaf ||
+         p.action == Action::HostDeaf;
+}
+
+bool longSilence(const TrialRecord& r) {
   return std::any_of(r.faults.begin(), r.faults.end(), [](const InjectedFault& f) {
-    return f.injected && f.planned.action == Action::Stop && f.planned.stop_s > kAbsorbedStopS;
+    return f.injected && silences(f.planned) && f.planned.length_s > kAbsorbedStopS;
   });
 }
 
@@ -254,7 +261,7 @@ bool explained(const TrialRecord& r, const std::string& reason, double first_ter
     return injectedAny(r, Target::FusionCenter, Action::Kill);
   }
   if (reason.rfind("cut short", 0) == 0) return first_terminal_at < 1e300;
-  if (longStop(r)) return true;
+  if (longSilence(r)) return true;
   const std::set<int> killed = killedSensors(r);
   std::istringstream parts(reason);
   std::string part;
@@ -334,10 +341,20 @@ ExpectedOutcome expectedOutcome(const TrialRecord& r) {
   const bool death = std::any_of(order.begin(), order.end(), [](const InjectedFault* f) {
     return f->planned.action == Action::Kill;
   });
+  const bool network_only =
+      !order.empty() && std::all_of(order.begin(), order.end(), [](const InjectedFault* f) {
+        return isNetworkFault(f->planned.action);
+      });
   if (death) {
     out.exit_codes = {3};
     out.statuses = {"degraded"};
     out.why = "a death the run survives";
+  } else if (network_only && !longSilence(r)) {
+    // A partition, loss or reordering within the stall limit loses nothing: a stall, not an
+    // overload nor a death (docs/ARCHITECTURE.md, "Stalls and deaths").
+    out.exit_codes = {0};
+    out.statuses = {"completed"};
+    out.why = "network faults within the stall limit";
   } else {
     out.exit_codes = {0, 3};
     out.statuses = {"completed", "degraded"};

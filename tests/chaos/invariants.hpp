@@ -39,6 +39,7 @@ struct TrialRecord {
   // The clean run's realized cost of each episode, null where it was not complete.
   std::vector<std::optional<double>> clean_costs;
   std::vector<std::string> leftovers;  // command lines of the run's processes still alive
+  std::string skipped;  // why the trial could not run here (a network trial without root)
 };
 
 // The outcome the table of docs/ARCHITECTURE.md ("Run outcome") gives for what was injected.
