@@ -24,6 +24,8 @@ constexpr int kTracePoints = 200;
 // process's own stalls) before the link that carried it counts as having stalled: the slack a
 // StallWatch allows a process (a loaded machine delays a sample by tens of milliseconds).
 constexpr double kHeldBackS = 0.5;
+// closed_without_: an episode cut short at the run's end, not closed by the stall limit.
+constexpr std::int64_t kClosedAtRunEnd = std::numeric_limits<std::int64_t>::min();
 
 std::int64_t toNs(double seconds) { return static_cast<std::int64_t>(1e9 * seconds); }
 
@@ -313,6 +315,9 @@ void FusionCenterCore::onMeasurement(MeasurementArrival arrival, std::int64_t no
     const int sensor = arrival.measurement.sensor;
     if (hasScenario() && networkCopyAfterClose(episode, sensor)) return;
     if (last_started_ && episode <= *last_started_) {
+      if (closed_without_.count({episode, sensor}) + held_back_.count({episode, sensor}) > 0) {
+        ++after_close_[{episode, sensor}];
+      }
       rejectOutside(RejectionReason::FinishedEpisode,
                     "of finished episode " + std::to_string(episode) + " (sensor " +
                         std::to_string(sensor) + ")");
@@ -447,16 +452,62 @@ void FusionCenterCore::applyTally(OpenEpisode& open, const EpisodeTally& t, std:
   }
 }
 
-// A tally of an episode closed before it came (the sensor stalled past the limit): the report
-// names what the episode missed.
+// A tally of an episode closed before it came (the sensor or the network stalled past the
+// limit): the report names what the episode missed, and who held it back.
 void FusionCenterCore::lateTally(const EpisodeTally& t) {
-  if (closed_without_.erase({t.episode, static_cast<int>(t.sensor)}) == 0) return;
-  recordFault(faultEntry(FaultKind::LateTally, kProcess, static_cast<int>(t.sensor), t.episode,
-                         std::nullopt,
-                         "sensor " + std::to_string(t.sensor) + " reported " +
-                             std::to_string(t.count.sent) + " measurements sent in episode " +
-                             std::to_string(t.episode) +
-                             " after the episode had been closed without them"));
+  const auto closed = closed_without_.find({t.episode, static_cast<int>(t.sensor)});
+  if (closed == closed_without_.end()) return;
+  const std::int64_t closed_at = closed->second;
+  closed_without_.erase(closed);
+  report::FaultRecord fault =
+      faultEntry(FaultKind::LateTally, kProcess, static_cast<int>(t.sensor), t.episode, std::nullopt,
+                 "sensor " + std::to_string(t.sensor) + " reported " + std::to_string(t.count.sent) +
+                     " measurements sent in episode " + std::to_string(t.episode) +
+                     " after the episode had been closed without them");
+  // Written before the close, arrived after: the sensor was on time, the network was not. (A
+  // stalled sensor writes its count late.) Clocks of different hosts agree to milliseconds
+  // under NTP, far within the stall limit this compares against.
+  if (t.wall_time_ns > 0 && t.wall_time_ns <= closed_at) {
+    blameNetwork(t);
+    fault.caused_by = report::FaultCause{FaultKind::NetworkPartition, "network"};
+  }
+  recordFault(std::move(fault));
+}
+
+// One network_partition fault per episode, naming every sensor whose count the network held
+// back past the stall limit; their stall faults become its consequences.
+void FusionCenterCore::blameNetwork(const EpisodeTally& t) {
+  const int j = static_cast<int>(t.sensor);
+  held_back_.insert({t.episode, j});
+  for (report::FaultRecord& f : faults_) {
+    if (f.kind == FaultKind::Stall && f.episode == t.episode && f.sensor == j && !f.caused_by) {
+      f.caused_by = report::FaultCause{FaultKind::NetworkPartition, "network"};
+    }
+  }
+  const auto partition = std::find_if(faults_.begin(), faults_.end(), [&](const report::FaultRecord& f) {
+    return f.kind == FaultKind::NetworkPartition && f.episode == t.episode;
+  });
+  std::vector<int> sensors = partition == faults_.end() ? std::vector<int>{} : *partition->sensors;
+  if (std::find(sensors.begin(), sensors.end(), j) == sensors.end()) sensors.push_back(j);
+  std::sort(sensors.begin(), sensors.end());
+  std::string names;
+  for (const int s : sensors) names += (names.empty() ? "" : ", ") + std::to_string(s);
+  const std::string detail =
+      "the network held back sensor" + std::string(sensors.size() > 1 ? "s " : " ") + names +
+      " past the stall limit: " + (sensors.size() > 1 ? "their counts" : "its count") +
+      " of episode " + std::to_string(t.episode) +
+      ", written before the episode was closed without them, arrived after it (a cut link or a "
+      "partition between them and the fusion center)";
+  log(spdlog::level::warn, "episode " + std::to_string(t.episode) + ": " + detail);
+  if (partition != faults_.end()) {
+    partition->sensors = std::move(sensors);
+    partition->detail = detail;
+    return;
+  }
+  report::FaultRecord fault =
+      faultEntry(FaultKind::NetworkPartition, "network", std::nullopt, t.episode, std::nullopt, detail);
+  fault.sensors = std::move(sensors);
+  recordFault(std::move(fault));
 }
 
 void FusionCenterCore::onCommandRefused(std::uint64_t command_id, const std::string& reason,
@@ -518,7 +569,8 @@ void FusionCenterCore::tick(std::int64_t now) {
     } else if (silentTooLong(open, now)) {
       closeUnsettled(number, open,
                      "silent for " + formatSeconds(config_.stall_limit_s) +
-                         " s after the episode ended");
+                         " s after the episode ended",
+                     now);
       close = true;
     }
     if (close) {
@@ -645,7 +697,7 @@ bool FusionCenterCore::silentTooLong(const OpenEpisode& open, std::int64_t now) 
 
 // Names every sensor the episode still waits for in the faults (the episode is incomplete).
 void FusionCenterCore::closeUnsettled(std::uint32_t number, OpenEpisode& open,
-                                      const std::string& why) {
+                                      const std::string& why, std::int64_t now) {
   for (const int j : open.fusion->unsettled()) {
     const SensorTally& t = open.fusion->tally(j);
     std::string detail;
@@ -657,7 +709,7 @@ void FusionCenterCore::closeUnsettled(std::uint32_t number, OpenEpisode& open,
       detail = "sensor " + std::to_string(j) + " never reported its count for episode " +
                std::to_string(number) + " (" + std::to_string(t.received) +
                " measurements arrived); the episode was closed when " + why;
-      closed_without_.insert({number, j});
+      closed_without_[{number, j}] = now;
     }
     recordFault(faultEntry(t.tallied ? FaultKind::Lost : FaultKind::Stall, kProcess, j, number,
                            open.fusion->fusedTime(), detail));
@@ -885,7 +937,7 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
       const SensorTally& t = open->fusion->tally(j);
       if (!t.tallied) {
         silent.push_back(j);
-        closed_without_.insert({number, j});
+        closed_without_[{number, j}] = kClosedAtRunEnd;
         continue;
       }
       recordFault(faultEntry(FaultKind::Lost, kProcess, j, number, open->fusion->fusedTime(),
@@ -966,11 +1018,31 @@ report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
                                (refusals.samples == 1 ? " sample" : " samples") +
                                " refused as malformed (" + refusals.first_detail + ")"));
   }
+  // Samples the network held back past the stall limit, refused because their episode had been
+  // closed without them: a consequence of the network_partition that names them.
+  std::map<std::uint32_t, std::uint64_t> held_by_episode;
+  for (const auto& [where, count] : after_close_) {
+    if (held_back_.count(where) > 0) held_by_episode[where.first] += count;
+  }
+  std::uint64_t held_total = 0;
+  for (const auto& [episode, count] : held_by_episode) {
+    held_total += count;
+    report::FaultRecord fault = faultEntry(
+        FaultKind::Rejected, kProcess, std::nullopt, episode, std::nullopt,
+        std::to_string(count) + (count == 1 ? " sample" : " samples") + " of episode " +
+            std::to_string(episode) +
+            " held back by the network arrived after the episode was closed without them "
+            "(refused as finished_episode)");
+    fault.caused_by = report::FaultCause{FaultKind::NetworkPartition, "network"};
+    recordFault(std::move(fault));
+  }
   std::string reasons;
   for (const auto& [reason, count] : s.rejected) {
     if (reason == kNetworkDuplicate) continue;  // scripted, not a fault
     const std::uint64_t rest =
-        reason == wordOf(RejectionReason::Malformed) ? count - std::min(count, named) : count;
+        reason == wordOf(RejectionReason::Malformed)        ? count - std::min(count, named)
+        : reason == wordOf(RejectionReason::FinishedEpisode) ? count - std::min(count, held_total)
+                                                            : count;
     if (rest > 0) reasons += (reasons.empty() ? "" : ", ") + std::to_string(rest) + " " + reason;
   }
   if (!reasons.empty()) {

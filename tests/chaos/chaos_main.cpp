@@ -339,9 +339,12 @@ struct PendingCont {
 struct PendingHeal {
   std::vector<Argv> commands;
   Clock::time_point at;
+  int cut_host = -1;  // CutLink: the host whose link comes up when no other cut of it lasts
 };
 
-void heal(const PendingHeal& h) {
+// Heals a network fault; a link cut twice at once comes up when its last cut ends.
+void heal(const PendingHeal& h, std::map<int, int>& cuts) {
+  if (h.cut_host >= 0 && --cuts[h.cut_host] > 0) return;
   for (const Argv& command : h.commands) (void)testing::runProcess(command, std::chrono::seconds(10));
 }
 
@@ -385,6 +388,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
   std::map<int, std::int64_t> starts;  // episode -> announced start (realtime ns)
   std::vector<PendingCont> conts;
   std::vector<PendingHeal> heals;
+  std::map<int, int> cuts;  // sensor host -> cuts of its link in force
   std::optional<int> exit_code;
   std::vector<bool> dead_agents(static_cast<std::size_t>(t.sensors), false);
   while (!exit_code && secondsSince(t0) < limit_s) {
@@ -428,14 +432,23 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
       if (p.target == Target::SensorHost) {
         f.at_s = secondsSince(t0);
         f.logged_before = logLineCount(log);
+        const bool cut = p.action == Action::CutLink;
+        if (cut && cuts[p.host]++ > 0) {  // already down: this cut lengthens it
+          f.injected = true;
+          f.note = "link down";
+          heals.push_back({{}, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000)), p.host});
+          continue;
+        }
         const Struck struck = strikeNetwork(p, *hosts);
         if (!struck.failed.empty()) {
+          if (cut) --cuts[p.host];
           f.note = "failed: " + struck.failed;
           continue;
         }
         f.injected = true;
         f.note = struck.how;
-        heals.push_back({struck.heal, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000))});
+        heals.push_back({struck.heal, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000)),
+                         cut ? p.host : -1});
         continue;
       }
       std::optional<pid_t> pid;
@@ -476,7 +489,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     }
     for (auto it = heals.begin(); it != heals.end();) {
       if (Clock::now() >= it->at) {
-        heal(*it);
+        heal(*it, cuts);
         it = heals.erase(it);
       } else {
         ++it;
@@ -493,7 +506,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     std::this_thread::sleep_for(kPoll);
   }
   for (const PendingCont& c : conts) ::kill(c.pid, SIGCONT);  // nothing stays stopped
-  for (const PendingHeal& h : heals) heal(h);                  // nor cut off
+  for (const PendingHeal& h : heals) heal(h, cuts);            // nor cut off
   if (!exit_code) {
     r.ended = false;
     ::kill(launcher.pid(), SIGCONT);

@@ -89,10 +89,22 @@ bool silences(const PlannedFault& p) {
          p.action == Action::HostDeaf;
 }
 
+// Silences that overlap or follow within a second count as one, whatever they struck: a cut of
+// 8 s lengthened by another of 8 s is a silence of up to 16 s.
 bool longSilence(const TrialRecord& r) {
-  return std::any_of(r.faults.begin(), r.faults.end(), [](const InjectedFault& f) {
-    return f.injected && silences(f.planned) && f.planned.length_s > kAbsorbedStopS;
-  });
+  std::vector<std::pair<double, double>> spans;
+  for (const InjectedFault& f : r.faults) {
+    if (f.injected && silences(f.planned)) spans.emplace_back(f.at_s, f.at_s + f.planned.length_s);
+  }
+  std::sort(spans.begin(), spans.end());
+  for (std::size_t i = 0; i < spans.size();) {
+    double end = spans[i].second;
+    std::size_t k = i + 1;
+    while (k < spans.size() && spans[k].first <= end + 1.0) end = std::max(end, spans[k++].second);
+    if (end - spans[i].first > kAbsorbedStopS) return true;
+    i = k;
+  }
+  return false;
 }
 
 // The whole lines of the episode log; a line that is not a JSON object is a violation.

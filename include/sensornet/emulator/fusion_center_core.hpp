@@ -250,7 +250,9 @@ class FusionCenterCore {
   [[nodiscard]] std::set<std::int32_t> liveSensorProcesses() const;
   void finishRestarted(std::uint32_t episode, std::int64_t now);
   [[nodiscard]] bool silentTooLong(const OpenEpisode& open, std::int64_t now) const;
-  void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why);
+  void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why,
+                      std::int64_t now);
+  void blameNetwork(const EpisodeTally& t);
   void cutShort(const std::string& why, std::optional<FaultKind> cause);
   void publishState(std::uint32_t episode, const OpenEpisode& open, std::int64_t now);
   // cut_short: why the run ended while it was open (its incomplete_reason says so).
@@ -302,7 +304,13 @@ class FusionCenterCore {
   bool holds_writers_ = false;          // restarted: held every sensor process's writers once
   std::set<std::uint32_t> began_unheld_;  // episodes that began before that: not fused
   std::set<int> answered_without_;  // sensors whose writers a restarted episode's answer lacked
-  std::set<std::pair<std::uint32_t, int>> closed_without_;  // (episode, sensor) with no tally
+  // (episode, sensor) closed with no tally -> when it was closed (the stall limit), or
+  // kClosedAtRunEnd (cut short)
+  std::map<std::pair<std::uint32_t, int>, std::int64_t> closed_without_;
+  // (episode, sensor) whose count the network held back past the stall limit (blameNetwork),
+  // and the samples of those episodes refused as finished_episode after the close
+  std::set<std::pair<std::uint32_t, int>> held_back_;
+  std::map<std::pair<std::uint32_t, int>, std::uint64_t> after_close_;
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;
   std::map<RejectionReason, std::uint64_t> rejected_outside_;  // refused before an episode

@@ -32,6 +32,9 @@ enum class FaultKind {
   Overload,           // the fusion center could not keep up (drain past the keep-up limit)
   SensorLag,          // a sensor published far behind the emulated clock
   LateTally,          // a tally came after its episode was closed without it
+  // The network held sensors back past the stall limit: a count written before its episode was
+  // closed arrived after (a cut link, a partition). Their stall and late_tally follow from it.
+  NetworkPartition,
   Restarted,          // the fusion center was restarted and resumed from its episode log
   MissingEpisodes,    // the coordinator ran episodes the report does not hold
   Rejected,           // samples refused on the wire (the counts by reason are in `rejected`)
@@ -116,11 +119,12 @@ struct Words<emulator::RunStatus> {
 template <>
 struct Words<emulator::FaultKind> {
   using F = emulator::FaultKind;
-  static constexpr std::array<WordOf<F>, 24> kTable{{{F::Stall, "stall"},
+  static constexpr std::array<WordOf<F>, 25> kTable{{{F::Stall, "stall"},
                                                      {F::Lost, "lost"},
                                                      {F::Overload, "overload"},
                                                      {F::SensorLag, "sensor_lag"},
                                                      {F::LateTally, "late_tally"},
+                                                     {F::NetworkPartition, "network_partition"},
                                                      {F::Restarted, "restarted"},
                                                      {F::MissingEpisodes, "missing_episodes"},
                                                      {F::Rejected, "rejected"},
