@@ -323,6 +323,24 @@ void checkDeathsListed(const TrialRecord& r, const json& report, std::vector<std
   }
 }
 
+bool networkOnly(const TrialRecord& r) {
+  const std::vector<const InjectedFault*> order = struck(r);
+  return !order.empty() && std::all_of(order.begin(), order.end(), [](const InjectedFault* f) {
+           return isNetworkFault(f->planned.action);
+         });
+}
+
+// Only the network was faulted: what the report blames is the network (a network_partition),
+// never a consequence of it standing as a cause (a stall of the sensors it cut off, an overload).
+void checkNetworkNamed(const TrialRecord& r, const json& report, std::vector<std::string>& v) {
+  if (!networkOnly(r) || !report["faults"].is_array()) return;
+  for (const json& fault : report["faults"]) {
+    if (sensornet::report::isConsequence(fault) || fault.value("kind", "") == "network_partition") continue;
+    v.push_back("cause: only the network was faulted, and the report blames " + fault.value("kind", "?") +
+                " in " + fault.value("process", "?") + ": " + fault.value("detail", "").substr(0, 160));
+  }
+}
+
 }  // namespace
 
 ExpectedOutcome expectedOutcome(const TrialRecord& r) {
@@ -353,10 +371,7 @@ ExpectedOutcome expectedOutcome(const TrialRecord& r) {
   const bool death = std::any_of(order.begin(), order.end(), [](const InjectedFault* f) {
     return f->planned.action == Action::Kill;
   });
-  const bool network_only =
-      !order.empty() && std::all_of(order.begin(), order.end(), [](const InjectedFault* f) {
-        return isNetworkFault(f->planned.action);
-      });
+  const bool network_only = networkOnly(r);
   if (death) {
     out.exit_codes = {3};
     out.statuses = {"degraded"};
@@ -409,6 +424,7 @@ std::vector<std::string> checkInvariants(const TrialRecord& r) {
       v.push_back("cause: status " + status + " with no fault that is not a consequence");
     }
     checkDeathsListed(r, report, v);
+    checkNetworkNamed(r, report, v);
   }
   const json& per_episode = report["per_episode"];
   if (!per_episode.is_array()) {

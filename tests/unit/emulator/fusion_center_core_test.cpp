@@ -283,6 +283,54 @@ TEST_F(FusionCenterCoreTest, ASilentSensorIsAwaitedForTheStallLimitThenAStall) {
   EXPECT_EQ(faultKinds(), (std::vector<std::string>{"stall", "late_tally"}));
 }
 
+// Issue 49: the same silence, but the network's. Sensor 2 wrote its samples and its count on
+// time; a cut link held them back past the stall limit. The count, written before the close,
+// arrives after it: one network_partition fault names sensor 2, and the stall, the late tally
+// and the held-back samples' refusal are its consequences. (Above, the count is written after
+// the close: a stalled sensor, and no partition.)
+TEST_F(FusionCenterCoreTest, ACountHeldBackByTheNetworkPastTheStallLimitIsAPartition) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::vector<MeasurementArrival> held;
+  for (const auto& m : all) {
+    if (m.measurement.sensor == 2) held.push_back(m);
+  }
+  ASSERT_FALSE(held.empty());
+  std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 2; });
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 3});
+  const std::int64_t written = now_;  // sensor 2's count, written now, held back
+  runUntil(endOf(0) + 12 * kS + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_FALSE(reports_[0].result.complete);
+  // The link heals: the samples, then the count.
+  for (MeasurementArrival m : held) {
+    m.measurement.receive_wall_ns = now_ + kMs;
+    runUntil(now_ + kMs);
+    core_->onMeasurement(m, now_);
+  }
+  core_->onTally(tally(2, 0, sent[2], written), now_);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
+  const json faults = faultsJson();
+  EXPECT_EQ(report::causeCount(faults), 1u) << faults.dump(2);
+  std::map<std::string, int> consequences;
+  for (const json& f : faults) {
+    if (!report::isConsequence(f)) {
+      EXPECT_EQ(f.at("kind"), "network_partition") << f.dump();
+      EXPECT_EQ(f.at("process"), "network");
+      EXPECT_EQ(f.at("sensors"), json::array({2}));
+      EXPECT_EQ(f.at("episode"), 0);
+      continue;
+    }
+    EXPECT_EQ(f.at("caused_by").at("kind"), "network_partition") << f.dump();
+    ++consequences[f.at("kind").get<std::string>()];
+  }
+  EXPECT_EQ(consequences, (std::map<std::string, int>{{"late_tally", 1}, {"rejected", 1}, {"stall", 1}}));
+  EXPECT_EQ(final_.at("summary").at("rejected"), held.size());
+}
+
 TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   begin(0);
   auto all = measurements(0);
