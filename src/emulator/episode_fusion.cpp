@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -610,8 +611,14 @@ EpisodeResult EpisodeFusion::finish() {
     result.sensors.push_back(tally);
   }
   double delay_sum_s = 0.0;
+  result.earliest_latency_s.assign(tallies.size(), std::numeric_limits<double>::infinity());
   for (const FusedMeasurement& m : all_) {
-    result.latencies_s.push_back(1e-9 * static_cast<double>(m.receive_wall_ns - m.publish_wall_ns));
+    const double latency_s = 1e-9 * static_cast<double>(m.receive_wall_ns - m.publish_wall_ns);
+    result.latencies_s.push_back(latency_s);
+    if (m.sensor >= 0 && static_cast<std::size_t>(m.sensor) < tallies.size()) {
+      double& earliest = result.earliest_latency_s[static_cast<std::size_t>(m.sensor)];
+      earliest = std::min(earliest, latency_s);
+    }
     delay_sum_s += m.network_delay_s;
     result.network_delay_max_s = std::max(result.network_delay_max_s, m.network_delay_s);
   }

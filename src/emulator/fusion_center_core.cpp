@@ -510,6 +510,43 @@ void FusionCenterCore::blameNetwork(const EpisodeTally& t) {
   recordFault(std::move(fault));
 }
 
+// Latencies across clocks: a measurement stamped after it was received cannot be, unless the
+// sender's clock is ahead of this one. Any such makes the latency figures not known (never
+// negative, never silently wrong); beyond kClockBoundS it is a clock_offset fault naming the
+// sensors and how far ahead their clocks are at least. (A clock behind looks like a slow
+// network, which a one-way figure cannot tell apart.)
+void FusionCenterCore::noteClocks() {
+  std::vector<int> ahead;
+  std::vector<int> beyond;
+  double most = 0.0;
+  for (std::size_t j = 0; j < earliest_latency_s_.size(); ++j) {
+    if (earliest_latency_s_[j] >= 0.0) continue;
+    ahead.push_back(static_cast<int>(j));
+    if (-earliest_latency_s_[j] > kClockBoundS) beyond.push_back(static_cast<int>(j));
+    most = std::max(most, -earliest_latency_s_[j]);
+  }
+  if (ahead.empty()) return;
+  const auto list = [](const std::vector<int>& sensors) {
+    std::string names;
+    for (const int j : sensors) names += (names.empty() ? "" : ", ") + std::to_string(j);
+    return (sensors.size() > 1 ? "sensors " : "sensor ") + names;
+  };
+  report_->setLatencyUnknown("the clocks disagree: " + list(ahead) +
+                             " stamped measurements up to " + formatSeconds(most) +
+                             " s after the fusion center received them");
+  if (beyond.empty()) return;
+  std::string detail = "the clock of the host of " + list(beyond) + " is ahead of the fusion center's by at least ";
+  double least = std::numeric_limits<double>::infinity();  // true of each of them
+  for (const int j : beyond) least = std::min(least, -earliest_latency_s_[static_cast<std::size_t>(j)]);
+  detail += formatSeconds(least) + " s (a measurement stamped that much after it was received; the bound is " +
+            formatSeconds(kClockBoundS) + " s): latencies and real-time costs across it are not known";
+  log(spdlog::level::warn, detail);
+  report::FaultRecord fault =
+      faultEntry(FaultKind::ClockOffset, "sensor_agent", std::nullopt, std::nullopt, std::nullopt, detail);
+  fault.sensors = beyond;
+  recordFault(std::move(fault));
+}
+
 void FusionCenterCore::onCommandRefused(std::uint64_t command_id, const std::string& reason,
                                         std::int64_t /*now*/) {
   if (!refused_commands_.insert(command_id).second) return;  // a reply comes again on a resend
@@ -742,6 +779,10 @@ void FusionCenterCore::finishEpisode(std::uint32_t number, OpenEpisode& open,
   noteHeldBack(number, open);
   traceCovariance(*open.fusion, result);
   report_->addLatencies(result.latencies_s);
+  earliest_latency_s_.resize(result.earliest_latency_s.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t j = 0; j < result.earliest_latency_s.size(); ++j) {
+    earliest_latency_s_[j] = std::min(earliest_latency_s_[j], result.earliest_latency_s[j]);
+  }
   const json entry = episodeEntry(result);
   if (!episode_log_refused_) emit<AppendEpisodeLog>(entry);
   report_->add(entry);
@@ -1018,6 +1059,7 @@ report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
                                (refusals.samples == 1 ? " sample" : " samples") +
                                " refused as malformed (" + refusals.first_detail + ")"));
   }
+  noteClocks();
   // Samples the network held back past the stall limit, refused because their episode had been
   // closed without them: a consequence of the network_partition that names them.
   std::map<std::uint32_t, std::uint64_t> held_by_episode;

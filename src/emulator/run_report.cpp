@@ -430,7 +430,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
   const auto ofComplete = [&s](double value, std::uint64_t needed = 1) {
     return s.episodes_complete >= needed ? numberOrNull(value) : json(nullptr);
   };
-  const bool measured_latency = latencies_.count() > 0;
+  const bool measured_latency = latencies_.count() > 0 && !latency_unknown_because_;
   json report = {
       {"schema_version", sensornet::report::kRecordSchemaVersion},
       {"run_id", run_id_},
@@ -479,6 +479,7 @@ json RunReport::toJsonWithoutEpisodes(const std::string& status, const json& fau
       {"network_delay_s",
        {{"mean", s.received > 0 ? json(s.network_delay_mean_s) : json(nullptr)},
         {"max", s.received > 0 ? json(s.network_delay_max_s) : json(nullptr)}}}};
+  if (latency_unknown_because_) report["latency_s"]["unknown_because"] = *latency_unknown_because_;
   for (const auto& [key, value] : extra.items()) report[key] = value;
   report.erase(kPerEpisode);
   return report;

@@ -473,7 +473,9 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
   const std::optional<double> delay_max = run.network_delay_s ? run.network_delay_s->max : std::nullopt;
   const bool delayed = delay_max && *delay_max > 0.0;
   const char* which = delayed ? " (the middleware's, without the emulated network's delay)" : "";
-  if (run.latency_s && run.latency_s->median) {
+  if (run.latency_s && run.latency_s->unknown_because) {
+    std::printf("latency publish-to-fusion: not known (%s)\n", run.latency_s->unknown_because->c_str());
+  } else if (run.latency_s && run.latency_s->median) {
     std::printf("latency publish-to-fusion%s: median %s ms, p99 %s ms\n", which,
                 shown(ms(run.latency_s->median)).c_str(), shown(ms(run.latency_s->p99)).c_str());
   } else {

@@ -403,6 +403,7 @@ RunRecord decodeRunRecord(const json& doc) {
     lf.optional("median", l.median);
     lf.optional("p99", l.p99);
     lf.optional("quantile_relative_error", l.quantile_relative_error);
+    lf.optional("unknown_because", l.unknown_because);
     lf.raw("histogram", l.histogram);
     run.latency_s = std::move(l);
   }
@@ -583,6 +584,7 @@ json encode(const RunRecord& run) {
                         {"p99", orNull(run.latency_s->p99)},
                         {"quantile_relative_error", orNull(run.latency_s->quantile_relative_error)},
                         {"histogram", run.latency_s->histogram}};
+    if (run.latency_s->unknown_because) doc["latency_s"]["unknown_because"] = *run.latency_s->unknown_because;
   }
   if (run.network_delay_s) {
     doc["network_delay_s"] = {{"mean", orNull(run.network_delay_s->mean)},

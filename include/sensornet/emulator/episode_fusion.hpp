@@ -154,6 +154,7 @@ struct EpisodeResult {
   double nees = 0.0;                    // e(T)' P(T)^{-1} e(T) against the emulated truth
   std::vector<SensorTally> sensors;
   std::vector<double> latencies_s;      // publish to fusion, one per measurement
+  std::vector<double> earliest_latency_s;  // per sensor, the smallest of its latencies (+inf: none)
   // The emulated network's delay of the measurements received (emulated seconds; not in the
   // latencies, which start when the sensor writes the delayed measurement).
   double network_delay_mean_s = 0.0;

@@ -149,6 +149,12 @@ struct PublishState {
 struct AppendEpisodeLog {
   nlohmann::json entry;
 };
+// How far the clocks of a run's hosts may disagree before latency figures across them are not
+// believed: a sensor that stamps measurements later than the fusion center receives them by
+// more than this has a clock ahead by at least as much, a clock_offset fault. (NTP keeps hosts
+// within a millisecond or so on a LAN; PTP within microseconds: docs/guide/many-hosts.md.)
+inline constexpr double kClockBoundS = 1e-3;
+
 struct RecordFault {
   report::FaultRecord fault;  // faultEntry(...), also kept for the final report
 };
@@ -253,6 +259,7 @@ class FusionCenterCore {
   void closeUnsettled(std::uint32_t number, OpenEpisode& open, const std::string& why,
                       std::int64_t now);
   void blameNetwork(const EpisodeTally& t);
+  void noteClocks();
   void cutShort(const std::string& why, std::optional<FaultKind> cause);
   void publishState(std::uint32_t episode, const OpenEpisode& open, std::int64_t now);
   // cut_short: why the run ended while it was open (its incomplete_reason says so).
@@ -310,6 +317,9 @@ class FusionCenterCore {
   // (episode, sensor) whose count the network held back past the stall limit (blameNetwork),
   // and the samples of those episodes refused as finished_episode after the close
   std::set<std::pair<std::uint32_t, int>> held_back_;
+  // Per sensor, the smallest publish-to-fusion latency of the run (+inf: none yet): below zero,
+  // its clock is ahead of this process's by at least as much (noteClocks).
+  std::vector<double> earliest_latency_s_;
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> after_close_;
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;

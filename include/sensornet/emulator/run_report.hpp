@@ -155,6 +155,9 @@ class RunReport {
   // Publish-to-fusion latencies, for the run's median and p99 (without them, the summary uses
   // the median of the episodes' medians).
   void addLatencies(const std::vector<double>& latencies_s);
+  // The latency figures cannot be believed (clocks that disagree): the report gives no median
+  // nor p99, and says why.
+  void setLatencyUnknown(std::string why) { latency_unknown_because_ = std::move(why); }
   // Samples refused outside any episode (other runs, malformed schedules, ...), by reason.
   void countRejected(const std::string& reason, std::uint64_t count = 1);
   [[nodiscard]] RunSummary summary() const;
@@ -204,6 +207,7 @@ class RunReport {
 
   std::vector<SensorTotals> sensor_totals_;
   LatencyHistogram latencies_;
+  std::optional<std::string> latency_unknown_because_;
   LatencyHistogram episode_medians_;  // the fallback without latencies
   RejectionCounts rejected_outside_;
 };

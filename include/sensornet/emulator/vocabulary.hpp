@@ -35,6 +35,9 @@ enum class FaultKind {
   // The network held sensors back past the stall limit: a count written before its episode was
   // closed arrived after (a cut link, a partition). Their stall and late_tally follow from it.
   NetworkPartition,
+  // A sensor stamped measurements later than the fusion center received them, by more than the
+  // clocks may disagree (kClockBoundS): its host's clock is ahead of the fusion center's.
+  ClockOffset,
   Restarted,          // the fusion center was restarted and resumed from its episode log
   MissingEpisodes,    // the coordinator ran episodes the report does not hold
   Rejected,           // samples refused on the wire (the counts by reason are in `rejected`)
@@ -119,12 +122,13 @@ struct Words<emulator::RunStatus> {
 template <>
 struct Words<emulator::FaultKind> {
   using F = emulator::FaultKind;
-  static constexpr std::array<WordOf<F>, 25> kTable{{{F::Stall, "stall"},
+  static constexpr std::array<WordOf<F>, 26> kTable{{{F::Stall, "stall"},
                                                      {F::Lost, "lost"},
                                                      {F::Overload, "overload"},
                                                      {F::SensorLag, "sensor_lag"},
                                                      {F::LateTally, "late_tally"},
                                                      {F::NetworkPartition, "network_partition"},
+                                                     {F::ClockOffset, "clock_offset"},
                                                      {F::Restarted, "restarted"},
                                                      {F::MissingEpisodes, "missing_episodes"},
                                                      {F::Rejected, "rejected"},

@@ -159,6 +159,8 @@ struct LatencyRecord {
   std::optional<double> median;  // publish to fusion, seconds; none: nothing measured
   std::optional<double> p99;
   std::optional<double> quantile_relative_error;
+  // Set when the figures cannot be believed (clocks that disagree): median and p99 are then null.
+  std::optional<std::string> unknown_because;
   nlohmann::json histogram;  // {"edges_s": [...], "counts": [...]} or null
 };
 

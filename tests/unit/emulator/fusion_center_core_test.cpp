@@ -331,6 +331,39 @@ TEST_F(FusionCenterCoreTest, ACountHeldBackByTheNetworkPastTheStallLimitIsAParti
   EXPECT_EQ(final_.at("summary").at("rejected"), held.size());
 }
 
+// Issue 49, clocks: sensor 1's host clock is 2 s ahead (it stamps measurements 2 s after the
+// fusion center receives them), sensor 2's 0.5 ms ahead (within the bound NTP keeps). Neither
+// latency figure is believed (null, and why), sensor 1's offset is a clock_offset fault naming it
+// and at least 2 s, sensor 2's is not a fault; the hindsight cost is that of the true times.
+TEST_F(FusionCenterCoreTest, AClockAheadMakesLatencyUnknownAndBeyondTheBoundAFault) {
+  begin(0);
+  auto all = measurements(0);
+  const double clean = inOrderCost(all);
+  const auto sent = sentBy(all);
+  for (auto& m : all) {
+    if (m.measurement.sensor == 1) m.measurement.publish_wall_ns += 2'000 * kMs;
+    if (m.measurement.sensor == 2) m.measurement.publish_wall_ns += kMs + kMs / 2;
+  }
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.realized_cost, clean);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
+  const json faults = faultsJson();
+  ASSERT_EQ(faults.size(), 1u) << faults.dump(2);
+  EXPECT_EQ(faults[0].at("kind"), "clock_offset");
+  EXPECT_EQ(faults[0].at("sensors"), json::array({1}));
+  EXPECT_NE(faults[0].at("detail").get<std::string>().find("by at least 2 s"), std::string::npos)
+      << faults[0].at("detail");
+  const json& latency = final_.at("latency_s");
+  EXPECT_TRUE(latency.at("median").is_null());
+  EXPECT_TRUE(latency.at("p99").is_null());
+  EXPECT_NE(latency.at("unknown_because").get<std::string>().find("sensors 1, 2"), std::string::npos)
+      << latency.dump();
+}
+
 TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   begin(0);
   auto all = measurements(0);
