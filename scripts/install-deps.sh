@@ -26,6 +26,7 @@ packages=(
   chromium  # headless, for the report page's browser test
   openssl  # secured runs: `sensornet pki init` runs openssl
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
+  iptables faketime  # the chaos checker's network faults (partitions, loss); a host's clock offset
   python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
   python3-numpy  # sensornet.World gives numpy arrays
   python3-jsonschema  # the tests check real reports against docs/report.schema.json

@@ -255,6 +255,58 @@ TEST_F(ManyHosts, ThreeSecondLinkCutLosesNothingOrIsCountedExactly) {
   }
 }
 
+// Issue 49, clocks: host 3's processes run under libfaketime 2 s ahead (`faketime -f +2s` before
+// its exec prefix). Its sensors stamp their measurements 2 s after the fusion center receives
+// them. The run must not show that as a latency: the figures are not known (null, and why),
+// and the offset, past the 1 ms bound, is a clock_offset fault naming sensors of host 3 only
+// and at least 1.9 s; the hindsight costs are the one-host run's (they use emulated times).
+TEST_F(ManyHosts, AHostClockAheadIsAFaultNeverANegativeLatency) {
+  if (runProcess({"/usr/bin/env", "sh", "-c", "command -v faketime"}).exit_code != 0) {
+    GTEST_SKIP() << "faketime is not installed (Debian: faketime)";
+  }
+  const LeftoverGuard guard(run_id_);
+  std::string harness;
+  ProcessResult result;
+  {
+    NetnsHosts hosts(3);
+    harness = hosts.name();
+    std::string yaml = threeHostsYaml(hosts);
+    const std::string prefix = "exec: ip netns exec " + hosts.ns(3);
+    yaml.replace(yaml.find(prefix), prefix.size(), "exec: faketime -f +2s ip netns exec " + hosts.ns(3));
+    const auto hosts_file = writeText(dir_ / "hosts.yaml", yaml);
+    std::vector<std::string> args = runArgs(run_id_, 3, "10", "hosts");
+    args.insert(args.end(), {"--hosts", hosts_file.string()});
+    result = runProcess(args, 180s);
+  }
+  expectHarnessRemoved(harness);
+  expectNothingLeft(run_id_);
+  EXPECT_EQ(result.exit_code, 3) << result.out << result.err;
+  const json report = readJson(dir_ / "hosts.json");
+  ASSERT_TRUE(report.is_object()) << result.err;
+  EXPECT_EQ(report.value("status", ""), "degraded");
+  EXPECT_EQ(checkAccounting(report), 0u);
+  const json& latency = report.at("latency_s");
+  EXPECT_TRUE(latency.at("median").is_null()) << latency.dump();
+  EXPECT_TRUE(latency.at("p99").is_null()) << latency.dump();
+  EXPECT_TRUE(latency.contains("unknown_because")) << latency.dump();
+  EXPECT_NE(result.out.find("latency publish-to-fusion: not known (the clocks disagree"), std::string::npos)
+      << result.out;
+  ASSERT_EQ(report.at("faults").size(), 1u) << report.at("faults").dump();
+  const json& fault = report.at("faults")[0];
+  EXPECT_EQ(fault.at("kind"), "clock_offset");
+  ASSERT_FALSE(fault.at("sensors").empty());
+  for (const json& j : fault.at("sensors")) {
+    EXPECT_GE(j.get<int>(), 3) << fault.dump();
+    EXPECT_LE(j.get<int>(), 5) << fault.dump();
+  }
+  double least = 0.0;
+  const std::string detail = fault.at("detail").get<std::string>();
+  ASSERT_EQ(std::sscanf(detail.c_str() + detail.find("by at least ") + 12, "%lf", &least), 1) << detail;
+  EXPECT_GT(least, 1.9) << detail;
+  EXPECT_LT(least, 2.1) << detail;
+  EXPECT_EQ(realizedCosts(report), oneHostCosts(3));
+}
+
 // A netem delay of 20 ms +- 5 ms on what both sensor hosts send: the measurements arrive later
 // (the latency figures grow by about 20 ms) and the cost of what had been received by each
 // instant grows (every measurement is received later than in the one-host run, and that cost is
