@@ -173,11 +173,39 @@ constexpr int kCoordinatorHost = 1;
 constexpr int kFusionHost = 2;
 int sensorHost(int host) { return 3 + host; }
 
-std::string hostsYaml(const Trial& t, const testing::NetnsHosts& hosts) {
+// Sensor hosts with a clock fault run their processes under libfaketime, reading their offset
+// from a file (FAKETIME_TIMESTAMP_FILE, re-read each second) that a step rewrites; their
+// monotonic clock is left alone, as NTP leaves it.
+struct Clocks {
+  std::string library;                  // libfaketime.so.1
+  std::map<int, fs::path> offset_file;  // sensor host (0, 1) -> its offset file
+};
+
+std::optional<std::string> faketimeLibrary() {
+  for (const char* path : {"/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1",
+                           "/usr/lib/aarch64-linux-gnu/faketime/libfaketime.so.1",
+                           "/usr/lib/faketime/libfaketime.so.1"}) {
+    if (fs::exists(path)) return path;
+  }
+  return std::nullopt;
+}
+
+void writeOffset(const fs::path& file, double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%+.3f\n", seconds);
+  std::ofstream(file) << text;
+}
+
+std::string hostsYaml(const Trial& t, const testing::NetnsHosts& hosts, const Clocks& clocks) {
   std::string text = "hosts:\n";
   const auto host = [&](int i, const std::string& name, const std::string& runs) {
-    text += "  - name: " + name + "\n    address: " + hosts.address(i) + "\n    exec: ip netns exec " +
-            hosts.ns(i) + "\n" + runs;
+    std::string exec = "ip netns exec " + hosts.ns(i);
+    for (const auto& [h, file] : clocks.offset_file) {
+      if (sensorHost(h) != i) continue;
+      exec = "env LD_PRELOAD=" + clocks.library + " FAKETIME_TIMESTAMP_FILE=" + file.string() +
+             " FAKETIME_CACHE_DURATION=1 FAKETIME_DONT_FAKE_MONOTONIC=1 " + exec;
+    }
+    text += "  - name: " + name + "\n    address: " + hosts.address(i) + "\n    exec: " + exec + "\n" + runs;
   };
   const int half = t.sensors / 2;
   host(kCoordinatorHost, "control", "    coordinator: true\n");
@@ -365,6 +393,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
   }
 
   std::optional<testing::NetnsHosts> hosts;
+  std::map<int, fs::path> offset_files;  // sensor host -> its clock's offset file
   std::vector<std::string> args =
       launchArgs(o, scenarioPath(o, t, dir), t.episodes, t.time_scale, t.policy, t.run_seed, run_id, dir);
   if (t.on_hosts) {
@@ -372,9 +401,23 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
       r.skipped = "a network trial, and " + *why;
       return r;
     }
+    Clocks clocks;
+    for (const PlannedFault& p : t.faults) {
+      if (!isClockFault(p.action)) continue;
+      const auto library = faketimeLibrary();
+      if (!library) {
+        r.skipped = "a clock fault, and libfaketime is not installed (Debian: faketime)";
+        return r;
+      }
+      clocks.library = *library;
+      const fs::path file = dir / ("clock-edge-" + std::to_string(p.host + 1));
+      writeOffset(file, p.action == Action::ClockOffset ? p.clock_s : 0.0);
+      clocks.offset_file[p.host] = file;
+    }
+    offset_files = clocks.offset_file;
     hosts.emplace(4);
     const fs::path file = dir / "hosts.yaml";
-    std::ofstream(file) << hostsYaml(t, *hosts);
+    std::ofstream(file) << hostsYaml(t, *hosts, clocks);
     args.insert(args.end(), {"--hosts", file.string()});
   }
 
@@ -429,6 +472,14 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
               realtimeNs() >= start->second + static_cast<std::int64_t>(p.offset_s * 1e9);
       }
       if (!due) continue;
+      if (isClockFault(p.action)) {  // an offset in force from the start, or a step now
+        f.at_s = secondsSince(t0);
+        f.logged_before = logLineCount(log);
+        if (p.action == Action::ClockStep) writeOffset(offset_files.at(p.host), p.clock_s);
+        f.injected = true;
+        f.note = "faketime";
+        continue;
+      }
       if (p.target == Target::SensorHost) {
         f.at_s = secondsSince(t0);
         f.logged_before = logLineCount(log);

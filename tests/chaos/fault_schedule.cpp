@@ -85,6 +85,8 @@ PlannedFault drawNetworkFault(Stream& s, const Trial& t) {
 
 }  // namespace
 
+bool isClockFault(Action action) { return action == Action::ClockOffset || action == Action::ClockStep; }
+
 bool isNetworkFault(Action action) {
   return action == Action::CutLink || action == Action::FusionDeaf || action == Action::HostDeaf ||
          action == Action::LossBurst || action == Action::ReorderBurst;
@@ -146,6 +148,22 @@ Trial drawTrial(std::uint64_t seed, bool network) {
     static constexpr int kNetworkCounts[] = {65, 35};
     const std::size_t links = 1 + net.weighted(kNetworkCounts);
     for (std::size_t i = 0; i < links; ++i) t.faults.push_back(drawNetworkFault(net, t));
+    // A third of the network trials also put a sensor host's clock off: from the start, or
+    // stepped mid-run; ahead twice as often as behind (a clock ahead is what the run detects).
+    Stream clock(seed ^ 0x636c6f636bULL);
+    if (clock.between(0, 2) == 0) {
+      PlannedFault f;
+      f.target = Target::SensorHost;
+      f.action = clock.between(0, 1) == 0 ? Action::ClockOffset : Action::ClockStep;
+      f.host = clock.between(0, 1);
+      f.clock_s = clock.uniform(0.2, 3.0) * (clock.between(0, 2) == 0 ? -1.0 : 1.0);
+      drawMoment(clock, t, f);
+      if (f.action == Action::ClockOffset) {
+        f.anchor = Anchor::Launch;
+        f.offset_s = 0.0;
+      }
+      t.faults.push_back(f);
+    }
   }
   return t;
 }
@@ -172,6 +190,8 @@ const char* nameOf(Action action) {
     case Action::HostDeaf: return "host deaf";
     case Action::LossBurst: return "loss";
     case Action::ReorderBurst: return "reorder";
+    case Action::ClockOffset: return "clock off";
+    case Action::ClockStep: return "clock step";
   }
   return "?";
 }
@@ -193,15 +213,20 @@ std::string describe(const PlannedFault& f) {
                         : std::string(nameOf(f.target));
   if (f.target == Target::SensorHost) {
     const std::string host = "edge-" + std::to_string(f.host + 1);
-    what = f.action == Action::LossBurst ? "drop " + std::to_string(static_cast<int>(f.loss * 100 + 0.5)) + "% on"
+    char clock[32];
+    std::snprintf(clock, sizeof clock, "%+.2f s", f.clock_s);
+    what = isClockFault(f.action)      ? std::string(f.action == Action::ClockOffset ? "set" : "step")
+           : f.action == Action::LossBurst ? "drop " + std::to_string(static_cast<int>(f.loss * 100 + 0.5)) + "% on"
            : f.action == Action::ReorderBurst ? "reorder"
            : f.action == Action::CutLink      ? "cut"
            : f.action == Action::FusionDeaf   ? "deafen the fusion center to"
                                               : "deafen";
-    who = f.action == Action::FusionDeaf ? host
+    who = isClockFault(f.action)         ? host + "'s clock " + clock
+          : f.action == Action::FusionDeaf ? host
           : f.action == Action::HostDeaf ? host + " to the coordinator"
                                          : host + "'s link";
   }
+  if (f.action == Action::ClockOffset) return what + " " + who + " from the start";
   const std::string length = f.action == Action::Stop || isNetworkFault(f.action)
                                  ? " for " + std::to_string(f.length_s).substr(0, 4) + " s"
                                  : "";

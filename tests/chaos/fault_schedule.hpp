@@ -34,7 +34,13 @@ enum class Action {
   LossBurst,     // a fraction `loss` of the packets into and out of the host dropped at random
   ReorderBurst,  // the host's outgoing packets reordered (netem where the kernel has it, else
                  // 30% of them through a slow HTB class)
+  // Clock faults (Target::SensorHost): the wall clock of the host's processes (libfaketime;
+  // their monotonic clock is left alone, as NTP leaves it), by clock_s seconds:
+  ClockOffset,  // off from the start
+  ClockStep,    // stepped at the fault's moment (NTP stepping it, a VM resumed)
 };
+
+[[nodiscard]] bool isClockFault(Action action);
 
 [[nodiscard]] bool isNetworkFault(Action action);
 
@@ -54,6 +60,7 @@ struct PlannedFault {
   double offset_s = 0.0;  // wall seconds after the anchor
   double length_s = 0.0;  // Stop and network faults: wall seconds until healed
   double loss = 0.0;      // LossBurst: the probability of each packet's drop
+  double clock_s = 0.0;   // ClockOffset, ClockStep: how far ahead (> 0) or behind (< 0)
 };
 
 enum class ScenarioKind { Default, Lossy, Small };
