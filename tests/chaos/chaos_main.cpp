@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -41,6 +42,11 @@ using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 constexpr auto kPoll = std::chrono::milliseconds(10);
+
+// Ctrl-C or SIGTERM of chaos itself: the trial under way is stopped and cleaned up (its
+// processes, its namespaces, links and rules), and no further trial starts.
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void onStopSignal(int /*signal*/) { g_stop = 1; }
 // After the launcher ended, its children may take this long to go (README: after kill -9 of the
 // launcher they outlive it by 2-4 s; the parent-death signal, then their own shutdown).
 constexpr double kLeftoverGraceS = 12.0;
@@ -434,7 +440,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
   std::map<int, int> cuts;  // sensor host -> cuts of its link in force
   std::optional<int> exit_code;
   std::vector<bool> dead_agents(static_cast<std::size_t>(t.sensors), false);
-  while (!exit_code && secondsSince(t0) < limit_s) {
+  while (!exit_code && secondsSince(t0) < limit_s && g_stop == 0) {
     exit_code = launcher.waitForExit(std::chrono::milliseconds(0));
     if (exit_code) break;
     for (const Target target : {Target::Coordinator, Target::FusionCenter, Target::SensorAgent}) {
@@ -558,6 +564,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
   }
   for (const PendingCont& c : conts) ::kill(c.pid, SIGCONT);  // nothing stays stopped
   for (const PendingHeal& h : heals) heal(h, cuts);            // nor cut off
+  if (g_stop != 0) r.skipped = "chaos was interrupted";
   if (!exit_code) {
     r.ended = false;
     ::kill(launcher.pid(), SIGCONT);
@@ -688,14 +695,16 @@ int main(int argc, char** argv) {
   ::setenv("SENSORNET_SCRATCH_DIR", (o.work / "scratch").c_str(), 1);
   ::unsetenv("SENSORNET_CYCLONE_CONFIG");
   // A shell starts background jobs with SIGINT ignored, and the launcher would inherit that:
-  // its signals must be the defaults a user's terminal gives it.
-  for (const int signal : {SIGINT, SIGTERM}) ::signal(signal, SIG_DFL);
+  // its signals must be the defaults a user's terminal gives it. Handled signals are reset to
+  // the defaults in every program chaos starts (exec); ignored ones would not be.
+  for (const int signal : {SIGINT, SIGTERM}) ::signal(signal, onStopSignal);
 
   int violated = 0;
   int skipped = 0;
   std::size_t injected = 0;
   std::map<std::string, int> kinds;
   for (const std::uint64_t seed : o.seeds) {
+    if (g_stop != 0) break;
     const Trial trial = drawTrial(seed, o.network);
     const fs::path dir = o.work / ("trial-" + std::to_string(seed));
     std::error_code ignored;
@@ -736,6 +745,10 @@ int main(int argc, char** argv) {
   if (own_work && violated == 0 && !o.keep) {
     std::error_code ignored;
     fs::remove_all(o.work, ignored);  // the clean runs and the scratch folder too
+  }
+  if (g_stop != 0) {
+    std::cout << "interrupted: the trial under way was stopped and cleaned up" << std::endl;
+    return 130;
   }
   return violated == 0 ? 0 : 1;
 }
