@@ -2,11 +2,11 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <deque>
 #include <functional>
+#include <limits>
 
 #include "sensornet/core/network.hpp"
 #include "sensornet/emulator/vocabulary.hpp"

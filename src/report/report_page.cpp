@@ -599,6 +599,9 @@ std::string formatDuration(double seconds) {
 
 std::string latencyPlot(const std::optional<LatencyRecord>& latency) {
   const std::string heading = "Publish-to-fusion latency";
+  if (latency && latency->unknown_because) {
+    return note(heading, "Not known: " + *latency->unknown_because + ".");
+  }
   const double median = latency ? orNan(latency->median) : kNan;
   const double p99 = latency ? orNan(latency->p99) : kNan;
   // The record keeps the histogram as written (LatencyRecord::histogram): read here as json.

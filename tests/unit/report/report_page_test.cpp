@@ -19,6 +19,7 @@
 #include "sensornet/emulator/covariance_trace.hpp"
 #include "sensornet/emulator/run_report.hpp"
 #include "sensornet/emulator/schedule_book.hpp"
+#include "sensornet/report/run_record.hpp"
 #include "sensornet/report/svg_plot.hpp"
 #include "support/csv_rows.hpp"
 #include "support/occurrences.hpp"
@@ -203,6 +204,23 @@ TEST(ReportPage, HasATitleAndOnePlotPerPartWithMarksAndNoFetchedResource) {
   EXPECT_EQ(page.find("href="), std::string::npos);
   EXPECT_EQ(page.find("@import"), std::string::npos);
   EXPECT_NE(page.find("@media print"), std::string::npos);
+}
+
+// Issue 49: latency figures withheld because clocks disagree are said to be not known, with
+// why, not drawn from a histogram whose floor holds the impossible (negative) latencies; and
+// the record's codec keeps the reason.
+TEST(ReportPage, SaysWhyLatencyIsNotKnownInsteadOfDrawingIt) {
+  json report = sampleReport();
+  report["latency_s"]["median"] = nullptr;
+  report["latency_s"]["p99"] = nullptr;
+  report["latency_s"]["unknown_because"] = "the clocks disagree: sensor 3 stamped <late>";
+  EXPECT_EQ(sensornet::report::encode(sensornet::report::decodeRunRecord(report))
+                .at("latency_s")
+                .at("unknown_because"),
+            report["latency_s"]["unknown_because"]);
+  const std::string page = reportPage(report, "r.json");
+  EXPECT_NE(page.find("Not known: the clocks disagree: sensor 3 stamped &lt;late&gt;."), std::string::npos);
+  EXPECT_EQ(page.find("id=\"plot-latency\""), std::string::npos);
 }
 
 TEST(ReportPage, RefusesAReportWithoutWhatItReadsNamingTheField) {
