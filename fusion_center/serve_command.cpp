@@ -57,6 +57,8 @@ struct ServeOptions {
 // After the final report, /metrics stays up this long, so that a scraper polling every second
 // gets the final counters.
 constexpr auto kMetricsLinger = 2s;
+// A run aborted before the scenario came: how long to wait for the scenario, to report why.
+constexpr auto kScenarioAfterAbort = 5s;
 // How often the metrics are rebuilt while the run lives (wall).
 constexpr auto kMetricsPeriod = 250ms;
 
@@ -108,6 +110,18 @@ class FusionCenter {
       readReplies(now);
       core_.tick(now);
       carryOut();
+    }
+    // A run the coordinator aborted at once (a journal it could not write) may end here before
+    // its scenario did (discovery matches the topics one by one, slowly on a loaded machine):
+    // the scenario is kept for late readers (transient local), so wait a little for it, to
+    // write the report that says why rather than none.
+    if (end && end->aborted && !core_.hasScenario()) {
+      const auto deadline = std::chrono::steady_clock::now() + kScenarioAfterAbort;
+      while (!core_.hasScenario() && std::chrono::steady_clock::now() < deadline &&
+             !emulator::stopRequested()) {
+        (void)dds_.waitset.wait(10ms);
+        (void)follow(wallNowNs());
+      }
     }
     // The death signal says so at once; the parent's id changes only once every thread of the
     // dying launcher is gone.

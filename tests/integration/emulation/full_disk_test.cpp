@@ -109,5 +109,36 @@ TEST_F(DiskFull, AReportItsFolderCannotTakeGoesBesideTheLogs) { runOnDiskOf(12, 
 
 TEST_F(DiskFull, AnEpisodeLogCutShortLosesNoEpisode) { runOnDiskOf(4, true); }
 
+// The log folder full (16 KiB: the processes' logs take its pages before the coordinator's
+// journal): the coordinator will not run what a restart could not resume, so the run is
+// `failed`, exit 1 (the coordinator gave up, docs/ARCHITECTURE.md "Run outcome"), with one
+// cause naming the journal's file and the disk's error, the report where it was asked for (its
+// folder has room), and no process left.
+TEST_F(DiskFull, ALogFolderThatCannotTakeTheJournalFailsTheRunNamingIt) {
+  const LeftoverGuard guard(run_id_);
+  const fs::path logs = dir_ / "logs";
+  const SmallDisk disk(logs, 16);
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here: " << disk.error();
+  const fs::path report_path = dir_ / "report.json";
+  const ProcessResult r = runProcess(launchArgs(6, "4", report_path, logs), 120s);
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  const std::string journal = (logs / "coordinator-state.json").string();
+  EXPECT_NE(r.out.find("cannot write the coordinator journal " + journal + ": No space left on device"),
+            std::string::npos)
+      << r.out;
+  const nlohmann::json report = testing::readJson(report_path);
+  ASSERT_TRUE(report.is_object()) << r.out;
+  EXPECT_EQ(report.at("status"), "failed");
+  std::size_t causes = 0;
+  for (const nlohmann::json& f : report.at("faults")) {
+    if (f.contains("caused_by")) continue;
+    ++causes;
+    EXPECT_EQ(f.at("kind"), "run_aborted") << f.dump();
+    EXPECT_EQ(f.at("process"), "coordinator") << f.dump();
+  }
+  EXPECT_EQ(causes, 1u) << report.at("faults").dump(1);
+  EXPECT_TRUE(testing::waitUntil([&] { return testing::processesMentioning(run_id_).empty(); }, 10s));
+}
+
 }  // namespace
 }  // namespace sensornet
