@@ -373,13 +373,30 @@ struct PendingCont {
 struct PendingHeal {
   std::vector<Argv> commands;
   Clock::time_point at;
-  int cut_host = -1;  // CutLink: the host whose link comes up when no other cut of it lasts
+  int cut_host = -1;   // CutLink: the host whose link comes up when no other cut of it lasts
+  std::size_t fault;   // its index in the trial record
 };
 
-// Heals a network fault; a link cut twice at once comes up when its last cut ends.
-void heal(const PendingHeal& h, std::map<int, int>& cuts) {
-  if (h.cut_host >= 0 && --cuts[h.cut_host] > 0) return;
+// Heals a network fault; a link cut twice at once comes up when its last cut ends (with the
+// commands of whichever cut brought it down: every cut of a host carries the same undoing).
+// Returns whether the fault's silence ended now.
+bool heal(const PendingHeal& h, std::map<int, int>& cuts) {
+  if (h.cut_host >= 0 && --cuts[h.cut_host] > 0) return false;
   for (const Argv& command : h.commands) (void)testing::runProcess(command, std::chrono::seconds(10));
+  return true;
+}
+
+// When each fault of `record` healed (seconds after the launch): every cut of a host heals
+// when its link comes up.
+void noteHealed(TrialRecord& record, const PendingHeal& h, double at_s) {
+  record.faults[h.fault].healed_at_s = at_s;
+  if (h.cut_host < 0) return;
+  for (InjectedFault& f : record.faults) {
+    if (f.injected && f.planned.action == Action::CutLink && f.planned.host == h.cut_host &&
+        f.healed_at_s < 0.0) {
+      f.healed_at_s = at_s;
+    }
+  }
 }
 
 // Runs the trial's launch, strikes its faults when their moments come, and collects what the
@@ -490,10 +507,13 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
         f.at_s = secondsSince(t0);
         f.logged_before = logLineCount(log);
         const bool cut = p.action == Action::CutLink;
+        const std::size_t index = static_cast<std::size_t>(&f - r.faults.data());
         if (cut && cuts[p.host]++ > 0) {  // already down: this cut lengthens it
           f.injected = true;
           f.note = "link down";
-          heals.push_back({{}, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000)), p.host});
+          heals.push_back({{{"/usr/bin/env", "ip", "link", "set", hosts->veth(sensorHost(p.host)), "up"}},
+                           Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000)),
+                           p.host, index});
           continue;
         }
         const Struck struck = strikeNetwork(p, *hosts);
@@ -505,7 +525,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
         f.injected = true;
         f.note = struck.how;
         heals.push_back({struck.heal, Clock::now() + std::chrono::milliseconds(static_cast<int>(p.length_s * 1000)),
-                         cut ? p.host : -1});
+                         cut ? p.host : -1, index});
         continue;
       }
       std::optional<pid_t> pid;
@@ -546,7 +566,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     }
     for (auto it = heals.begin(); it != heals.end();) {
       if (Clock::now() >= it->at) {
-        heal(*it, cuts);
+        if (heal(*it, cuts)) noteHealed(r, *it, secondsSince(t0));
         it = heals.erase(it);
       } else {
         ++it;
@@ -563,7 +583,10 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     std::this_thread::sleep_for(kPoll);
   }
   for (const PendingCont& c : conts) ::kill(c.pid, SIGCONT);  // nothing stays stopped
-  for (const PendingHeal& h : heals) heal(h, cuts);            // nor cut off
+  r.ended_at_s = secondsSince(t0);
+  for (const PendingHeal& h : heals) {  // nor cut off
+    if (heal(h, cuts)) noteHealed(r, h, secondsSince(t0));
+  }
   if (g_stop != 0) r.skipped = "chaos was interrupted";
   if (!exit_code) {
     r.ended = false;

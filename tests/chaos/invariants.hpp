@@ -26,6 +26,7 @@ struct InjectedFault {
   int agent = -1;                 // SensorAgent: the agent it hit (another when that one was dead)
   double at_s = 0.0;              // wall seconds after the launch
   std::size_t logged_before = 0;  // episodes in the episode log at that moment
+  double healed_at_s = -1.0;      // network faults: when it was healed (-1: not)
 };
 
 struct TrialRecord {
@@ -40,6 +41,7 @@ struct TrialRecord {
   std::vector<std::optional<double>> clean_costs;
   std::vector<std::string> leftovers;  // command lines of the run's processes still alive
   std::string skipped;  // why the trial could not run here (a network trial without root)
+  double ended_at_s = 0.0;  // when the launcher ended (or the trial gave up on it)
 };
 
 // The outcome the table of docs/ARCHITECTURE.md ("Run outcome") gives for what was injected.
