@@ -24,7 +24,8 @@
 
 namespace sensornet::testing {
 
-inline const std::string kNetnsScript = std::string(SENSORNET_SOURCE_DIR) + "/scripts/netns-hosts.sh";
+inline const std::string kNetnsScript =
+    std::string(SENSORNET_SOURCE_DIR) + "/scripts/netns-hosts.sh";
 
 class NetnsHosts {
  public:
