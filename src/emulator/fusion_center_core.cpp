@@ -1020,6 +1020,7 @@ void FusionCenterCore::cutShort(const std::string& why, std::optional<FaultKind>
 report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
     const std::optional<RunEnd>& end, const std::map<std::string, std::uint64_t>& rejected_by_inputs) {
   if (resumed_ && report_) noteRestart();
+  if (report_) noteClocks();  // however the run ended
   report::StatusEvidence seen;
   if (!end) {
     seen.interrupted = true;
@@ -1059,7 +1060,6 @@ report::StatusEvidence FusionCenterCore::gatherStatusEvidence(
                                (refusals.samples == 1 ? " sample" : " samples") +
                                " refused as malformed (" + refusals.first_detail + ")"));
   }
-  noteClocks();
   // Samples the network held back past the stall limit, refused because their episode had been
   // closed without them: a consequence of the network_partition that names them.
   std::map<std::uint32_t, std::uint64_t> held_by_episode;

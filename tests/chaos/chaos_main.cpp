@@ -108,6 +108,17 @@ std::optional<pid_t> processOf(const std::string& run_id, Target target, int age
   return std::nullopt;
 }
 
+// Whether `pid` has a handler for `signal` (SigCgt of /proc/PID/status).
+bool catches(pid_t pid, int signal) {
+  std::istringstream status(readText("/proc/" + std::to_string(pid) + "/status"));
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("SigCgt:", 0) != 0) continue;
+    const unsigned long long mask = std::strtoull(line.c_str() + 7, nullptr, 16);
+    return ((mask >> (signal - 1)) & 1ULL) != 0;
+  }
+  return false;
+}
+
 std::size_t logLineCount(const fs::path& log) {
   const std::string text = readText(log);
   return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
@@ -551,6 +562,13 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
                          : p.action == Action::Interrupt ? SIGINT
                          : p.action == Action::Terminate ? SIGTERM
                                                          : SIGKILL;
+      // A signal that comes before the launcher's main() could install its handlers (the
+      // loader maps its libraries first, ~10 ms) kills it whatever the program does: no user
+      // is that fast, and no program can answer it. Such a moment waits for the handlers.
+      if (p.target == Target::Launcher && signal != SIGKILL && signal != SIGSTOP) {
+        const auto give_up = Clock::now() + std::chrono::seconds(2);
+        while (!catches(*pid, signal) && Clock::now() < give_up) std::this_thread::sleep_for(kPoll / 10);
+      }
       if (::kill(*pid, signal) != 0) {
         f.note = "kill failed";
         continue;
