@@ -742,10 +742,12 @@ int main(int argc, char** argv) {
 
   int violated = 0;
   int skipped = 0;
+  std::size_t ran = 0;  // trials begun (an interrupt ends the list early)
   std::size_t injected = 0;
   std::map<std::string, int> kinds;
   for (const std::uint64_t seed : o.seeds) {
     if (g_stop != 0) break;
+    ++ran;
     const Trial trial = drawTrial(seed, o.network);
     const fs::path dir = o.work / ("trial-" + std::to_string(seed));
     std::error_code ignored;
@@ -776,7 +778,7 @@ int main(int argc, char** argv) {
       fs::remove_all(dir, ignored);
     }
   }
-  std::cout << o.seeds.size() << " trial(s), " << injected << " fault(s) injected (";
+  std::cout << ran << " trial(s)" << (ran < o.seeds.size() ? " of " + std::to_string(o.seeds.size()) : "") << ", " << injected << " fault(s) injected (";
   bool first_kind = true;
   for (const auto& [kind, n] : kinds) {
     std::cout << (first_kind ? "" : ", ") << n << " " << kind;
