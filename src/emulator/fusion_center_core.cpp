@@ -24,6 +24,13 @@ constexpr int kTracePoints = 200;
 // process's own stalls) before the link that carried it counts as having stalled: the slack a
 // StallWatch allows a process (a loaded machine delays a sample by tens of milliseconds).
 constexpr double kHeldBackS = 0.5;
+// "sensor 3", "sensors 3, 4, 5": the sensors a fault's detail names, each by its number.
+std::string sensorList(const std::vector<int>& sensors) {
+  std::string names;
+  for (const int j : sensors) names += (names.empty() ? "" : ", ") + std::to_string(j);
+  return (sensors.size() > 1 ? "sensors " : "sensor ") + names;
+}
+
 // closed_without_: an episode cut short at the run's end, not closed by the stall limit.
 constexpr std::int64_t kClosedAtRunEnd = std::numeric_limits<std::int64_t>::min();
 
@@ -490,11 +497,8 @@ void FusionCenterCore::blameNetwork(const EpisodeTally& t) {
   std::vector<int> sensors = partition == faults_.end() ? std::vector<int>{} : *partition->sensors;
   if (std::find(sensors.begin(), sensors.end(), j) == sensors.end()) sensors.push_back(j);
   std::sort(sensors.begin(), sensors.end());
-  std::string names;
-  for (const int s : sensors) names += (names.empty() ? "" : ", ") + std::to_string(s);
   const std::string detail =
-      "the network held back sensor" + std::string(sensors.size() > 1 ? "s " : " ") + names +
-      " past the stall limit: " + (sensors.size() > 1 ? "their counts" : "its count") +
+      "the network held back " + sensorList(sensors) + " past the stall limit: " + (sensors.size() > 1 ? "their counts" : "its count") +
       " of episode " + std::to_string(t.episode) +
       ", written before the episode was closed without them, arrived after it (a cut link or a "
       "partition between them and the fusion center)";
@@ -526,16 +530,11 @@ void FusionCenterCore::noteClocks() {
     most = std::max(most, -earliest_latency_s_[j]);
   }
   if (ahead.empty()) return;
-  const auto list = [](const std::vector<int>& sensors) {
-    std::string names;
-    for (const int j : sensors) names += (names.empty() ? "" : ", ") + std::to_string(j);
-    return (sensors.size() > 1 ? "sensors " : "sensor ") + names;
-  };
-  report_->setLatencyUnknown("the clocks disagree: " + list(ahead) +
+  report_->setLatencyUnknown("the clocks disagree: " + sensorList(ahead) +
                              " stamped measurements up to " + formatSeconds(most) +
                              " s after the fusion center received them");
   if (beyond.empty()) return;
-  std::string detail = "the clock of the host of " + list(beyond) + " is ahead of the fusion center's by at least ";
+  std::string detail = "the clock of the host of " + sensorList(beyond) + " is ahead of the fusion center's by at least ";
   double least = std::numeric_limits<double>::infinity();  // true of each of them
   for (const int j : beyond) least = std::min(least, -earliest_latency_s_[static_cast<std::size_t>(j)]);
   detail += formatSeconds(least) + " s (a measurement stamped that much after it was received; the bound is " +
