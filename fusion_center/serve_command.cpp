@@ -59,6 +59,9 @@ struct ServeOptions {
 constexpr auto kMetricsLinger = 2s;
 // A run aborted before the scenario came: how long to wait for the scenario, to report why.
 constexpr auto kScenarioAfterAbort = 5s;
+// How often the fusion center probes the sensor processes' clocks (docs/wire-protocol.md,
+// "Clocks").
+constexpr std::int64_t kProbePeriodNs = 500'000'000;
 // How often the metrics are rebuilt while the run lives (wall).
 constexpr auto kMetricsPeriod = 250ms;
 
@@ -101,7 +104,12 @@ class FusionCenter {
         metrics_due = std::chrono::steady_clock::now() + kMetricsPeriod;
       }
       if (inbox_.mayWait()) (void)dds_.waitset.wait(10ms);
+      readEchoes();  // first: an echo's wait here widens its clock's bound
       const std::int64_t now = wallNowNs();
+      if (now >= next_probe_ns_) {
+        probes_.send(dds_.probe_writer, options_.run.run_id, now);
+        next_probe_ns_ = now + kProbePeriodNs;
+      }
       inbox_.drainInto(drained_);
       for (Arrival& arrival : drained_) core_.onMeasurement(std::move(arrival), now);
       end = follow(now);
@@ -169,6 +177,14 @@ class FusionCenter {
     if (!core_.hasScenario()) return;  // kept by the reader (transient local) until then
     for (auto& received : dds_.tally_reader.take(64).samples) {
       core_.onTally(wire::tallyOfSample(*received.sample, received.info.publication), now);
+    }
+  }
+
+  // The sensor processes' answers to our clock probes, each stamped when taken (t4).
+  void readEchoes() {
+    for (auto& received : dds_.echo_reader.take(64).samples) {
+      const std::int64_t now = wallNowNs();
+      if (const auto echo = probes_.answerOf(*received.sample)) core_.onClockEcho(*echo, now);
     }
   }
 
@@ -298,6 +314,8 @@ class FusionCenter {
   emulator::ArrivalInbox<Arrival> inbox_;
   std::vector<Arrival> taken_;    // the listener's batch (receive thread only)
   std::vector<Arrival> drained_;  // the main loop's (main thread only)
+  wire::ClockProbes probes_;
+  std::int64_t next_probe_ns_ = 0;
   wire::ReportInstances report_instances_{dds_.report_writer, options_.run.run_id};
   // After what its callback touches (reader, waitset, inbox): it is destroyed before them, and
   // its destructor waits for a callback in progress.

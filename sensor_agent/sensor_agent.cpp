@@ -7,8 +7,11 @@
 #include <cstdio>
 #include <chrono>
 #include <span>
+#include <string>
+#include <vector>
 
 #include "sensornet/dds/participant.hpp"
+#include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
 #include "sensornet/dds/waitset.hpp"
 #include "sensornet/dds/wire.hpp"
@@ -51,9 +54,18 @@ class Agent {
                       dds::endpointQosIn<sensornet_EpisodeTally>(own_partition_)),
         status_writer_(participant_, status_topic_,
                        dds::endpointQosIn<sensornet_SensorStatus>(own_partition_)),
+        probe_topic_(participant_),
+        echo_topic_(participant_),
+        probe_reader_(participant_, probe_topic_),
+        echo_writer_(participant_, echo_topic_,
+                     dds::endpointQosIn<sensornet_ClockEcho>(own_partition_)),
         waitset_(participant_),
-        core_({options.sensors, options.status_period_s}, inputs_.state()) {
+        probe_ready_(probe_reader_),
+        core_({options.sensors, options.status_period_s}, inputs_.state()),
+        process_name_(processName()) {
     inputs_.attachTo(waitset_);
+    waitset_.attach(probe_ready_, kProbeToken);
+    for (const int j : options.sensors) echo_sensors_.push_back(static_cast<std::uint32_t>(j));
   }
 
   int run() {
@@ -64,6 +76,7 @@ class Agent {
         break;
       }
       (void)waitset_.wait(core_.untilNextEvent(wallNowNs(), kIdleWait));
+      answerProbes();
       core_.onDiscovery({inputs_.controlMatched(), measurement_writer_.matchedReaders() > 0,
                          tally_writer_.matchedReaders() > 0});
       carryOut(core_.onInputs(inputs_.poll(), wallNowNs()));
@@ -73,6 +86,34 @@ class Agent {
   }
 
  private:
+  static constexpr dds_attach_t kProbeToken = 2001;
+
+  // "sensor_agent 4711@edge-1": unique in the run while the process lives.
+  static std::string processName() {
+    char host[256] = {};
+    if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+    return "sensor_agent " + std::to_string(::getpid()) + "@" + host;
+  }
+
+  // The fusion center's clock probes, answered at once (docs/wire-protocol.md, "Clocks"): t2
+  // when taken, t3 just before the write. Best-effort: a lost answer costs nothing.
+  void answerProbes() {
+    for (auto& received : probe_reader_.take(4).samples) {
+      const sensornet_ClockProbe& probe = *received.sample;
+      const std::int64_t taken_ns = wallNowNs();
+      if (dds::viewString(probe.run_id) != options_.run.run_id) continue;
+      sensornet_ClockEcho echo{};
+      echo.run_id = dds::borrowString(options_.run.run_id);
+      echo.process = dds::borrowString(process_name_);
+      dds::borrowSequence(echo.sensor_ids, echo_sensors_);
+      echo.probe_seq = probe.seq;
+      echo.probe_sent_wall_time_ns = probe.sent_wall_time_ns;
+      echo.received_wall_time_ns = taken_ns;
+      echo.sent_wall_time_ns = wallNowNs();
+      (void)echo_writer_.write(echo);
+    }
+  }
+
   // The measurements of one call fell due together (all at or before now): they share packets,
   // sent when the last is written. Under load a wake finds several due, and one sendmsg instead
   // of one each is most of the agent's CPU and of the fusion center's receive thread
@@ -176,8 +217,15 @@ class Agent {
   dds::Writer<sensornet_Measurement> measurement_writer_;
   dds::Writer<sensornet_EpisodeTally> tally_writer_;
   dds::Writer<sensornet_SensorStatus> status_writer_;
+  dds::Topic<sensornet_ClockProbe> probe_topic_;
+  dds::Topic<sensornet_ClockEcho> echo_topic_;
+  dds::Reader<sensornet_ClockProbe> probe_reader_;
+  dds::Writer<sensornet_ClockEcho> echo_writer_;
   dds::WaitSet waitset_;
+  dds::ReadCondition probe_ready_;
   emulator::SensorAgentCore core_;
+  std::string process_name_;
+  std::vector<std::uint32_t> echo_sensors_;
 };
 
 }  // namespace

@@ -172,6 +172,24 @@ const SampleType& infoOf<sensornet_FusionState>() {
   return info;
 }
 
+template <>
+const SampleType& infoOf<sensornet_ClockProbe>() {
+  using T = sensornet_ClockProbe;
+  static const SampleType info{"ClockProbe", "sensornet/ClockProbe", sizeof(T),
+                               {F(run_id), F(seq), F(sent_wall_time_ns)}};
+  return info;
+}
+
+template <>
+const SampleType& infoOf<sensornet_ClockEcho>() {
+  using T = sensornet_ClockEcho;
+  static const SampleType info{"ClockEcho", "sensornet/ClockEcho", sizeof(T),
+                               {F(run_id), F(process), F(sensor_ids), F(probe_seq),
+                                F(probe_sent_wall_time_ns), F(received_wall_time_ns),
+                                F(sent_wall_time_ns)}};
+  return info;
+}
+
 #undef F
 
 }  // namespace
@@ -185,7 +203,8 @@ const std::vector<const SampleType*>& topicSampleTypes() {
       &infoOf<sensornet_EpisodeControl>(), &infoOf<sensornet_Measurement>(),
       &infoOf<sensornet_EpisodeTally>(), &infoOf<sensornet_SensorStatus>(),
       &infoOf<sensornet_Report>(),       &infoOf<sensornet_Command>(),
-      &infoOf<sensornet_CommandReply>(), &infoOf<sensornet_FusionState>()};
+      &infoOf<sensornet_CommandReply>(), &infoOf<sensornet_FusionState>(),
+      &infoOf<sensornet_ClockProbe>(),   &infoOf<sensornet_ClockEcho>()};
   return all;
 }
 

@@ -51,4 +51,6 @@ Qos commandReplyQos() { return lastKnownState(1); }
 
 Qos fusionStateQos() { return Qos().reliable(kMaxBlockingTime).volatileDurability().keepLast(1); }
 
+Qos clockQos() { return Qos().bestEffort().volatileDurability().keepLast(1); }
+
 }  // namespace sensornet::dds

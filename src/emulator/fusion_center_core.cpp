@@ -514,36 +514,107 @@ void FusionCenterCore::blameNetwork(const EpisodeTally& t) {
   recordFault(std::move(fault));
 }
 
-// Latencies across clocks: a measurement stamped after it was received cannot be, unless the
-// sender's clock is ahead of this one. Any such makes the latency figures not known (never
-// negative, never silently wrong); beyond kClockBoundS it is a clock_offset fault naming the
-// sensors and how far ahead their clocks are at least. (A clock behind looks like a slow
-// network, which a one-way figure cannot tell apart.)
+// A process's answer to a clock probe: its sensors must be the run's, and its times possible.
+void FusionCenterCore::onClockEcho(const ClockEcho& echo, std::int64_t now) {
+  if (echo.run_id != config_.run_id) return;
+  const int sensors = hasScenario() ? scenario().sensorCount() : 0;
+  const bool known = !echo.sensors.empty() &&
+                     std::all_of(echo.sensors.begin(), echo.sensors.end(),
+                                 [sensors](int j) { return j >= 0 && j < sensors; });
+  if (!known) {
+    if (++clock_echoes_refused_ == 1) {
+      log(spdlog::level::warn, "a clock echo of \"" + echo.process + "\" names sensors " +
+                                   listed(echo.sensors) + ", not sensors of this run: refused");
+    }
+    return;
+  }
+  const ClockExchange x{echo.probe_sent_ns, echo.probe_taken_ns, echo.answered_ns, now};
+  if (!clocks_.add(echo.process, echo.sensors, x) && clocks_.refused() == 1) {
+    log(spdlog::level::warn, "a clock echo of \"" + echo.process +
+                                 "\" has times that cannot be (answered before it took the "
+                                 "probe, or came back before it was sent): refused");
+  }
+}
+
+// Latencies across clocks. Where a process answered the clock probes, its offset is measured
+// both ways (clock_offsets.hpp): one surely beyond kClockBoundS either way is a clock_offset
+// fault naming its sensors and the offset, and the latency figures are not known. Where none
+// did, one way only: a measurement stamped after it was received cannot be, unless the sender's
+// clock is ahead of this one (beyond kClockBoundS, a fault too); a clock behind then looks like
+// a slow network. Any such makes the latency figures not known (never negative, never silently
+// wrong). One fault however often it is called; each call says what is known by then.
 void FusionCenterCore::noteClocks() {
-  std::vector<int> ahead;
-  std::vector<int> beyond;
+  std::vector<int> named;  // by the fault
+  std::vector<std::string> parts;
+  for (const ClockOffsets::Process& p : clocks_.processes()) {
+    if (!p.farthest.surelyBeyond(kClockBoundS)) continue;
+    named.insert(named.end(), p.sensors.begin(), p.sensors.end());
+    parts.push_back("the clock of the host of " + sensorList(p.sensors) + " is " +
+                    (p.farthest.offset_s > 0.0 ? "ahead of" : "behind") + " the fusion center's by " +
+                    formatSeconds(std::abs(p.farthest.offset_s)) + " s (+/- " +
+                    formatSeconds(p.farthest.uncertainty_s) + " s, measured both ways)");
+  }
+  std::vector<int> ahead;   // one way: stamped after they were received
+  std::vector<int> beyond;  // ... by more than the bound, with no measurement both ways
   double most = 0.0;
   for (std::size_t j = 0; j < earliest_latency_s_.size(); ++j) {
     if (earliest_latency_s_[j] >= 0.0) continue;
-    ahead.push_back(static_cast<int>(j));
-    if (-earliest_latency_s_[j] > kClockBoundS) beyond.push_back(static_cast<int>(j));
+    const int sensor = static_cast<int>(j);
+    ahead.push_back(sensor);
     most = std::max(most, -earliest_latency_s_[j]);
+    if (-earliest_latency_s_[j] > kClockBoundS && !clocks_.measured(sensor)) beyond.push_back(sensor);
   }
-  if (ahead.empty()) return;
-  report_->setLatencyUnknown("the clocks disagree: " + sensorList(ahead) +
-                             " stamped measurements up to " + formatSeconds(most) +
-                             " s after the fusion center received them");
-  if (beyond.empty()) return;
-  std::string detail = "the clock of the host of " + sensorList(beyond) + " is ahead of the fusion center's by at least ";
-  double least = std::numeric_limits<double>::infinity();  // true of each of them
-  for (const int j : beyond) least = std::min(least, -earliest_latency_s_[static_cast<std::size_t>(j)]);
-  detail += formatSeconds(least) + " s (a measurement stamped that much after it was received; the bound is " +
-            formatSeconds(kClockBoundS) + " s): latencies and real-time costs across it are not known";
+  if (!beyond.empty()) {
+    double least = std::numeric_limits<double>::infinity();  // true of each of them
+    for (const int j : beyond) least = std::min(least, -earliest_latency_s_[static_cast<std::size_t>(j)]);
+    named.insert(named.end(), beyond.begin(), beyond.end());
+    parts.push_back("the clock of the host of " + sensorList(beyond) +
+                    " is ahead of the fusion center's by at least " + formatSeconds(least) +
+                    " s (a measurement stamped that much after it was received)");
+  }
+  if (!ahead.empty()) {
+    report_->setLatencyUnknown("the clocks disagree: " + sensorList(ahead) +
+                               " stamped measurements up to " + formatSeconds(most) +
+                               " s after the fusion center received them");
+  } else if (!named.empty()) {
+    report_->setLatencyUnknown("the clocks disagree: " + parts.front());
+  }
+  if (named.empty()) return;
+  std::string detail;
+  for (const std::string& part : parts) detail += (detail.empty() ? "" : "; ") + part;
+  detail += "; the bound is " + formatSeconds(kClockBoundS) +
+            " s: latencies and real-time costs across them are not known";
+  std::sort(named.begin(), named.end());
+  const auto known = std::find_if(faults_.begin(), faults_.end(), [](const report::FaultRecord& f) {
+    return f.kind == FaultKind::ClockOffset;
+  });
+  if (known != faults_.end()) {  // called again: says what is known now
+    known->sensors = std::move(named);
+    known->detail = detail;
+    return;
+  }
   log(spdlog::level::warn, detail);
   report::FaultRecord fault =
       faultEntry(FaultKind::ClockOffset, "sensor_agent", std::nullopt, std::nullopt, std::nullopt, detail);
-  fault.sensors = beyond;
+  fault.sensors = std::move(named);
   recordFault(std::move(fault));
+}
+
+// The report's `clocks`: every process's measured offset from the fusion center's clock.
+nlohmann::json FusionCenterCore::clocksJson() const {
+  json processes = json::array();
+  for (const ClockOffsets::Process& p : clocks_.processes()) {
+    processes.push_back({{"process", p.name},
+                         {"sensors", p.sensors},
+                         {"offset_s", p.best.offset_s},
+                         {"uncertainty_s", p.best.uncertainty_s},
+                         {"farthest_offset_s", p.farthest.offset_s},
+                         {"farthest_uncertainty_s", p.farthest.uncertainty_s},
+                         {"exchanges", p.exchanges}});
+  }
+  return {{"bound_s", kClockBoundS},
+          {"processes", std::move(processes)},
+          {"echoes_refused", clocks_.refused() + clock_echoes_refused_}};
 }
 
 void FusionCenterCore::onCommandRefused(std::uint64_t command_id, const std::string& reason,
@@ -1141,7 +1212,8 @@ json FusionCenterCore::finalReport(RunStatus status, const std::string& written_
                       {"stalls", stalls_},
                       {"written_at", written_at},
                       {"covariance_traces", covarianceTraces()},
-                      {"arrivals", arrivalsJson(scenario().arrivals)}};
+                      {"arrivals", arrivalsJson(scenario().arrivals)},
+                      {"clocks", clocksJson()}};
   // per_episode is streamed in from the episode log, never held whole.
   return report_->toJsonWithoutEpisodes(std::string(wordOf(status)), report::encode(faults_),
                                         scheduleVersionsJson(book_), extra);

@@ -31,13 +31,13 @@ TopicRights rightsOf(const SecurityIdentity& identity) {
               {"Scenario", "Schedule", "EpisodeControl", "Command", "SensorStatus", "Report",
                "FusionState"}};
     case SecurityRole::Sensor:
-      return {{"Measurement", "EpisodeTally", "SensorStatus"},
-              {"Scenario", "Schedule", "EpisodeControl"},
+      return {{"Measurement", "EpisodeTally", "SensorStatus", "ClockEcho"},
+              {"Scenario", "Schedule", "EpisodeControl", "ClockProbe"},
               "sensornet/*/sensors/" + identity.sensors};
     case SecurityRole::FusionCenter:  // CommandReply: a command refused by right is a fault
-      return {{"Report", "FusionState"},
+      return {{"Report", "FusionState", "ClockProbe"},
               {"Scenario", "Schedule", "EpisodeControl", "Measurement", "EpisodeTally",
-               "SensorStatus", "CommandReply"}};
+               "SensorStatus", "CommandReply", "ClockEcho"}};
     case SecurityRole::Operator:
     case SecurityRole::Launcher:  // it sends the sensors' failure notices as Commands
       return {{"Command"},

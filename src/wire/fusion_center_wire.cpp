@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <iterator>
+#include <limits>
 #include <optional>
 
 #include "sensornet/dds/wire.hpp"
@@ -102,10 +103,48 @@ FusionCenterEndpoints::FusionCenterEndpoints(const dds::DomainConfig& config, bo
                     outputQos(dds::reportWriterQos(), participant, reference)),
       state_writer(participant, state_topic,
                    outputQos(dds::defaultEndpointQos<sensornet_FusionState>(), participant,
-                             reference)) {
+                             reference)),
+      probe_writer(participant, probe_topic,
+                   outputQos(dds::defaultEndpointQos<sensornet_ClockProbe>(), participant,
+                             reference)),
+      echo_reader(participant, echo_topic,
+                  dds::readerQosMatching<sensornet_ClockEcho>(
+                      emulator::sensorPartitionPattern(participant.partition()))) {
   inputs.attachTo(waitset);
   waitset.attach(tally_ready, 1);
   waitset.attach(status_ready, 2);
+  waitset.attach(echo_ready, 3);
+}
+
+void ClockProbes::send(dds::Writer<sensornet_ClockProbe>& writer, const std::string& run_id,
+                       std::int64_t now) {
+  sensornet_ClockProbe probe{};
+  probe.run_id = dds::borrowString(run_id);
+  probe.seq = ++seq_;
+  probe.sent_wall_time_ns = now;
+  sent_.emplace_back(probe.seq, now);
+  if (sent_.size() > kKept) sent_.pop_front();
+  (void)writer.write(probe);  // best-effort: the next probe replaces a lost one
+}
+
+std::optional<emulator::ClockEcho> ClockProbes::answerOf(const sensornet_ClockEcho& echo) const {
+  const auto ours = std::find_if(sent_.begin(), sent_.end(), [&echo](const auto& probe) {
+    return probe.first == echo.probe_seq && probe.second == echo.probe_sent_wall_time_ns;
+  });
+  if (ours == sent_.end()) return std::nullopt;
+  emulator::ClockEcho out;
+  out.run_id = std::string(dds::viewString(echo.run_id));
+  out.process = std::string(dds::viewString(echo.process));
+  // An id beyond int's range reads as -1: not a sensor of the run, so the core refuses it.
+  for (const std::uint32_t id : dds::viewSequence(echo.sensor_ids)) {
+    out.sensors.push_back(id <= static_cast<std::uint32_t>(std::numeric_limits<int>::max())
+                              ? static_cast<int>(id)
+                              : -1);
+  }
+  out.probe_sent_ns = ours->second;
+  out.probe_taken_ns = echo.received_wall_time_ns;
+  out.answered_ns = echo.sent_wall_time_ns;
+  return out;
 }
 
 sensornet_FusionState fusionStateSample(const std::string& run_id,

@@ -34,6 +34,9 @@
 // |                |                  | the sender even if its reader matched after the write    |
 // | FusionState    | run              | reliable, volatile, last 1: only the newest estimate     |
 // |                |                  | matters; a re-plan uses whatever is latest               |
+// | ClockProbe     | run              | best-effort, volatile, last 1: a lost probe is replaced  |
+// |                |                  | by the next (every 0.5 s); only a fast one measures well |
+// | ClockEcho      | run, process     | best-effort, volatile, last 1 per process: as the probe  |
 //
 // Reliable writers block up to max_blocking_time (100 ms, Cyclone's default) and then time out.
 //
@@ -75,6 +78,7 @@ inline constexpr std::chrono::milliseconds kMaxBlockingTime{100};
 [[nodiscard]] Qos commandQos();
 [[nodiscard]] Qos commandReplyQos();
 [[nodiscard]] Qos fusionStateQos();
+[[nodiscard]] Qos clockQos();
 
 template <>
 struct TopicType<sensornet_Scenario> {
@@ -146,6 +150,20 @@ struct TopicType<sensornet_FusionState> {
   static constexpr const char* kName = "sensornet/FusionState";
   static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_FusionState_desc; }
   static Qos qos() { return fusionStateQos(); }
+};
+
+template <>
+struct TopicType<sensornet_ClockProbe> {
+  static constexpr const char* kName = "sensornet/ClockProbe";
+  static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_ClockProbe_desc; }
+  static Qos qos() { return clockQos(); }
+};
+
+template <>
+struct TopicType<sensornet_ClockEcho> {
+  static constexpr const char* kName = "sensornet/ClockEcho";
+  static const dds_topic_descriptor_t& descriptor() noexcept { return sensornet_ClockEcho_desc; }
+  static Qos qos() { return clockQos(); }
 };
 
 }  // namespace sensornet::dds

@@ -35,6 +35,7 @@
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/surrogate.hpp"
+#include "sensornet/emulator/clock_offsets.hpp"
 #include "sensornet/emulator/episode_fusion.hpp"
 #include "sensornet/emulator/episode_controls.hpp"
 #include "sensornet/emulator/log_line.hpp"
@@ -132,6 +133,17 @@ struct SensorStatus {
   WriterId writer = 0;
 };
 
+// A process's answer to a clock probe (the ClockEcho topic), decoded: t1 to t3 of the exchange
+// (clock_offsets.hpp); t4 is the `now` it is handed in with.
+struct ClockEcho {
+  std::string run_id;
+  std::string process;
+  std::vector<int> sensors;
+  std::int64_t probe_sent_ns = 0;
+  std::int64_t probe_taken_ns = 0;
+  std::int64_t answered_ns = 0;
+};
+
 // Actions: what the wiring carries out.
 struct PublishReport {
   EpisodeResult result;
@@ -150,9 +162,10 @@ struct AppendEpisodeLog {
   nlohmann::json entry;
 };
 // How far the clocks of a run's hosts may disagree before latency figures across them are not
-// believed: a sensor that stamps measurements later than the fusion center receives them by
-// more than this has a clock ahead by at least as much, a clock_offset fault. (NTP keeps hosts
-// within a millisecond or so on a LAN; PTP within microseconds: docs/guide/many-hosts.md.)
+// believed: a process whose clock is measured (clock_offsets.hpp) farther than this from the
+// fusion center's for certain, or a sensor that stamps measurements later than the fusion
+// center receives them by more than this, is a clock_offset fault. (NTP keeps hosts within a
+// millisecond or so on a LAN; PTP within microseconds: docs/guide/many-hosts.md.)
 inline constexpr double kClockBoundS = 1e-3;
 
 struct RecordFault {
@@ -181,6 +194,9 @@ class FusionCenterCore {
   void onMeasurement(MeasurementArrival arrival, std::int64_t now);
   void onTally(const EpisodeTally& tally, std::int64_t now);
   void onStatus(const SensorStatus& status, std::int64_t now);
+  // A process answered a clock probe, the answer taken at `now` (t4). One naming sensors out
+  // of the scenario, or with times that cannot be, is counted and logged, and changes nothing.
+  void onClockEcho(const ClockEcho& echo, std::int64_t now);
   // The coordinator refused command `command_id` because its sender had no right to send it
   // (a CommandReply whose reason begins with kNotPermitted): a fault, once per command.
   void onCommandRefused(std::uint64_t command_id, const std::string& reason, std::int64_t now);
@@ -260,6 +276,7 @@ class FusionCenterCore {
                       std::int64_t now);
   void blameNetwork(const EpisodeTally& t);
   void noteClocks();
+  [[nodiscard]] nlohmann::json clocksJson() const;
   void cutShort(const std::string& why, std::optional<FaultKind> cause);
   void publishState(std::uint32_t episode, const OpenEpisode& open, std::int64_t now);
   // cut_short: why the run ended while it was open (its incomplete_reason says so).
@@ -320,6 +337,8 @@ class FusionCenterCore {
   // Per sensor, the smallest publish-to-fusion latency of the run (+inf: none yet): below zero,
   // its clock is ahead of this process's by at least as much (noteClocks).
   std::vector<double> earliest_latency_s_;
+  ClockOffsets clocks_;  // the sensor processes' clocks, measured both ways
+  std::uint64_t clock_echoes_refused_ = 0;  // naming sensors out of the run
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> after_close_;
   // (episode, sensor) of a closed episode: copies its tally says the network made, not yet seen.
   std::map<std::pair<std::uint32_t, int>, std::uint64_t> copies_left_;

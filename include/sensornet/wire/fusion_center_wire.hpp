@@ -11,8 +11,10 @@
 
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "sensornet/dds/domain.hpp"
@@ -104,9 +106,16 @@ struct FusionCenterEndpoints {
   dds::Reader<sensornet_CommandReply> reply_reader{participant, reply_topic};
   dds::Writer<sensornet_Report> report_writer;
   dds::Writer<sensornet_FusionState> state_writer;
+  // Clocks (docs/wire-protocol.md, "Clocks"): probes in P (P/reference for a reference, where
+  // no sensor answers), the sensor processes' echoes from P/sensors/*.
+  dds::Topic<sensornet_ClockProbe> probe_topic{participant};
+  dds::Topic<sensornet_ClockEcho> echo_topic{participant};
+  dds::Writer<sensornet_ClockProbe> probe_writer;
+  dds::Reader<sensornet_ClockEcho> echo_reader;
   dds::WaitSet waitset{participant};
   dds::ReadCondition tally_ready{tally_reader};
   dds::ReadCondition status_ready{status_reader};
+  dds::ReadCondition echo_ready{echo_reader};
   ReaderFacts facts{measurement_reader, tally_reader, status_reader, participant.partition()};
 };
 
@@ -116,6 +125,21 @@ struct FusionCenterEndpoints {
 // in Cyclone's receive thread, from the reader's listener.
 std::size_t takeArrivals(dds::Reader<sensornet_Measurement>& reader, std::string_view own_run,
                          std::vector<emulator::MeasurementArrival>& arrivals);
+
+// The probes this fusion center sent lately, to know its own among the echoes (a reference
+// fusion center reads the echoes of the run's probes too) and to take t1 from its own record.
+class ClockProbes {
+ public:
+  static constexpr std::size_t kKept = 16;
+  // Writes the next probe, stamped `now`.
+  void send(dds::Writer<sensornet_ClockProbe>& writer, const std::string& run_id, std::int64_t now);
+  // The echo decoded, when it answers a probe of ours; none for another's or a garbled one.
+  [[nodiscard]] std::optional<emulator::ClockEcho> answerOf(const sensornet_ClockEcho& echo) const;
+
+ private:
+  std::uint32_t seq_ = 0;
+  std::deque<std::pair<std::uint32_t, std::int64_t>> sent_;  // (seq, t1), the latest kKept
+};
 
 // The FusionState sample of `state` (its covariance's entries in `values`, which it borrows, as
 // it borrows `run_id`), stamped `wall_time_ns`.

@@ -213,7 +213,9 @@ TEST(SampleFields, EveryTopicTypeDecodesFromCycloneBitForBitAndRefusesDamage) {
   checkType<sensornet_Command>();
   checkType<sensornet_CommandReply>();
   checkType<sensornet_FusionState>();
-  EXPECT_EQ(topicSampleTypes().size(), 10u);
+  checkType<sensornet_ClockProbe>();
+  checkType<sensornet_ClockEcho>();
+  EXPECT_EQ(topicSampleTypes().size(), 12u);
 }
 
 }  // namespace

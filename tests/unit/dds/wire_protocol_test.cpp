@@ -126,6 +126,8 @@ TEST(WireProtocol, TheDocumentedTopicsAreThoseTheCodeCreatesWithTheirTypesKeysAn
   expectDocumented<sensornet_Command>(rows, seen);
   expectDocumented<sensornet_CommandReply>(rows, seen);
   expectDocumented<sensornet_FusionState>(rows, seen);
+  expectDocumented<sensornet_ClockProbe>(rows, seen);
+  expectDocumented<sensornet_ClockEcho>(rows, seen);
   EXPECT_EQ(rows.size(), seen) << "the document names a topic the code does not create";
 }
 

@@ -384,6 +384,77 @@ TEST_F(FusionCenterCoreTest, AClockAheadIsNamedInAnInterruptedRunToo) {
   EXPECT_TRUE(final_.at("latency_s").at("median").is_null()) << final_.at("latency_s").dump();
 }
 
+// Issue 49: a clock behind looks like a slow network one way; the clock probes measure it both
+// ways. Sensors 2 and 3's process answers 1.5 s behind (100 us each way), sensors 0 and 1's in
+// step: one clock_offset fault naming 2 and 3 "behind ... by 1.5 s", the latency figures not
+// known, the costs untouched; the report lists both processes' offsets. An echo naming a sensor
+// the run does not have, or with times that cannot be, is refused and counted.
+TEST_F(FusionCenterCoreTest, AClockBehindMeasuredBothWaysIsAFaultAndNoLatency) {
+  begin(0);
+  auto all = measurements(0);
+  const double clean = inOrderCost(all);
+  const auto sent = sentBy(all);
+  for (auto& m : all) {
+    if (m.measurement.sensor >= 2) m.measurement.publish_wall_ns -= 1'500 * kMs;
+  }
+  const auto echo = [this](const std::string& process, std::vector<int> sensors, std::int64_t theta) {
+    const std::int64_t t1 = now_;
+    const std::int64_t t2 = t1 + kMs / 10 + theta;
+    core_->onClockEcho({kRun, process, std::move(sensors), t1, t2, t2 + kMs / 10},
+                       t1 + 3 * kMs / 10);
+  };
+  for (int i = 0; i < 3; ++i) {
+    echo("a", {0, 1}, 0);
+    echo("b", {2, 3}, -1'500 * kMs);
+  }
+  echo("c", {9}, 0);                                           // not a sensor of the run
+  core_->onClockEcho({kRun, "d", {0}, now_, now_ - kMs, now_ - 2 * kMs}, now_);  // t3 < t2
+  core_->onClockEcho({"another-run", "e", {0}, now_, now_, now_}, now_);  // not ours: ignored
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(reports_[0].result.realized_cost, clean);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
+  const json faults = faultsJson();
+  ASSERT_EQ(faults.size(), 1u) << faults.dump(2);
+  EXPECT_EQ(faults[0].at("kind"), "clock_offset");
+  EXPECT_EQ(faults[0].at("sensors"), json::array({2, 3}));
+  EXPECT_NE(faults[0].at("detail").get<std::string>().find("sensors 2, 3 is behind the fusion center's by 1.5 s"),
+            std::string::npos)
+      << faults[0].at("detail");
+  const json& latency = final_.at("latency_s");
+  EXPECT_TRUE(latency.at("median").is_null()) << latency.dump();
+  EXPECT_TRUE(latency.contains("unknown_because")) << latency.dump();
+  const json& clocks = final_.at("clocks");
+  ASSERT_EQ(clocks.at("processes").size(), 2u) << clocks.dump(1);
+  const json& b = clocks.at("processes")[1];
+  EXPECT_EQ(b.at("sensors"), json::array({2, 3}));
+  EXPECT_NEAR(b.at("offset_s").get<double>(), -1.5, 1e-9);
+  EXPECT_NEAR(b.at("uncertainty_s").get<double>(), 1e-4, 1e-9);
+  EXPECT_NEAR(clocks.at("processes")[0].at("offset_s").get<double>(), 0.0, 1e-9);
+  EXPECT_EQ(clocks.at("echoes_refused"), 2);
+}
+
+// In step to within the bound: no fault, the latency figures stand.
+TEST_F(FusionCenterCoreTest, ClocksWithinTheBoundLeaveTheLatencyKnown) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t t1 = now_;
+    core_->onClockEcho({kRun, "a", {0, 1, 2, 3}, t1, t1 + kMs / 2, t1 + kMs / 2}, t1 + 2 * kMs / 10);
+  }
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 2, 3});
+  runUntil(endOf(0) + 100 * kMs);
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed) << faultsJson().dump(1);
+  EXPECT_FALSE(final_.at("latency_s").at("median").is_null());
+  EXPECT_NEAR(final_.at("clocks").at("processes")[0].at("offset_s").get<double>(), 0.4e-3, 1e-9);
+}
+
 TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   begin(0);
   auto all = measurements(0);

@@ -41,12 +41,14 @@ TEST(SecurityPolicy, ASensorProcessPublishesItsOwnTopicsInItsOwnPartitionOnly) {
   const std::string publish = section(xml, "publish");
   EXPECT_EQ(all(publish, "topic"), (std::vector<std::string>{"sensornet/Measurement",
                                                              "sensornet/EpisodeTally",
-                                                             "sensornet/SensorStatus"}));
+                                                             "sensornet/SensorStatus",
+                                                             "sensornet/ClockEcho"}));
   EXPECT_EQ(all(publish, "partition"), std::vector<std::string>{"sensornet/*/sensors/0-4"});
   const std::string subscribe = section(xml, "subscribe");
   EXPECT_EQ(all(subscribe, "topic"), (std::vector<std::string>{"sensornet/Scenario",
                                                                "sensornet/Schedule",
-                                                               "sensornet/EpisodeControl"}));
+                                                               "sensornet/EpisodeControl",
+                                                               "sensornet/ClockProbe"}));
   EXPECT_EQ(all(subscribe, "partition"), std::vector<std::string>{"sensornet/*"});
   EXPECT_EQ(all(xml, "subject_name"), std::vector<std::string>{"CN=sensor-0-4,O=sensornet"});
   EXPECT_NE(xml.find("<grant name=\"sensornet_sensor-0-4\">"), std::string::npos);
@@ -80,7 +82,7 @@ TEST(SecurityPolicy, TheFusionCenterAloneWritesReports) {
     EXPECT_EQ(reports, role == SecurityRole::FusionCenter) << dds::securityRoleName(role);
   }
   EXPECT_EQ(rightsOf(SecurityRole::FusionCenter).publish,
-            (std::vector<std::string>{"Report", "FusionState"}));
+            (std::vector<std::string>{"Report", "FusionState", "ClockProbe"}));
 }
 
 TEST(SecurityPolicy, OperatorAndLauncherSendCommandsEachInTheirOwnPartition) {
