@@ -42,6 +42,13 @@ std::string formatSeconds(double seconds) {
   return text;
 }
 
+// A clock's offset: to the microsecond up to 1000 s ("2.00018").
+std::string formatOffset(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", seconds);
+  return text;
+}
+
 template <class Numbers>
 std::string listed(const Numbers& numbers) {
   std::string out;
@@ -551,7 +558,7 @@ void FusionCenterCore::noteClocks() {
     named.insert(named.end(), p.sensors.begin(), p.sensors.end());
     parts.push_back("the clock of the host of " + sensorList(p.sensors) + " is " +
                     (p.farthest.offset_s > 0.0 ? "ahead of" : "behind") + " the fusion center's by " +
-                    formatSeconds(std::abs(p.farthest.offset_s)) + " s (+/- " +
+                    formatOffset(std::abs(p.farthest.offset_s)) + " s (+/- " +
                     formatSeconds(p.farthest.uncertainty_s) + " s, measured both ways)");
   }
   std::vector<int> ahead;   // one way: stamped after they were received

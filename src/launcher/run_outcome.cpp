@@ -255,6 +255,33 @@ std::string arrivalsLine(const std::optional<report::ArrivalsRecord>& arrivals, 
          "says whether the cost lies in it";
 }
 
+// The sensor processes' clocks as the fusion center measured them (the report's "clocks"): how
+// far the farthest may be off, which bounds what the clocks can do to the latency figures; none
+// when the report has no measurement (an older one, an outside fusion center's, a rebuilt one).
+std::string clocksLine(const std::optional<report::ClocksRecord>& clocks) {
+  if (!clocks || clocks->processes.empty()) return "";
+  double within_s = 0.0;
+  std::size_t beyond = 0;
+  for (const report::ClockProcessRecord& p : clocks->processes) {
+    within_s = std::max(within_s, std::abs(p.offset_s) + p.uncertainty_s);
+    if (std::abs(p.offset_s) - p.uncertainty_s > clocks->bound_s) ++beyond;
+  }
+  char text[200];
+  const std::size_t n = clocks->processes.size();
+  if (beyond > 0) {
+    std::snprintf(text, sizeof text,
+                  "clocks: %zu of %zu sensor processes off the fusion center's by more than %g ms "
+                  "(the clock_offset fault above)",
+                  beyond, n, 1e3 * clocks->bound_s);
+  } else {
+    std::snprintf(text, sizeof text,
+                  "clocks: %zu sensor process%s measured against the fusion center's, all within "
+                  "%.2g ms of it (the bound is %g ms)",
+                  n, n == 1 ? "" : "es", 1e3 * within_s, 1e3 * clocks->bound_s);
+  }
+  return text;
+}
+
 // Two brackets of the report differ beyond their rounding (false when one is not there).
 bool differs(const std::optional<BracketRecord>& a, const std::optional<BracketRecord>& b) {
   if (!a || !b || !a->info || !a->cov || !b->info || !b->cov) return false;
@@ -489,6 +516,7 @@ void printOutcome(const RunOutcome& outcome, const fs::path& report_path) {
                                              : "not measured (no measurement arrived)";
     std::printf("latency publish-to-fusion: %s\n", why);
   }
+  if (const std::string line = clocksLine(run.clocks); !line.empty()) std::printf("%s\n", line.c_str());
   if (delayed) {
     std::printf("emulated network delay: mean %s ms, largest %s ms (emulated time)\n",
                 shown(ms(run.network_delay_s->mean)).c_str(), shown(ms(delay_max)).c_str());

@@ -284,6 +284,19 @@ SensorRecord decodeSensor(const json& entry, const std::string& path) {
   return r;
 }
 
+ClockProcessRecord decodeClockProcess(const json& entry, const std::string& path) {
+  ClockProcessRecord p;
+  Fields f(entry, path);
+  f.required("process", p.process);
+  f.required("sensors", p.sensors);
+  f.required("offset_s", p.offset_s);
+  f.required("uncertainty_s", p.uncertainty_s);
+  f.optional("farthest_offset_s", p.farthest_offset_s);
+  f.optional("farthest_uncertainty_s", p.farthest_uncertainty_s);
+  f.optional("exchanges", p.exchanges);
+  return p;
+}
+
 ScheduleVersionRecord decodeVersion(const json& entry, const std::string& path) {
   ScheduleVersionRecord v;
   Fields f(entry, path);
@@ -416,6 +429,18 @@ RunRecord decodeRunRecord(const json& doc) {
     run.network_delay_s = d;
   }
   f.taken("network_delay_s");
+  if (const auto it = doc.find("clocks"); it != doc.end() && !it->is_null()) {
+    ClocksRecord c;
+    Fields cf(*it, "clocks");
+    cf.required("bound_s", c.bound_s);
+    if (const auto list = it->find("processes"); list != it->end() && !list->is_null()) {
+      c.processes = decodeList<ClockProcessRecord>(*list, "clocks.processes", decodeClockProcess);
+    }
+    cf.taken("processes");
+    cf.optional("echoes_refused", c.echoes_refused);
+    run.clocks = std::move(c);
+  }
+  f.taken("clocks");
   if (const auto it = doc.find("arrivals"); it != doc.end() && !it->is_null()) {
     ArrivalsRecord a;
     Fields af(*it, "arrivals");
@@ -589,6 +614,22 @@ json encode(const RunRecord& run) {
   if (run.network_delay_s) {
     doc["network_delay_s"] = {{"mean", orNull(run.network_delay_s->mean)},
                               {"max", orNull(run.network_delay_s->max)}};
+  }
+  if (run.clocks) {
+    json processes = json::array();
+    for (const ClockProcessRecord& p : run.clocks->processes) {
+      json entry = {{"process", p.process},
+                    {"sensors", p.sensors},
+                    {"offset_s", p.offset_s},
+                    {"uncertainty_s", p.uncertainty_s},
+                    {"exchanges", p.exchanges}};
+      if (p.farthest_offset_s) entry["farthest_offset_s"] = *p.farthest_offset_s;
+      if (p.farthest_uncertainty_s) entry["farthest_uncertainty_s"] = *p.farthest_uncertainty_s;
+      processes.push_back(std::move(entry));
+    }
+    doc["clocks"] = {{"bound_s", run.clocks->bound_s},
+                     {"processes", std::move(processes)},
+                     {"echoes_refused", run.clocks->echoes_refused}};
   }
   if (run.arrivals) {
     doc["arrivals"] = {{"mode", run.arrivals->mode}, {"bracket_note", run.arrivals->bracket_note}};

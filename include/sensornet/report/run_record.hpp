@@ -164,6 +164,24 @@ struct LatencyRecord {
   nlohmann::json histogram;  // {"edges_s": [...], "counts": [...]} or null
 };
 
+// One sensor process's wall clock against the fusion center's, measured both ways
+// (docs/wire-protocol.md, "Clocks"): the true offset lies within uncertainty_s of offset_s.
+struct ClockProcessRecord {
+  std::string process;
+  std::vector<int> sensors;
+  double offset_s = 0.0;  // its clock minus the fusion center's: > 0 ahead
+  double uncertainty_s = 0.0;
+  std::optional<double> farthest_offset_s;  // the estimate farthest from zero for certain
+  std::optional<double> farthest_uncertainty_s;
+  std::uint64_t exchanges = 0;
+};
+
+struct ClocksRecord {
+  double bound_s = 0.0;  // farther than this for certain: a clock_offset fault
+  std::vector<ClockProcessRecord> processes;
+  std::uint64_t echoes_refused = 0;
+};
+
 struct NetworkDelayRecord {
   std::optional<double> mean;  // emulated seconds; none: nothing received
   std::optional<double> max;
@@ -193,6 +211,7 @@ struct RunRecord {
   std::vector<SensorRecord> sensors;
   std::optional<LatencyRecord> latency_s;
   std::optional<NetworkDelayRecord> network_delay_s;
+  std::optional<ClocksRecord> clocks;  // none: written before clocks were measured
   std::optional<ArrivalsRecord> arrivals;
   std::optional<ExternalRoles> external;
   std::optional<std::uint64_t> seed;

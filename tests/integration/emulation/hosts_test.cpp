@@ -329,6 +329,7 @@ TEST_P(HostClock, IsMeasuredBothWaysAndBeyondTheBoundAFaultNeverALatency) {
             std::string::npos)
       << detail;
   EXPECT_EQ(realizedCosts(report), oneHostCosts(3));
+  std::fprintf(stderr, "clock %+g s: %s\n", put_s, result.out.c_str());
 }
 
 INSTANTIATE_TEST_SUITE_P(ManyHosts, HostClock, ::testing::Values(2.0, -2.0),
