@@ -258,7 +258,8 @@ const std::vector<TopicEntry>& topics() {
       entryOf<sensornet_EpisodeControl>(), entryOf<sensornet_Measurement>(),
       entryOf<sensornet_EpisodeTally>(), entryOf<sensornet_SensorStatus>(),
       entryOf<sensornet_Report>(&dds::reportWriterQos), entryOf<sensornet_Command>(),
-      entryOf<sensornet_CommandReply>(), entryOf<sensornet_FusionState>()};
+      entryOf<sensornet_CommandReply>(), entryOf<sensornet_FusionState>(),
+      entryOf<sensornet_ClockProbe>(),   entryOf<sensornet_ClockEcho>()};
   return all;
 }
 

@@ -69,9 +69,9 @@ bool parse(int argc, char** argv, Options& o) {
   return argc % 2 == 1 && !o.run_id.empty() && o.domain_id >= 0 && !o.out_path.empty();
 }
 
-DataReaderQos readerQos(bool transient_local) {
+DataReaderQos readerQos(bool transient_local, bool reliable) {
   DataReaderQos qos = DATAREADER_QOS_DEFAULT;
-  qos.reliability().kind = RELIABLE_RELIABILITY_QOS;
+  qos.reliability().kind = reliable ? RELIABLE_RELIABILITY_QOS : BEST_EFFORT_RELIABILITY_QOS;
   qos.durability().kind =
       transient_local ? TRANSIENT_LOCAL_DURABILITY_QOS : VOLATILE_DURABILITY_QOS;
   qos.history().kind = KEEP_ALL_HISTORY_QOS;
@@ -83,11 +83,11 @@ template <class T, class PubSub>
 class TopicReader {
  public:
   TopicReader(DomainParticipant* participant, Subscriber* subscriber, const char* name,
-              bool transient_local) {
+              bool transient_local, bool reliable = true) {
     TypeSupport type(new PubSub());
     type.register_type(participant);
     topic_ = participant->create_topic(name, type.get_type_name(), TOPIC_QOS_DEFAULT);
-    reader_ = subscriber->create_datareader(topic_, readerQos(transient_local));
+    reader_ = subscriber->create_datareader(topic_, readerQos(transient_local, reliable));
     if (topic_ == nullptr || reader_ == nullptr) {
       throw std::runtime_error(std::string("cannot read ") + name);
     }
@@ -157,6 +157,10 @@ int run(const Options& o) {
       participant, subscriber, "sensornet/CommandReply", true);
   TopicReader<sensornet::FusionState, sensornet::FusionStatePubSubType> fusion_states(
       participant, subscriber, "sensornet/FusionState", false);
+  TopicReader<sensornet::ClockProbe, sensornet::ClockProbePubSubType> clock_probes(
+      participant, subscriber, "sensornet/ClockProbe", false, false);
+  TopicReader<sensornet::ClockEcho, sensornet::ClockEchoPubSubType> clock_echoes(
+      participant, subscriber, "sensornet/ClockEcho", false, false);
 
   DataWriterQos writer_qos = DATAWRITER_QOS_DEFAULT;
   writer_qos.reliability().kind = RELIABLE_RELIABILITY_QOS;
@@ -248,6 +252,8 @@ int run(const Options& o) {
                             {"reason", r.reason()}});
     });
     fusion_states.takeAll([](const sensornet::FusionState&) {});
+    clock_probes.takeAll([](const sensornet::ClockProbe&) {});
+    clock_echoes.takeAll([](const sensornet::ClockEcho&) {});
     if (shut_down && std::chrono::steady_clock::now() - shut_down_at > std::chrono::seconds(2)) {
       break;
     }
@@ -266,7 +272,8 @@ int run(const Options& o) {
                      {"EpisodeControl", controls.counts()}, {"EpisodeTally", tallies.counts()},
                      {"Measurement", measurements.counts()}, {"SensorStatus", statuses.counts()},
                      {"Report", reports.counts()},         {"Command", commands.counts()},
-                     {"CommandReply", replies.counts()},   {"FusionState", fusion_states.counts()}};
+                     {"CommandReply", replies.counts()},   {"FusionState", fusion_states.counts()},
+                     {"ClockProbe", clock_probes.counts()}, {"ClockEcho", clock_echoes.counts()}};
   std::ofstream(o.out_path) << seen.dump(2) << "\n";
   participant->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(participant);

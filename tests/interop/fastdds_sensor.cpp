@@ -126,6 +126,24 @@ DataWriterQos writerQos(int depth, bool lease) {
   return qos;
 }
 
+// The clock topics (docs/wire-protocol.md, "Clocks"): best-effort, volatile, keep last 1.
+DataReaderQos clockReader() {
+  DataReaderQos qos = DATAREADER_QOS_DEFAULT;
+  qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  qos.durability().kind = VOLATILE_DURABILITY_QOS;
+  qos.history().kind = KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = 1;
+  return qos;
+}
+DataWriterQos clockWriter() {
+  DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
+  qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  qos.durability().kind = VOLATILE_DURABILITY_QOS;
+  qos.history().kind = KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = 1;
+  return qos;
+}
+
 template <class PubSub>
 Topic* topicOf(DomainParticipant* participant, const char* name) {
   TypeSupport type(new PubSub());
@@ -213,6 +231,17 @@ int run(const Options& o) {
           topicOf<sensornet::SensorStatusPubSubType>(participant, "sensornet/SensorStatus"),
           writerQos(1, true)),
       "the SensorStatus writer");
+  DataReader* probes = required(
+      subscriber->create_datareader(
+          topicOf<sensornet::ClockProbePubSubType>(participant, "sensornet/ClockProbe"),
+          clockReader()),
+      "the ClockProbe reader");
+  DataWriter* echoes = required(
+      publisher->create_datawriter(
+          topicOf<sensornet::ClockEchoPubSubType>(participant, "sensornet/ClockEcho"),
+          clockWriter()),
+      "the ClockEcho writer");
+  const std::string process = "fastdds_sensor " + std::to_string(::getpid());
 
   run_book book{};
   book.run_id = o.run_id.c_str();
@@ -260,6 +289,21 @@ int run(const Options& o) {
       run_book_set_scenario(&book, scenario.horizon_s(), scenario.intervals(),
                             scenario.sensor_count(), scenario.state_dim(), scenario.seed(),
                             scenario.yaml().c_str(), scenario.arrivals().c_str());
+    }
+    // The fusion center's clock probes, answered at once with t2 and t3 on this clock.
+    sensornet::ClockProbe probe;
+    while (probes->take_next_sample(&probe, &info) == ReturnCode_t::RETCODE_OK) {
+      const std::int64_t taken_ns = wallNowNs();
+      if (!info.valid_data || probe.run_id() != o.run_id) continue;
+      sensornet::ClockEcho echo;
+      echo.run_id(o.run_id);
+      echo.process(process);
+      echo.sensor_ids({o.sensor});
+      echo.probe_seq(probe.seq());
+      echo.probe_sent_wall_time_ns(probe.sent_wall_time_ns());
+      echo.received_wall_time_ns(taken_ns);
+      echo.sent_wall_time_ns(wallNowNs());
+      (void)echoes->write(&echo);
     }
     sensornet::Schedule schedule;
     while (schedules->take_next_sample(&schedule, &info) == ReturnCode_t::RETCODE_OK) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -50,7 +51,7 @@ TEST_F(FastDdsInterop, FastDdsReadsEveryTopicAndItsReplanIsAccepted) {
   // Every topic delivered samples with data to the other vendor.
   for (const char* topic : {"Scenario", "Schedule", "EpisodeControl", "EpisodeTally",
                             "Measurement", "SensorStatus", "Report", "CommandReply",
-                            "FusionState"}) {
+                            "FusionState", "ClockProbe", "ClockEcho"}) {
     EXPECT_GT(seen["samples"][topic]["valid"].get<std::uint64_t>(), 0u) << topic;
   }
   EXPECT_EQ(seen["scenario"]["digest"], report["scenario"]["digest"]);
@@ -111,7 +112,9 @@ TEST_F(FastDdsInterop, FastDdsReadsEveryTopicAndItsReplanIsAccepted) {
 // A second vendor taking a role: the Fast DDS sensor (tests/interop/fastdds_sensor.cpp) speaks
 // for sensor 1 of the default scenario in a launched run, as the C example does against Cyclone:
 // the run completes with every measurement it sent fused, its count within the Poisson bounds
-// of the schedule (expectExternalSensorTookItsRole).
+// of the schedule (expectExternalSensorTookItsRole). It answers the fusion center's clock
+// probes too: the report measures its clock, on this machine the fusion center's, within the
+// uncertainty it gives (half a round trip between the vendors).
 TEST_F(FastDdsInterop, FastDdsSpeaksForASensor) {
   const LeftoverGuard guard(run_id_);
   constexpr int kEpisodes = 4;
@@ -126,8 +129,18 @@ TEST_F(FastDdsInterop, FastDdsSpeaksForASensor) {
   const ProcessResult& r = launcher.result();
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(sensor.result().exit_code, 0) << sensor.result().err;
-  expectExternalSensorTookItsRole(readJson(dir_ / "report.json"), kEpisodes, 1,
-                                  sensor.result().out);
+  const json report = readJson(dir_ / "report.json");
+  expectExternalSensorTookItsRole(report, kEpisodes, 1, sensor.result().out);
+  bool measured = false;
+  for (const json& p : report["clocks"]["processes"]) {
+    if (p["process"].get<std::string>().rfind("fastdds_sensor ", 0) != 0) continue;
+    measured = true;
+    EXPECT_EQ(p["sensors"], json::array({1})) << p.dump();
+    EXPECT_GT(p["exchanges"].get<std::uint64_t>(), 0u) << p.dump();
+    EXPECT_LE(std::abs(p["offset_s"].get<double>()), p["uncertainty_s"].get<double>() + 1e-6)
+        << p.dump();
+  }
+  EXPECT_TRUE(measured) << report["clocks"].dump();
 }
 
 }  // namespace
