@@ -607,10 +607,17 @@ void FusionCenterCore::noteClocks() {
   recordFault(std::move(fault));
 }
 
-// The report's `clocks`: every process's measured offset from the fusion center's clock.
+// The report's `clocks`: every process's measured offset from the fusion center's clock, by
+// first sensor.
 nlohmann::json FusionCenterCore::clocksJson() const {
+  std::vector<const ClockOffsets::Process*> by_sensor;  // in the order of their first sensors
+  for (const ClockOffsets::Process& p : clocks_.processes()) by_sensor.push_back(&p);
+  std::stable_sort(by_sensor.begin(), by_sensor.end(), [](const auto* a, const auto* b) {
+    return a->sensors.front() < b->sensors.front();
+  });
   json processes = json::array();
-  for (const ClockOffsets::Process& p : clocks_.processes()) {
+  for (const ClockOffsets::Process* process : by_sensor) {
+    const ClockOffsets::Process& p = *process;
     processes.push_back({{"process", p.name},
                          {"sensors", p.sensors},
                          {"offset_s", p.best.offset_s},

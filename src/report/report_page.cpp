@@ -635,6 +635,32 @@ std::string latencyPlot(const std::optional<LatencyRecord>& latency) {
                 "measurement of the run, in log-spaced bins (5 a decade).");
 }
 
+// The sensor processes' clocks against the fusion center's (the report's `clocks`): a table,
+// since a handful of offsets with their uncertainties read best as numbers.
+std::string clocksTable(const std::optional<report::ClocksRecord>& clocks) {
+  if (!clocks || clocks->processes.empty()) return "";
+  const auto signedDuration = [](double seconds) {
+    return (seconds < 0.0 ? "−" : seconds > 0.0 ? "+" : "") + formatDuration(std::abs(seconds));
+  };
+  std::string t = "<table class=\"clocks\"><tr><th>process</th><th>sensors</th>"
+                  "<th>offset</th><th>±</th><th>exchanges</th><th></th></tr>\n";
+  for (const report::ClockProcessRecord& p : clocks->processes) {
+    std::string sensors;
+    for (const int j : p.sensors) sensors += (sensors.empty() ? "" : ", ") + std::to_string(j);
+    const bool beyond = std::abs(p.offset_s) - p.uncertainty_s > clocks->bound_s;
+    t += "<tr><td>" + escapeXml(p.process) + "</td><td>" + escapeXml(sensors) + "</td><td>" +
+         escapeXml(signedDuration(p.offset_s)) + "</td><td>" + escapeXml(formatDuration(p.uncertainty_s)) +
+         "</td><td>" + std::to_string(p.exchanges) + "</td><td>" +
+         (beyond ? "beyond the bound" : "") + "</td></tr>\n";
+  }
+  return "<section class=\"note\"><h2>Clocks</h2><p>" +
+         escapeXml("Each sensor process's wall clock minus the fusion center's (+ ahead), measured "
+                   "both ways as NTP does, from the fastest of its latest exchanges; the true "
+                   "offset lies within ± of it. Beyond " + formatDuration(clocks->bound_s) +
+                   " for certain, latencies across it are not known.") +
+         "</p>" + t + "</table></section>\n";
+}
+
 // ---- 5. covariance traces ---------------------------------------------------------------------
 
 std::string tracePlot(const RunRecord& run) {
@@ -708,6 +734,14 @@ std::string faultCell(const std::optional<T>& value) {
   return value ? escapeXml(formatTick(asDouble(*value))) : std::string("–");
 }
 
+// The sensors a fault names: its list ("3, 4, 5") or its one sensor.
+std::string sensorsCell(const FaultRecord& f) {
+  if (!f.sensors || f.sensors->empty()) return faultCell(f.sensor);
+  std::string names;
+  for (const int j : *f.sensors) names += (names.empty() ? "" : ", ") + std::to_string(j);
+  return escapeXml(names);
+}
+
 std::string faultPlot(const RunRecord& run) {
   if (run.faults.empty()) return "";
   // The report's `episodes` (not finishedEpisodes()): the axis the page has always drawn.
@@ -742,7 +776,7 @@ std::string faultPlot(const RunRecord& run) {
     const std::string kind(wordOf(f.kind));
     plot.circle(at, rows[kind], 5.0, Style::outlined(kAccent, kInk), kind + ": " + f.detail);
     table += "<tr><td>" + escapeXml(kind) + "</td><td>" + escapeXml(f.process) + "</td><td>" +
-             faultCell(f.sensor) + "</td><td>" + faultCell(f.episode) + "</td><td>" +
+             sensorsCell(f) + "</td><td>" + faultCell(f.episode) + "</td><td>" +
              faultCell(f.emulated_time_s) + "</td><td>" + consequenceNote(f) +
              escapeXml(f.detail) + "</td></tr>\n";
   }
@@ -838,7 +872,7 @@ h1 { font-size: 22px; margin: 0 0 4px; } h2 { font-size: 16px; margin: 24px 0 6p
 .meta { color: #444; font-size: 13px; margin-bottom: 12px; }
 table { border-collapse: collapse; font-size: 13px; margin: 8px 0; }
 th, td { text-align: left; padding: 2px 10px 2px 0; vertical-align: top; }
-table.faults td, table.faults th { border-bottom: 1px solid #ddd; }
+table.faults td, table.faults th, table.clocks td, table.clocks th { border-bottom: 1px solid #ddd; }
 figure { margin: 0 0 12px; break-inside: avoid; page-break-inside: avoid; }
 figcaption, .sub, .note p { font-size: 12.5px; color: #333; }
 svg.plot { display: block; max-width: 100%; height: auto; }
@@ -950,6 +984,7 @@ std::string reportPage(const RunRecord& run, const std::string& source) {
   page += schedulePlots(run.schedule_versions, per_episode);
   page += sensorPlot(run.sensors);
   page += latencyPlot(run.latency_s);
+  page += clocksTable(run.clocks);
   page += tracePlot(run);
   page += faultPlot(run);
   page += std::string("<script>") + kScript + "</script>\n</body>\n</html>\n";

@@ -223,6 +223,34 @@ TEST(ReportPage, SaysWhyLatencyIsNotKnownInsteadOfDrawingIt) {
   EXPECT_EQ(page.find("id=\"plot-latency\""), std::string::npos);
 }
 
+// The report's clocks read back through the record as written, and the page lists each process
+// with its signed offset and uncertainty, marking only the one surely beyond the bound; a fault
+// naming several sensors lists them in the faults table (not "–").
+TEST(ReportPage, ListsEachProcesssClockAndTheSensorsAFaultNames) {
+  json report = sampleReport();
+  report["clocks"] = {{"bound_s", 1e-3},
+                      {"echoes_refused", 0},
+                      {"processes",
+                       {{{"process", "sensor_agent 10@edge-2"}, {"sensors", {3, 4}},
+                         {"offset_s", -2.0}, {"uncertainty_s", 2e-4}, {"exchanges", 12}},
+                        {{"process", "sensor_agent 11@edge-1"}, {"sensors", {0}},
+                         {"offset_s", 5e-4}, {"uncertainty_s", 6e-4}, {"exchanges", 12}}}}};
+  report["faults"].push_back({{"kind", "clock_offset"}, {"process", "sensor_agent"},
+                              {"sensors", {3, 4}}, {"detail", "behind"}});
+  EXPECT_EQ(sensornet::report::encode(sensornet::report::decodeRunRecord(report)).at("clocks"),
+            report["clocks"]);
+  const std::string page = reportPage(report, "r.json");
+  const std::size_t table = page.find("<table class=\"clocks\">");
+  ASSERT_NE(table, std::string::npos);
+  const std::string clocks = page.substr(table, page.find("</table>", table) - table);
+  EXPECT_NE(clocks.find("<td>3, 4</td><td>−2 s</td><td>200 µs</td><td>12</td><td>beyond the bound</td>"),
+            std::string::npos)
+      << clocks;
+  EXPECT_NE(clocks.find("<td>0</td><td>+500 µs</td><td>600 µs</td><td>12</td><td></td>"), std::string::npos)
+      << clocks;
+  EXPECT_NE(page.find("<td>clock_offset</td><td>sensor_agent</td><td>3, 4</td>"), std::string::npos);
+}
+
 TEST(ReportPage, RefusesAReportWithoutWhatItReadsNamingTheField) {
   json report = sampleReport();
   report.erase("run_id");
