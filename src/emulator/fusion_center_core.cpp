@@ -607,6 +607,15 @@ void FusionCenterCore::noteClocks() {
   recordFault(std::move(fault));
 }
 
+// Whether an episode's latencies compare clocks that disagree: a measurement of it stamped after
+// it arrived, or a process whose latest measured offset is surely beyond kClockBoundS.
+bool FusionCenterCore::clocksDisagree(const EpisodeResult& r) const {
+  const auto stamped_late = [](double latency_s) { return latency_s < 0.0; };
+  const auto beyond = [](const ClockOffsets::Process& p) { return p.best.surelyBeyond(kClockBoundS); };
+  return std::any_of(r.earliest_latency_s.begin(), r.earliest_latency_s.end(), stamped_late) ||
+         std::any_of(clocks_.processes().begin(), clocks_.processes().end(), beyond);
+}
+
 // The report's `clocks`: every process's measured offset from the fusion center's clock, by
 // first sensor.
 nlohmann::json FusionCenterCore::clocksJson() const {
@@ -862,11 +871,14 @@ void FusionCenterCore::finishEpisode(std::uint32_t number, OpenEpisode& open,
   checkKeepingUp(number, open, result);
   noteHeldBack(number, open);
   traceCovariance(*open.fusion, result);
-  report_->addLatencies(result.latencies_s);
   earliest_latency_s_.resize(result.earliest_latency_s.size(), std::numeric_limits<double>::infinity());
   for (std::size_t j = 0; j < result.earliest_latency_s.size(); ++j) {
     earliest_latency_s_[j] = std::min(earliest_latency_s_[j], result.earliest_latency_s[j]);
   }
+  // Latencies across clocks that disagree by now are no figures (noteClocks): this episode's
+  // are left out of the run's and its entry has none (null), as an episode without arrivals.
+  if (clocksDisagree(result)) result.latencies_s.clear();
+  report_->addLatencies(result.latencies_s);
   const json entry = episodeEntry(result);
   if (!episode_log_refused_) emit<AppendEpisodeLog>(entry);
   report_->add(entry);

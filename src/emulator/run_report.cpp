@@ -126,8 +126,9 @@ json episodeEntry(const EpisodeResult& r) {
           {"rejected", r.rejected},
           {"drain_s", r.drain_s},
           {"backlog", r.backlog},
-          {"latency_median_s", quantile(r.latencies_s, 0.5)},
-          {"latency_p99_s", quantile(r.latencies_s, 0.99)},
+          // None measured (or none believed: clocks that disagree): null, not 0.
+          {"latency_median_s", r.latencies_s.empty() ? json(nullptr) : json(quantile(r.latencies_s, 0.5))},
+          {"latency_p99_s", r.latencies_s.empty() ? json(nullptr) : json(quantile(r.latencies_s, 0.99))},
           {"network_delay_mean_s", r.network_delay_mean_s},
           {"network_delay_max_s", r.network_delay_max_s}};
 }

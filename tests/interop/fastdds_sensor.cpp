@@ -126,17 +126,10 @@ DataWriterQos writerQos(int depth, bool lease) {
   return qos;
 }
 
-// The clock topics (docs/wire-protocol.md, "Clocks"): best-effort, volatile, keep last 1.
-DataReaderQos clockReader() {
-  DataReaderQos qos = DATAREADER_QOS_DEFAULT;
-  qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-  qos.durability().kind = VOLATILE_DURABILITY_QOS;
-  qos.history().kind = KEEP_LAST_HISTORY_QOS;
-  qos.history().depth = 1;
-  return qos;
-}
-DataWriterQos clockWriter() {
-  DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
+// The clock topics (docs/wire-protocol.md, "Clocks"): best-effort, volatile, keep last 1; the
+// same for the reader (DataReaderQos) and the writer (DataWriterQos).
+template <class Qos>
+Qos clockQos(Qos qos) {
   qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
   qos.durability().kind = VOLATILE_DURABILITY_QOS;
   qos.history().kind = KEEP_LAST_HISTORY_QOS;
@@ -234,12 +227,12 @@ int run(const Options& o) {
   DataReader* probes = required(
       subscriber->create_datareader(
           topicOf<sensornet::ClockProbePubSubType>(participant, "sensornet/ClockProbe"),
-          clockReader()),
+          clockQos(DATAREADER_QOS_DEFAULT)),
       "the ClockProbe reader");
   DataWriter* echoes = required(
       publisher->create_datawriter(
           topicOf<sensornet::ClockEchoPubSubType>(participant, "sensornet/ClockEcho"),
-          clockWriter()),
+          clockQos(DATAWRITER_QOS_DEFAULT)),
       "the ClockEcho writer");
   const std::string process = "fastdds_sensor " + std::to_string(::getpid());
 

@@ -277,6 +277,7 @@ class FusionCenterCore {
   void blameNetwork(const EpisodeTally& t);
   void noteClocks();
   [[nodiscard]] nlohmann::json clocksJson() const;
+  [[nodiscard]] bool clocksDisagree(const EpisodeResult& r) const;
   void cutShort(const std::string& why, std::optional<FaultKind> cause);
   void publishState(std::uint32_t episode, const OpenEpisode& open, std::int64_t now);
   // cut_short: why the run ended while it was open (its incomplete_reason says so).

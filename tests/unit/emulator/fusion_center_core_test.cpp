@@ -171,7 +171,10 @@ class FusionCenterCoreTest : public ::testing::Test {
     for (FusionAction& a : core_->takeActions()) {
       if (auto* r = std::get_if<PublishReport>(&a)) reports_.push_back(*r);
       if (auto* f = std::get_if<WriteFinalReport>(&a)) final_ = f->doc;
-      if (std::holds_alternative<AppendEpisodeLog>(a)) ++logged_;
+      if (auto* l = std::get_if<AppendEpisodeLog>(&a)) {
+        ++logged_;
+        entries_.push_back(l->entry);
+      }
       if (auto* f = std::get_if<RecordFault>(&a)) fault_log_.push_back(report::encode(f->fault));
     }
   }
@@ -206,6 +209,7 @@ class FusionCenterCoreTest : public ::testing::Test {
   std::vector<PublishReport> reports_;
   json final_;
   int logged_ = 0;
+  std::vector<json> entries_;  // the episode log's entries, in order
   std::vector<json> fault_log_;  // what RecordFault gave the fault log, in order
 };
 
@@ -435,6 +439,10 @@ TEST_F(FusionCenterCoreTest, AClockBehindMeasuredBothWaysIsAFaultAndNoLatency) {
   EXPECT_NEAR(b.at("uncertainty_s").get<double>(), 1e-4, 1e-9);
   EXPECT_NEAR(clocks.at("processes")[0].at("offset_s").get<double>(), 0.0, 1e-9);
   EXPECT_EQ(clocks.at("echoes_refused"), 2);
+  // The episode's own latency figures are none either (the clocks were known apart at its end).
+  ASSERT_EQ(entries_.size(), 1u);
+  EXPECT_TRUE(entries_[0].at("latency_median_s").is_null()) << entries_[0].dump();
+  EXPECT_TRUE(entries_[0].at("latency_p99_s").is_null()) << entries_[0].dump();
 }
 
 // In step to within the bound: no fault, the latency figures stand.
@@ -453,6 +461,8 @@ TEST_F(FusionCenterCoreTest, ClocksWithinTheBoundLeaveTheLatencyKnown) {
   EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Completed) << faultsJson().dump(1);
   EXPECT_FALSE(final_.at("latency_s").at("median").is_null());
   EXPECT_NEAR(final_.at("clocks").at("processes")[0].at("offset_s").get<double>(), 0.4e-3, 1e-9);
+  ASSERT_EQ(entries_.size(), 1u);
+  EXPECT_GT(entries_[0].at("latency_median_s").get<double>(), 0.0) << entries_[0].dump();
 }
 
 TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
