@@ -119,8 +119,8 @@ RunRecord externalReport(const RunEnd& end, bool logged) {
   if (logged) {
     sensornet::report::forEachReportedEpisode(log, [&](const json& entry) {
       const report::EpisodeRecord episode = report::decodeEpisode(entry);
-      median = episode.latency_median_s;
-      p99 = episode.latency_p99_s;
+      median = episode.latency_median_s.value_or(0.0);
+      p99 = episode.latency_p99_s.value_or(0.0);
     });
   }
   if (median > 0.0) {

@@ -1013,7 +1013,7 @@ ReportTables reportTables(const RunRecord& run, const std::string& source) {
                              sumOf(r.dropped_by_network), sumOf(r.late), sumOf(r.expected)}) {
       e << ',' << formatCsv(sum);
     }
-    e << ',' << formatCsv(r.latency_median_s) << ',' << formatCsv(r.latency_p99_s) << '\n';
+    e << ',' << formatCsv(orNan(r.latency_median_s)) << ',' << formatCsv(orNan(r.latency_p99_s)) << '\n';
   }
   tables.episodes = e.str();
   std::ostringstream s;

@@ -526,8 +526,8 @@ json encode(const EpisodeRecord& r) {
               {"rejected", encode(r.rejected)},
               {"drain_s", r.drain_s},
               {"backlog", r.backlog},
-              {"latency_median_s", r.latency_median_s},
-              {"latency_p99_s", r.latency_p99_s},
+              {"latency_median_s", orNull(r.latency_median_s)},
+              {"latency_p99_s", orNull(r.latency_p99_s)},
               {"network_delay_mean_s", r.network_delay_mean_s},
               {"network_delay_max_s", r.network_delay_max_s}};
   if (!r.refused.empty()) doc["refused"] = r.refused;  // absent from records older than it

@@ -101,8 +101,8 @@ struct EpisodeRecord {
   RejectionTally rejected;
   double drain_s = 0.0;
   std::uint64_t backlog = 0;
-  double latency_median_s = 0.0;
-  double latency_p99_s = 0.0;
+  std::optional<double> latency_median_s;  // none: nothing measured, or clocks known apart
+  std::optional<double> latency_p99_s;
   double network_delay_mean_s = 0.0;
   double network_delay_max_s = 0.0;
   nlohmann::json other = nlohmann::json::object();
