@@ -35,6 +35,14 @@ std::string stateWord(const std::optional<emulator::SensorState>& state) {
 
 double seconds(std::int64_t ns) { return 1e-9 * static_cast<double>(ns); }
 
+// The latency a Report carries (the run's so far); 0 when the fusion center has none: nothing
+// measured yet, or every figure across clocks it found apart (the final report says which).
+std::string latencyText(const EpisodeReportSeen& r) {
+  if (!(r.latency_median_s > 0.0)) return "latency not known";
+  return format("latency median %.3g ms, p99 %.3g ms", 1e3 * r.latency_median_s,
+                1e3 * r.latency_p99_s);
+}
+
 }  // namespace
 
 std::string formatProgress(const EpisodeReportSeen& report,
@@ -375,8 +383,7 @@ void RunView::releaseReports(bool even_unplaced) {
 }
 
 void RunView::sayReport(const EpisodeReportSeen& r) {
-  say(formatProgress(r, planned_) + format("; latency median %.3g ms, p99 %.3g ms",
-                                           1e3 * r.latency_median_s, 1e3 * r.latency_p99_s));
+  say(formatProgress(r, planned_) + "; " + latencyText(r));
 }
 
 void RunView::markEnded(std::int64_t now_ns) {
@@ -465,8 +472,7 @@ std::string RunView::screen(std::int64_t now_ns) const {
     if (!r.complete) {
       out += " (INCOMPLETE" + (r.incomplete_reason.empty() ? "" : ": " + r.incomplete_reason) + ")";
     }
-    out += format("; latency median %.3g ms, p99 %.3g ms\n", 1e3 * r.latency_median_s,
-                  1e3 * r.latency_p99_s);
+    out += "; " + latencyText(r) + "\n";
   } else {
     out += "no episode reported yet\n";
   }

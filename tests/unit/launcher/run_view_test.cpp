@@ -235,6 +235,26 @@ TEST(RunView, StartAndReportLinesNumberAnEpisodeAlike) {
   EXPECT_FALSE(has(lines, "of 25")) << joined(lines);
 }
 
+// A Report's latency is the run's so far; none (0) when the fusion center has none it believes
+// (nothing measured, or clocks it found apart): said so, never "median 0 ms".
+TEST(RunView, AReportWithoutLatencySaysItIsNotKnown) {
+  RunView view = runningView(kT0);
+  (void)view.takeLines(kT0);
+  view.onEpisodeStart(start(0, kT0 + kSecond / 5, 1.0, 2), kT0);
+  view.onEpisodeStart(start(1, kT0 + kSecond, 1.0, 2), kT0);
+  EpisodeReportSeen measured = report(0);
+  measured.latency_median_s = 2.5e-4;
+  measured.latency_p99_s = 1e-3;
+  view.onReport(measured, kT0 + kSecond);
+  view.onReport(report(1), kT0 + 2 * kSecond);
+  const std::vector<std::string> lines = view.takeLines(kT0 + 2 * kSecond);
+  EXPECT_TRUE(has(lines, "episode 0: realized 12.5")) << joined(lines);
+  EXPECT_TRUE(has(lines, "latency median 0.25 ms, p99 1 ms")) << joined(lines);
+  EXPECT_TRUE(has(lines, "episode 1: realized 13.5")) << joined(lines);
+  EXPECT_TRUE(has(lines, "latency not known")) << joined(lines);
+  EXPECT_FALSE(has(lines, "median 0 ms")) << joined(lines);
+}
+
 TEST(RunView, AReplayedStartOfAnEpisodeThatIsOverIsNotNews) {
   RunView view = runningView(kT0 + 100 * kSecond);
   (void)view.takeLines(kT0 + 100 * kSecond);
