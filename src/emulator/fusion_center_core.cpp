@@ -666,7 +666,14 @@ void FusionCenterCore::onStatus(const SensorStatus& s, std::int64_t now) {
     return;
   }
   open->second->fusion->noteSentAtLeast(static_cast<int>(s.sensor), s.sent_in_episode);
-  open->second->last_heard_ns[s.sensor] = now;
+  // Hearing for the stall limit: a sensor still publishing the episode (running it, its count
+  // not yet in). One that says it is done with it (ready, its count written) is waited for no
+  // longer than the limit: its statuses naming the episode it ran last come every second for as
+  // long as it lives, and would keep an episode whose measurements or count the network lost
+  // open for ever (chaos seed 214: a restarted fusion center never matched one sensor's writer).
+  if (s.state == SensorState::Running && !open->second->fusion->tally(static_cast<int>(s.sensor)).tallied) {
+    open->second->last_heard_ns[s.sensor] = now;
+  }
 }
 
 // Wall seconds since `from_ns` during which this process ran.

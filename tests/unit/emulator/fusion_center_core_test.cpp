@@ -936,18 +936,60 @@ std::vector<json> loggedEpisodes(std::uint32_t n) {
 
 // Two sensor processes: sensors 0, 1 in one, 2, 3 in the other.
 void hearStatuses(FusionCenterCore& core, std::uint32_t episode, std::int64_t now,
-                  const std::vector<int>& sensors = {0, 1, 2, 3}) {
+                  const std::vector<int>& sensors = {0, 1, 2, 3},
+                  SensorState state = SensorState::Running) {
   for (const int j : sensors) {
     SensorStatus s;
     s.sensor = static_cast<std::uint32_t>(j);
     s.run_id = kRun;
     s.episode = episode;
-    s.state = SensorState::Running;
+    s.state = state;
     s.process_id = j < 2 ? 1000 : 2000;
     s.writer = statusWriter(j < 2 ? 0 : 2);
     s.wall_time_ns = now;
     core.onStatus(s, now);
   }
+}
+
+// Chaos seed 214: sensor 2's count came but none of its measurements (a writer the restarted
+// fusion center never matched), while its statuses, ready and naming the episode it ran last,
+// came every second. The episode closes at the stall limit with the loss named: the statuses
+// of a sensor done with the episode do not hold it open (they did, for ever). Running, its
+// count not in, a sensor's statuses still do: it is publishing late, not gone.
+TEST_F(FusionCenterCoreTest, StatusesOfASensorDoneWithTheEpisodeDoNotHoldItOpen) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  ASSERT_GT(sent[2], 0u);
+  std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 2; });
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 2, 3});
+  for (int s = 1; s <= 14; ++s) {
+    runUntil(endOf(0) + s * kS);
+    hearStatuses(*core_, 0, now_, {2}, SensorState::Ready);
+  }
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_FALSE(reports_[0].result.complete);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"lost"});
+}
+
+TEST_F(FusionCenterCoreTest, StatusesOfASensorStillRunningTheEpisodeHoldItOpen) {
+  begin(0);
+  auto all = measurements(0);
+  const auto sent = sentBy(all);
+  std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 2; });
+  deliver(all);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sent, 0, {0, 1, 3});
+  for (int s = 1; s <= 14; ++s) {
+    runUntil(endOf(0) + s * kS);
+    hearStatuses(*core_, 0, now_, {2}, SensorState::Running);
+  }
+  EXPECT_TRUE(reports_.empty()) << "a sensor running the episode was given up";
+  runUntil(endOf(0) + 26 * kS + 100 * kMs);  // silent from 14 s: the limit from there
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_EQ(faultKinds(), std::vector<std::string>{"stall"});
 }
 
 // Defect (c): restarted 1 s into episode 4 (its start replayed by durability), the fusion center
