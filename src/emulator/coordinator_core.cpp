@@ -63,10 +63,19 @@ CoordinatorCore::CoordinatorCore(CoordinatorConfig config, CoordinatedRun run,
       stopping_(journal.shutdown_requested),
       abort_detail_(journal.abort_detail) {
   for (const ScheduleVersion& v : journal.versions) book_.add(v);
-  if (announced_) {  // resumed: the episode announced last runs on without us
+  if (announced_) {  // resumed: the episodes announced and not reported run on without us
     current_episode_ = announced_->episode;
     next_episode_ = current_episode_ + 1;
     const EpisodeClock clock{announced_->start_wall_ns, config_.time_scale};
+    // At most two are outstanding: the one before the last may still owe its report (the fusion
+    // center may close them out of order; chaos seed 435 ended a run with it open). Its start
+    // is not journaled, but it ended at the latest the gap before the last one's start.
+    if (current_episode_ > 0 && !reported_.count(current_episode_ - 1)) {
+      const std::int64_t ended_by = announced_->start_wall_ns - toNs(config_.episode_gap_s);
+      const double duration_s = run_.scenario.horizon_s / config_.time_scale;
+      outstanding_.push_back({current_episode_ - 1,
+                              EpisodeClock{ended_by - toNs(duration_s), config_.time_scale}});
+    }
     if (!reported_.count(current_episode_)) {
       outstanding_.push_back({current_episode_, clock});
       resumed_with_outstanding_ = true;
@@ -230,7 +239,7 @@ CoordinatorActions CoordinatorCore::tick(std::int64_t now_ns) {
     tickAwaitingPeers(now_ns);
   } else if (phase_ == Phase::Settling && now_ns >= settled_ns_) {
     phase_ = Phase::Running;
-    if (resumed_with_outstanding_) announceAgain(outstanding_.front(), now_ns);
+    if (resumed_with_outstanding_) announceAgain(outstanding_.back(), now_ns);
     tickRunning(now_ns);
   } else if (phase_ == Phase::Running) {
     declareDeaths(now_ns);
@@ -320,7 +329,8 @@ void CoordinatorCore::announceEpisode(std::uint32_t episode, std::int64_t now_ns
   act(PublishControl{std::move(c)});
 }
 
-// A resumed coordinator announces the episode its journal says it announced last, as it was:
+// A resumed coordinator announces the episode its journal says it announced last (the last
+// outstanding), as it was:
 // it may have died between the journal write and the announcement. Whoever had it already drops
 // the repeat (RunInputs keeps each episode's first start).
 void CoordinatorCore::announceAgain(const Outstanding& outstanding, std::int64_t now_ns) {
