@@ -120,8 +120,8 @@ struct FusionCenterEndpoints {
 };
 
 // Takes every Measurement the reader holds (in batches: a small one keeps the loan and its info
-// array small) into `arrivals`, stamped with the wall clock now (one thread hop after the wire,
-// as in ddsperf); logs a sensor whose writers are all gone. Returns how many were taken. Called
+// array small) into `arrivals`, each batch stamped with the wall clock once taken (one thread
+// hop after the wire, as in ddsperf; never before a sample came); logs a sensor whose writers are all gone. Returns how many were taken. Called
 // in Cyclone's receive thread, from the reader's listener.
 std::size_t takeArrivals(dds::Reader<sensornet_Measurement>& reader, std::string_view own_run,
                          std::vector<emulator::MeasurementArrival>& arrivals);
