@@ -1,5 +1,6 @@
 // The Python module sensornet._sensornet: LaunchedRun of sensornet::testing (launched_run.hpp)
-// for Python test suites, and Participant (participant.hpp), a DDS participant of a run. The package sensornet (python/sensornet/__init__.py) wraps it with
+// for Python test suites, Participant (participant.hpp), a DDS participant of a run, World
+// (world.hpp), and the math of the programs (math_bindings.hpp). The package sensornet (python/sensornet/__init__.py) wraps it with
 // keyword arguments, a context manager and the report as a dict; sensornet.pytest_plugin
 // gives the pytest fixture.
 #include <pybind11/chrono.h>
@@ -9,6 +10,7 @@
 
 #include <memory>
 
+#include "math_bindings.hpp"
 #include "participant.hpp"
 #include "world.hpp"
 #include "sensornet/testing/launched_run.hpp"
@@ -20,6 +22,7 @@ PYBIND11_MODULE(_sensornet, m) {
   m.doc() = "sensornet's launch fixture (sensornet::testing::LaunchedRun) and a participant of a run";
   sensornet::python::bindParticipant(m);
   sensornet::python::bindWorld(m);
+  sensornet::python::bindMath(m);
   py::class_<st::LaunchOptions>(m, "LaunchOptions")
       .def(py::init<>())
       .def_readwrite("program", &st::LaunchOptions::program)

@@ -28,7 +28,8 @@ packages=(
   iproute2 procps  # multi-host tests and scripts/netns-hosts.sh (ip netns, veth); pgrep/ps in tests
   iptables faketime  # the chaos checker's network faults (partitions, loss); a host's clock offset
   python3-dev python3-pybind11 pybind11-dev python3-pytest  # the Python module, its pytest fixture
-  python3-numpy  # sensornet.World gives numpy arrays
+  python3-numpy  # sensornet.World and the math give numpy arrays
+  python3-pandas  # sensornet.Report.episodes is a DataFrame
   python3-jsonschema  # the tests check real reports against docs/report.schema.json
 )
 # --tests (scripts/test.sh): also what only the tests use. Prometheus' server scrapes a run's

@@ -31,6 +31,16 @@ numpy arrays, bit for bit theirs) from its Scenario sample, for a sensor that me
     w.add_schedule(v["version"], v["effective_episode"], v["effective_time_s"], v["rates_hz"])
     times, versions = w.arrivals(episode, sensor)
     z = w.measure(episode, sensor, seq, times[seq])
+
+The math of the programs without a run (sensornet.offline): scenarios, plan(), bracket(),
+evaluate() (the Monte Carlo of `fusion_center evaluate`, the same numbers for the same seed),
+closed_loop(), the surrogates' trajectory() and the exact cdkf(); and a report.json as a typed
+Report with its episodes as a pandas DataFrame (sensornet.report):
+
+    s = sensornet.load_scenario("scenarios/default.yaml")
+    p = sensornet.plan(s, surrogate="info", budget=4.0)
+    e = sensornet.evaluate(s.with_budget(4.0), p, runs=2000, seed=7)
+    df = sensornet.load_report("report.json").episodes
 """
 
 import datetime
@@ -42,8 +52,12 @@ import shutil
 from ._sensornet import LaunchOptions as _LaunchOptions
 from ._sensornet import LaunchedRun as _LaunchedRun
 from ._sensornet import Participant, World, topic_names
+from . import offline, report
+from .offline import *  # noqa: F401,F403 (listed in offline.__all__)
+from .report import Fault, Report, load_report
 
-__all__ = ["launch", "Run", "Result", "program", "Participant", "World", "topic_names"]
+__all__ = (["launch", "Run", "Result", "program", "Participant", "World", "topic_names",
+            "Fault", "Report", "load_report"] + offline.__all__)
 
 
 def program():
@@ -76,6 +90,11 @@ class Result:
         self.summary = self.report.get("summary", {})
         self.faults = [f"{f.get('kind')} in {f.get('process')}: {f.get('detail')}"
                        for f in self.report.get("faults", [])]
+
+    @property
+    def record(self):
+        """The report as a typed Report (episodes as a DataFrame)."""
+        return Report(self.report)
 
     def __repr__(self):
         return f"Result(exit_code={self.exit_code}, status={self.status!r}, episodes={len(self.episodes)})"

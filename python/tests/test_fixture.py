@@ -37,6 +37,15 @@ def test_a_run_completes_and_accounts_for_every_measurement(sensornet_launch):
             assert sent == received + lost and lost == 0
     mean = sum(e["realized_cost"] for e in result.episodes) / 3
     assert result.summary["mean"] == pytest.approx(mean, rel=1e-12)
+    # The same report, typed: its episodes as a DataFrame, one row each, brackets split.
+    record = result.record
+    assert record.status == "completed" and record.exit_code_expected == result.exit_code
+    df = record.episodes
+    assert list(df.episode) == [0, 1, 2]
+    assert list(df.realized_cost) == [e["realized_cost"] for e in result.episodes]
+    assert list(df.bracket_info) == [e["bracket"]["info"] for e in result.episodes]
+    assert (df.bracket_info <= df.bracket_cov).all()
+    assert record.faults == []
 
 
 def test_a_run_left_early_is_stopped_and_leaves_no_process():

@@ -31,6 +31,7 @@
 #include "fault_schedule.hpp"
 #include "invariants.hpp"
 #include "support/background_process.hpp"
+#include "support/faketime.hpp"
 #include "support/netns_hosts.hpp"
 #include "support/process.hpp"
 
@@ -198,15 +199,6 @@ struct Clocks {
   std::map<int, fs::path> offset_file;  // sensor host (0, 1) -> its offset file
 };
 
-std::optional<std::string> faketimeLibrary() {
-  for (const char* path : {"/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1",
-                           "/usr/lib/aarch64-linux-gnu/faketime/libfaketime.so.1",
-                           "/usr/lib/faketime/libfaketime.so.1"}) {
-    if (fs::exists(path)) return path;
-  }
-  return std::nullopt;
-}
-
 void writeOffset(const fs::path& file, double seconds) {
   char text[32];
   std::snprintf(text, sizeof text, "%+.3f\n", seconds);
@@ -219,8 +211,10 @@ std::string hostsYaml(const Trial& t, const testing::NetnsHosts& hosts, const Cl
     std::string exec = "ip netns exec " + hosts.ns(i);
     for (const auto& [h, file] : clocks.offset_file) {
       if (sensorHost(h) != i) continue;
-      exec = "env LD_PRELOAD=" + clocks.library + " FAKETIME_TIMESTAMP_FILE=" + file.string() +
-             " FAKETIME_CACHE_DURATION=1 FAKETIME_DONT_FAKE_MONOTONIC=1 " + exec;
+      exec = "env " +
+             testing::faketimeEnvironment(clocks.library, "FAKETIME_TIMESTAMP_FILE=" + file.string() +
+                                                              " FAKETIME_CACHE_DURATION=1") +
+             " " + exec;
     }
     text += "  - name: " + name + "\n    address: " + hosts.address(i) + "\n    exec: " + exec + "\n" + runs;
   };
@@ -438,7 +432,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
     Clocks clocks;
     for (const PlannedFault& p : t.faults) {
       if (!isClockFault(p.action)) continue;
-      const auto library = faketimeLibrary();
+      const auto library = testing::faketimeLibrary();
       if (!library) {
         r.skipped = "a clock fault, and libfaketime is not installed (Debian: faketime)";
         return r;

@@ -26,6 +26,7 @@
 #include <thread>
 
 #include "hosts_fixture.hpp"
+#include "support/faketime.hpp"
 #include "launch_fixture.hpp"
 
 namespace sensornet::testing {
@@ -259,7 +260,7 @@ TEST_F(ManyHosts, ThreeSecondLinkCutLosesNothingOrIsCountedExactly) {
 }
 
 // Issue 49, clocks: host 3's processes run under libfaketime 2 s ahead or behind
-// (`faketime -f +2s` before its exec prefix). Ahead, its sensors stamp their measurements 2 s
+// (libfaketime preloaded by its exec prefix). Ahead, its sensors stamp their measurements 2 s
 // after the fusion center receives them; behind, 2 s before, as a slow network would. Either
 // way the run must not show that as a latency: the figures are not known (null, and why); the
 // fusion center's clock probes measure host 3's processes 2 s off (within the uncertainty they
@@ -269,9 +270,8 @@ TEST_F(ManyHosts, ThreeSecondLinkCutLosesNothingOrIsCountedExactly) {
 class HostClock : public ManyHosts, public ::testing::WithParamInterface<double> {};
 
 TEST_P(HostClock, IsMeasuredBothWaysAndBeyondTheBoundAFaultNeverALatency) {
-  if (runProcess({"/usr/bin/env", "sh", "-c", "command -v faketime"}).exit_code != 0) {
-    GTEST_SKIP() << "faketime is not installed (Debian: faketime)";
-  }
+  const auto library = testing::faketimeLibrary();
+  if (!library) GTEST_SKIP() << "libfaketime is not installed (Debian: faketime)";
   const double put_s = GetParam();
   const LeftoverGuard guard(run_id_);
   std::string harness;
@@ -284,7 +284,8 @@ TEST_P(HostClock, IsMeasuredBothWaysAndBeyondTheBoundAFaultNeverALatency) {
     char shift[32];
     std::snprintf(shift, sizeof shift, "%+gs", put_s);
     yaml.replace(yaml.find(prefix), prefix.size(),
-                 std::string("exec: faketime -f ") + shift + " ip netns exec " + hosts.ns(3));
+                 "exec: env " + testing::faketimeEnvironment(*library, std::string("FAKETIME=") + shift) +
+                     " ip netns exec " + hosts.ns(3));
     const auto hosts_file = writeText(dir_ / "hosts.yaml", yaml);
     std::vector<std::string> args = runArgs(run_id_, 3, "10", "hosts");
     args.insert(args.end(), {"--hosts", hosts_file.string()});
