@@ -748,6 +748,7 @@ int main(int argc, char** argv) {
     fs::remove_all(dir, ignored);
     const auto began = Clock::now();
     const TrialRecord record = runTrial(o, trial, dir);
+    sensornet::testing::removeStaleFaketimeFiles();  // of the clock-faulted processes it killed
     if (!record.skipped.empty()) {
       ++skipped;
       std::cout << outcomeLine(record, {}) << std::endl;
