@@ -9,6 +9,7 @@
 // invariant. The exit status is 0 when no trial violated anything, 1 otherwise, 2 on bad usage.
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -450,6 +451,7 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
   }
 
   const auto t0 = Clock::now();
+  const std::int64_t t0_realtime_ns = realtimeNs();
   testing::BackgroundProcess launcher(args, (dir / "launch.log").string());
   double stops = 0.0;
   for (const PlannedFault& p : t.faults) stops += p.length_s;
@@ -612,6 +614,11 @@ TrialRecord runTrial(const Options& o, const Trial& t, const fs::path& dir) {
   r.leftovers = reapLeftovers(run_id);
   hosts.reset();  // the namespaces, their links and rules go
   r.report_exists = fs::exists(dir / "report.json");
+  struct stat written {};
+  if (r.report_exists && ::stat((dir / "report.json").c_str(), &written) == 0) {
+    const std::int64_t at_ns = static_cast<std::int64_t>(written.st_mtim.tv_sec) * 1'000'000'000 + written.st_mtim.tv_nsec;
+    r.report_written_at_s = 1e-9 * static_cast<double>(at_ns - t0_realtime_ns);
+  }
   json report = json::parse(readText(dir / "report.json"), nullptr, false);
   if (report.is_object()) r.report = std::move(report);
   r.episode_log = readText(log);

@@ -346,12 +346,16 @@ bool networkOnly(const TrialRecord& r) {
 
 // Only the network was faulted: what the report blames is the network (a network_partition),
 // never a consequence of it standing as a cause (a stall of the sensors it cut off, an overload).
-// Only when each silence healed while the run went on (2 s before the launcher ended): a
-// partition the run ends in leaves nothing that tells it from silent sensors.
+// Only when each silence healed while the run went on (2 s before the launcher ended, and
+// before the fusion center wrote its report: the launcher may wait on after it for agents the
+// cut keeps from hearing the end, seed 4035): a partition the run ends in leaves nothing that
+// tells it from silent sensors.
 void checkNetworkNamed(const TrialRecord& r, const json& report, std::vector<std::string>& v) {
   if (!networkOnly(r) || !report["faults"].is_array()) return;
+  double run_went_on_until_s = r.ended_at_s - 2.0;
+  if (r.report_written_at_s >= 0.0) run_went_on_until_s = std::min(run_went_on_until_s, r.report_written_at_s - 2.0);
   for (const InjectedFault& f : r.faults) {
-    if (f.injected && silences(f.planned) && (f.healed_at_s < 0.0 || f.healed_at_s > r.ended_at_s - 2.0)) {
+    if (f.injected && silences(f.planned) && (f.healed_at_s < 0.0 || f.healed_at_s > run_went_on_until_s)) {
       return;
     }
   }

@@ -42,6 +42,7 @@ struct TrialRecord {
   std::vector<std::string> leftovers;  // command lines of the run's processes still alive
   std::string skipped;  // why the trial could not run here (a network trial without root)
   double ended_at_s = 0.0;  // when the launcher ended (or the trial gave up on it)
+  double report_written_at_s = -1.0;  // when report.json was last written (-1: no report)
 };
 
 // The outcome the table of docs/ARCHITECTURE.md ("Run outcome") gives for what was injected.
