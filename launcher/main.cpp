@@ -21,6 +21,7 @@
 #include "runs_command.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "status_command.hpp"
+#include "sweep_command.hpp"
 #include "watch_command.hpp"
 
 int main(int argc, char** argv) {
@@ -38,7 +39,8 @@ int main(int argc, char** argv) {
         sensornet::launcher::addStatusCommand(app), sensornet::launcher::addWatchCommand(app),
         sensornet::launcher::addReportCommand(app), sensornet::launcher::addPkiCommand(app),
         sensornet::launcher::addRunsCommand(app), sensornet::launcher::addReplayCommand(app),
-        sensornet::launcher::addRecordCommand(app), sensornet::launcher::addConformCommand(app)};
+        sensornet::launcher::addRecordCommand(app), sensornet::launcher::addConformCommand(app),
+        sensornet::launcher::addSweepCommand(app)};
     if (auto code = sensornet::parseCommandLine(app, argc, argv)) return *code;
     return sensornet::runChosenSubcommand(subcommands);
   });

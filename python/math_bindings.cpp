@@ -19,8 +19,8 @@
 
 #include "sensornet/core/cdkf.hpp"
 #include "sensornet/core/input_error.hpp"
-#include "sensornet/core/plan_status.hpp"
 #include "sensornet/core/monte_carlo.hpp"
+#include "sensornet/core/plan_status.hpp"
 #include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/core/student_t.hpp"
@@ -50,7 +50,8 @@ RateSchedule scheduleOf(const Scenario& scenario, const Matrix& rates) {
   }
   RateSchedule schedule(scenario.horizon_s, rates);
   const Feasibility f = checkFeasibility(schedule, scenario);
-  if (!f.feasible) throw InputError("rates", "values", "rates meeting C λ <= b, λ >= 0: " + f.reason);
+  if (!f.feasible)
+    throw InputError("rates", "values", "rates meeting C λ <= b, λ >= 0: " + f.reason);
   return schedule;
 }
 
@@ -84,19 +85,6 @@ py::dict monteCarloDict(const MonteCarloResult& mc) {
   d["arrivals_mean"] = mc.arrivals_mean;
   d["episode_costs"] = vectorOf(mc.episode_costs);
   return d;
-}
-
-// The scenario with its one budget row's bound replaced (the random plant's `budget`).
-Scenario withBudget(const Scenario& scenario, double budget) {
-  if (scenario.constraints.C.rows() != 1) {
-    throw InputError("budget", "budget",
-                     "a scenario with one constraint row (this one has " +
-                         std::to_string(scenario.constraints.C.rows()) + "); change its C and b instead");
-  }
-  Scenario changed = scenario;
-  changed.constraints.b(0) = budget;
-  validateScenario(changed, "budget");
-  return changed;
 }
 
 py::dict plan(const Scenario& scenario, const std::string& surrogate, const std::string& method,
@@ -146,15 +134,17 @@ py::dict evaluate(const Scenario& scenario, const Matrix& rates, int runs, std::
   options.seed = seed;
   options.threads = threads;
   options.simulate_plant = plant;
-  const ArrivalMode mode =
-      arrivals.empty() ? scenario.arrivals : parseWord<ArrivalMode>(arrivals, "evaluate", "arrivals");
+  const ArrivalMode mode = arrivals.empty()
+                               ? scenario.arrivals
+                               : parseWord<ArrivalMode>(arrivals, "evaluate", "arrivals");
   evaluation::OpenLoopRun run;
   {
     py::gil_scoped_release unlocked;
     run = evaluation::runOpenLoop(scenario, schedule, options, mode);
   }
   py::dict d = monteCarloDict(run.mc);
-  d["timetable"] = run.timetable ? py::object(monteCarloDict(*run.timetable)) : py::object(py::none());
+  d["timetable"] =
+      run.timetable ? py::object(monteCarloDict(*run.timetable)) : py::object(py::none());
   d["seconds"] = run.seconds;
   return d;
 }
@@ -197,9 +187,10 @@ std::pair<Eigen::VectorXd, py::list> trajectory(const Scenario& scenario, const 
                                                 const std::string& form,
                                                 const std::optional<Eigen::VectorXd>& times) {
   const RateSchedule schedule = scheduleOf(scenario, rates);
-  const SurrogateForm f = form == "info"  ? SurrogateForm::Information
-                          : form == "cov" ? SurrogateForm::Covariance
-                                          : throw InputError("trajectory", "form", "info or cov, got '" + form + "'");
+  const SurrogateForm f =
+      form == "info"  ? SurrogateForm::Information
+      : form == "cov" ? SurrogateForm::Covariance
+                      : throw InputError("trajectory", "form", "info or cov, got '" + form + "'");
   py::list covariances;
   if (!times) {
     const SurrogateRollout r = rollout(f, scenario, schedule);
@@ -227,10 +218,12 @@ std::pair<Eigen::VectorXd, py::list> trajectory(const Scenario& scenario, const 
 
 // The exact CD-KF's covariance over the given arrivals (times in [0, T], sensors 0..M-1): the
 // realized cost J(P) of eq. (6) and P(T).
-py::dict exactFilter(const Scenario& scenario, const Eigen::VectorXd& times, const std::vector<int>& sensors) {
+py::dict exactFilter(const Scenario& scenario, const Eigen::VectorXd& times,
+                     const std::vector<int>& sensors) {
   if (static_cast<std::size_t>(times.size()) != sensors.size()) {
-    throw InputError("cdkf", "sensors", "one sensor per time (" + std::to_string(times.size()) + " times, " +
-                                            std::to_string(sensors.size()) + " sensors)");
+    throw InputError("cdkf", "sensors",
+                     "one sensor per time (" + std::to_string(times.size()) + " times, " +
+                         std::to_string(sensors.size()) + " sensors)");
   }
   std::vector<std::size_t> order(sensors.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -281,22 +274,27 @@ random_scenario; its matrices are numpy arrays (copies).)")
       .def_property_readonly("WT", [](const Scenario& s) { return s.cost.WT; })
       .def_property_readonly("C", [](const Scenario& s) { return s.constraints.C; })
       .def_property_readonly("b", [](const Scenario& s) { return s.constraints.b; })
-      .def_property_readonly("H", [](const Scenario& s) {
-        std::vector<Matrix> h;
-        for (const SensorModel& j : s.sensors) h.push_back(j.H);
-        return h;
-      })
-      .def_property_readonly("R", [](const Scenario& s) {
-        std::vector<Matrix> r;
-        for (const SensorModel& j : s.sensors) r.push_back(j.R);
-        return r;
-      })
+      .def_property_readonly("H",
+                             [](const Scenario& s) {
+                               std::vector<Matrix> h;
+                               for (const SensorModel& j : s.sensors) h.push_back(j.H);
+                               return h;
+                             })
+      .def_property_readonly("R",
+                             [](const Scenario& s) {
+                               std::vector<Matrix> r;
+                               for (const SensorModel& j : s.sensors) r.push_back(j.R);
+                               return r;
+                             })
       .def_property_readonly("max_rates", &Scenario::maxRates)
-      .def("with_budget", &withBudget, py::arg("budget"),
-           "The same scenario with its one budget row 1'λ <= b set to `budget`.")
+      .def(
+          "with_budget",
+          [](const Scenario& s, double budget) { return withBudget(s, budget, "budget"); },
+          py::arg("budget"), "The same scenario with its one budget row 1'λ <= b set to `budget`.")
       .def("__repr__", [](const Scenario& s) {
-        return "Scenario(states=" + std::to_string(s.stateDim()) + ", sensors=" +
-               std::to_string(s.sensorCount()) + ", horizon=" + std::to_string(s.horizon_s) +
+        return "Scenario(states=" + std::to_string(s.stateDim()) +
+               ", sensors=" + std::to_string(s.sensorCount()) +
+               ", horizon=" + std::to_string(s.horizon_s) +
                ", intervals=" + std::to_string(s.intervals) + ")";
       });
 
@@ -321,9 +319,12 @@ random_scenario; its matrices are numpy arrays (copies).)")
       },
       py::arg("states"), py::arg("sensors"), py::arg("seed"), py::arg("noise_scale"),
       py::arg("budget"), py::arg("horizon"), py::arg("intervals"), py::arg("rows_per_sensor"));
-  m.def("uniform_rates", [](const Scenario& s) { return uniformSchedule(s).rates(); }, py::arg("scenario"));
   m.def(
-      "load_rates", [](const std::string& path, const Scenario& s) { return loadScheduleFile(path, s).rates(); },
+      "uniform_rates", [](const Scenario& s) { return uniformSchedule(s).rates(); },
+      py::arg("scenario"));
+  m.def(
+      "load_rates",
+      [](const std::string& path, const Scenario& s) { return loadScheduleFile(path, s).rates(); },
       py::arg("path"), py::arg("scenario"));
   m.def(
       "write_rates",
@@ -331,9 +332,9 @@ random_scenario; its matrices are numpy arrays (copies).)")
         writeScheduleFile(path, scheduleOf(s, rates));
       },
       py::arg("path"), py::arg("scenario"), py::arg("rates"));
-  m.def("plan", &plan, py::arg("scenario"), py::arg("surrogate"), py::arg("method"), py::arg("tolerance"),
-        py::arg("max_iterations"), py::arg("max_seconds"), py::arg("excluded"), py::arg("network_aware"),
-        py::arg("warm_start"), py::arg("seed"));
+  m.def("plan", &plan, py::arg("scenario"), py::arg("surrogate"), py::arg("method"),
+        py::arg("tolerance"), py::arg("max_iterations"), py::arg("max_seconds"),
+        py::arg("excluded"), py::arg("network_aware"), py::arg("warm_start"), py::arg("seed"));
   m.def(
       "bracket",
       [](const Scenario& s, const Matrix& rates) {
@@ -346,12 +347,13 @@ random_scenario; its matrices are numpy arrays (copies).)")
         return bracketDict(b);
       },
       py::arg("scenario"), py::arg("rates"));
-  m.def("evaluate", &evaluate, py::arg("scenario"), py::arg("rates"), py::arg("runs"), py::arg("seed"),
-        py::arg("threads"), py::arg("plant"), py::arg("arrivals"));
+  m.def("evaluate", &evaluate, py::arg("scenario"), py::arg("rates"), py::arg("runs"),
+        py::arg("seed"), py::arg("threads"), py::arg("plant"), py::arg("arrivals"));
   m.def("closed_loop", &closedLoop, py::arg("scenario"), py::arg("rates"), py::arg("replan_every"),
-        py::arg("surrogate"), py::arg("runs"), py::arg("seed"), py::arg("threads"), py::arg("switch_margin"),
-        py::arg("time_scale"));
-  m.def("trajectory", &trajectory, py::arg("scenario"), py::arg("rates"), py::arg("form"), py::arg("times"));
+        py::arg("surrogate"), py::arg("runs"), py::arg("seed"), py::arg("threads"),
+        py::arg("switch_margin"), py::arg("time_scale"));
+  m.def("trajectory", &trajectory, py::arg("scenario"), py::arg("rates"), py::arg("form"),
+        py::arg("times"));
   m.def("cdkf", &exactFilter, py::arg("scenario"), py::arg("times"), py::arg("sensors"));
 }
 

@@ -54,10 +54,10 @@ from ._sensornet import LaunchedRun as _LaunchedRun
 from ._sensornet import Participant, World, topic_names
 from . import offline, report
 from .offline import *  # noqa: F401,F403 (listed in offline.__all__)
-from .report import Fault, Report, load_report
+from .report import Fault, Report, load_report, load_sweep
 
 __all__ = (["launch", "Run", "Result", "program", "Participant", "World", "topic_names",
-            "Fault", "Report", "load_report"] + offline.__all__)
+            "Fault", "Report", "load_report", "load_sweep"] + offline.__all__)
 
 
 def program():

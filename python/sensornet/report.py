@@ -5,13 +5,18 @@ DataFrame:
     r.status, r.exit_code_expected, [f.kind for f in r.faults]
     df = r.episodes                      # one row per episode; bracket_info, bracket_cov columns
     df[df.complete].realized_cost.mean()
+
+A sweep's results (`sensornet sweep`) load the same way, one row per cell:
+
+    cells = sensornet.load_sweep("sweeps/planners-vs-budget")
+    cells.groupby(["planner", "budget"]).mean.mean()
 """
 
 import dataclasses
 import json
 import os
 
-__all__ = ["Fault", "Report", "load_report"]
+__all__ = ["Fault", "Report", "load_report", "load_sweep"]
 
 # The exit code of each status ("Exit status" in docs/guide/first-run.md).
 _EXIT_CODES = {"completed": 0, "degraded": 3, "failed": 1, "interrupted": 1}
@@ -81,3 +86,20 @@ def load_report(path):
     """Reads a report.json (or a sweep's JSON lines' `report` field) into a Report."""
     with open(os.fspath(path), encoding="utf-8") as f:
         return Report(json.load(f))
+
+
+def load_sweep(path):
+    """The results of `sensornet sweep` (its folder, or its results.jsonl) as a DataFrame: one
+    row per cell (the last row of a cell run again), its axes and measurements as columns."""
+    import pandas
+
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        path = os.path.join(path, "results.jsonl")
+    rows = {}
+    with open(path, encoding="utf-8") as f:
+        for line in f:
+            if line.endswith("\n"):  # a last line torn by a crash is not a cell
+                row = json.loads(line)
+                rows[row["key"]] = row
+    return pandas.DataFrame(list(rows.values()))

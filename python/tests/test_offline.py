@@ -16,6 +16,7 @@ import sensornet
 SOURCE = pathlib.Path(os.environ["SENSORNET_SOURCE_DIR"])
 COORDINATOR = os.environ["SENSORNET_COORDINATOR"]
 FUSION_CENTER = os.environ["SENSORNET_FUSION_CENTER"]
+LAUNCHER = os.environ["SENSORNET_PROGRAM"]
 
 # The first paper's random plant, small: a non-symmetric A with stable and unstable modes.
 RANDOM = """name: python-math
@@ -190,3 +191,22 @@ def test_bad_input_is_one_line_naming_what_is_wrong(random_file):
         sensornet.load_scenario(SOURCE / "scenarios" / "default.yaml").with_budget(3.0)
     with pytest.raises(sensornet.InputError):
         sensornet.parse_scenario("horizon: -1\n")
+
+
+def test_a_sweeps_cells_load_as_a_table_and_equal_the_functions(tmp_path, random_file):
+    scenario = random_file(seed=6, budget=3.0)
+    experiment = tmp_path / "e.yaml"
+    experiment.write_text(f"scenarios: [{{file: {scenario}, budget: [2, 3]}}]\n"
+                          "planners: [info, uniform]\nruns: 200\nseeds: [5]\n")
+    done = subprocess.run([LAUNCHER, "sweep", str(experiment), "--out", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=240)
+    assert done.returncode == 0, done.stderr
+    cells = sensornet.load_sweep(tmp_path / "out")
+    assert len(cells) == 4 and set(cells.status) == {"ok"}
+    assert sorted(cells.budget.unique()) == [2.0, 3.0]
+    s = sensornet.load_scenario(scenario)
+    for row in cells.itertuples():
+        p = sensornet.plan(s, surrogate=row.planner, budget=row.budget)
+        e = sensornet.evaluate(s.with_budget(row.budget), p, runs=200, seed=5)
+        assert (row.bracket_info, row.bracket_cov) == (p.bracket.info, p.bracket.cov)
+        assert row.mean == e.mean and row.ci95 == e.ci95

@@ -439,4 +439,18 @@ Scenario generateRandomScenario(const RandomPlantSpec& spec) {
   return s;
 }
 
+Scenario withBudget(Scenario scenario, double budget, const std::string& source) {
+  if (scenario.constraints.C.rows() != 1) {
+    throw InputError(source, "budget",
+                     "a scenario with one constraint row (this one has " +
+                         std::to_string(scenario.constraints.C.rows()) + "; change its C and b instead)");
+  }
+  if (!(budget > 0.0) || !std::isfinite(budget)) {
+    throw InputError(source, "budget", "a number > 0, got " + std::to_string(budget));
+  }
+  scenario.constraints.b(0) = budget;
+  validateScenario(scenario, source);
+  return scenario;
+}
+
 }  // namespace sensornet

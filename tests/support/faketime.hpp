@@ -49,7 +49,8 @@ inline int removeStaleFaketimeFiles() {
     for (const char* prefix : {"faketime_shm_", "sem.faketime_sem_"}) {
       if (name.rfind(prefix, 0) == 0) pid = name.substr(std::string(prefix).size());
     }
-    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9) continue;
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9)
+      continue;
     if (::kill(static_cast<pid_t>(std::stol(pid)), 0) == 0 || errno != ESRCH) continue;  // alive
     std::error_code gone;
     if (std::filesystem::remove(entry.path(), gone)) ++removed;

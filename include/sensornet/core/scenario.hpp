@@ -103,4 +103,9 @@ struct RandomPlantSpec {
 
 [[nodiscard]] Scenario generateRandomScenario(const RandomPlantSpec& spec);
 
+// The scenario with the bound of its one constraint row set to `budget` (the random plant's
+// 1'λ <= budget), validated. Throws InputError naming `source` when the scenario has more than
+// one row, or the budget is not a positive number.
+[[nodiscard]] Scenario withBudget(Scenario scenario, double budget, const std::string& source);
+
 }  // namespace sensornet

@@ -1,0 +1,228 @@
+#include "sensornet/evaluation/sweep.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/plan_status.hpp"
+#include "sensornet/core/surrogate.hpp"
+#include "sensornet/evaluation/schedule_evaluation.hpp"
+#include "sensornet/io/output_file.hpp"
+#include "sensornet/io/plan_request.hpp"
+#include "sensornet/planning/planner.hpp"
+
+namespace sensornet::evaluation {
+namespace {
+
+using nlohmann::json;
+
+json numberOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+// The cell's axes as columns.
+json axesOf(const SweepCell& cell) {
+  json row = {{"key", cell.key()}};
+  if (cell.scenario.random) {
+    const RandomPlantSpec& r = *cell.scenario.random;
+    row["scenario"] = "random";
+    row["states"] = r.state_dim;
+    row["sensors"] = r.sensor_count;
+    row["scenario_seed"] = r.seed;
+    row["noise_scale"] = r.noise_scale;
+    row["budget"] = cell.scenario.budget.value_or(r.budget);
+  } else {
+    row["scenario"] = cell.scenario.file;
+    row["budget"] = cell.scenario.budget ? json(*cell.scenario.budget) : json(nullptr);
+  }
+  row["planner"] = cell.planner;
+  row["surrogate"] = std::string(wordOf(cell.surrogate));
+  row["replan_every"] = cell.planner == "closed_loop" ? json(cell.replan_every_s) : json(nullptr);
+  row["seed"] = cell.seed;
+  row["runs"] = cell.runs;
+  return row;
+}
+
+// Progress callbacks that stop the work when the sweep is stopped.
+auto stopper(const std::atomic<bool>& stop) {
+  return [&stop](int, int) {
+    if (stop.load()) throw SweepStopped();
+  };
+}
+
+std::string csvField(const json& value) {
+  if (value.is_null()) return "";
+  std::string text = value.is_string() ? value.get<std::string>() : value.dump();
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+}  // namespace
+
+json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& stop) {
+  json row = axesOf(cell);
+  const auto began = std::chrono::steady_clock::now();
+  try {
+    const Scenario scenario = cell.scenario.load(cell.key());
+    // The open-loop plan (the closed loop's plan at every episode start): as `coordinator plan`.
+    PlanChoices choices;
+    choices.surrogate = cell.surrogate;
+    PlanRequest request = planRequest(scenario, cell.key(), choices);
+    request.realized.seed = cell.seed;
+    request.realized.threads = threads;
+    request.progress = [&stop](const PlanProgress&) { return !stop.load(); };
+    const PlanResult plan = planSchedule(scenario, request);
+    if (stop.load()) throw SweepStopped();
+    row["plan_status"] = statusText(plan.status, plan.failure);
+    row["plan_seconds"] = plan.solve_seconds;
+    row["objective"] = numberOrNull(plan.objective);
+    row["bracket_info"] = numberOrNull(plan.bracket.info);
+    row["bracket_cov"] = numberOrNull(plan.bracket.cov);
+    if (cell.planner == "closed_loop") {
+      ClosedLoopOptions loop;
+      loop.replan_every_s = cell.replan_every_s;
+      loop.surrogate = cell.surrogate;
+      loop.runs = cell.runs;
+      loop.seed = cell.seed;
+      loop.threads = threads;
+      loop.progress = stopper(stop);
+      const ClosedLoopRun run = runClosedLoop(scenario, plan.schedule, loop);
+      row["mean"] = run.closed.mean;
+      row["ci95"] = run.closed.ci95;
+      row["std"] = run.closed.std_dev;
+      row["arrivals_mean"] = run.closed.arrivals_mean;
+      row["open_mean"] = run.open_mean;
+      row["gain_mean"] = run.gain.mean;
+      row["gain_ci95"] = run.gain.ci95;
+    } else {
+      MonteCarloOptions mc;
+      mc.runs = cell.runs;
+      mc.seed = cell.seed;
+      mc.threads = threads;
+      mc.progress = stopper(stop);
+      const OpenLoopRun run = runOpenLoop(scenario, plan.schedule, mc, scenario.arrivals);
+      row["mean"] = run.mc.mean;
+      row["ci95"] = run.mc.ci95;
+      row["std"] = run.mc.std_dev;
+      row["arrivals_mean"] = run.mc.arrivals_mean;
+    }
+    row["status"] = "ok";
+  } catch (const SweepStopped&) {
+    throw;
+  } catch (const std::exception& e) {
+    if (stop.load()) throw SweepStopped();
+    row["status"] = "failed";
+    row["reason"] = e.what();
+  }
+  row["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  return row;
+}
+
+const std::vector<std::string>& sweepColumns() {
+  static const std::vector<std::string> columns = {
+      "scenario",  "states",      "sensors",      "scenario_seed", "noise_scale",  "budget",
+      "planner",   "surrogate",   "replan_every", "seed",          "runs",         "status",
+      "reason",    "plan_status", "plan_seconds", "objective",     "bracket_info", "bracket_cov",
+      "mean",      "ci95",        "std",          "arrivals_mean", "open_mean",    "gain_mean",
+      "gain_ci95", "seconds",     "key"};
+  return columns;
+}
+
+SweepResults::SweepResults(std::string path) : path_(std::move(path)) {
+  std::ifstream in(path_, std::ios::binary);
+  if (!in) return;  // no results yet
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // A torn last line (no newline: the run died while writing it) is cut off the file.
+  const std::size_t whole = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+  if (whole < text.size()) {
+    if (::truncate(path_.c_str(), static_cast<off_t>(whole)) != 0) {
+      throw InputError(
+          path_, "",
+          std::string("a results file this sweep can mend (") + std::strerror(errno) + ")");
+    }
+    text.resize(whole);
+  }
+  std::istringstream lines(text);
+  std::string line;
+  for (int number = 1; std::getline(lines, line); ++number) {
+    if (line.empty()) continue;
+    json row = json::parse(line, nullptr, false);
+    if (!row.is_object() || !row.contains("key") || !row["key"].is_string() ||
+        !row.contains("status")) {
+      throw InputError(
+          path_ + ":" + std::to_string(number), "",
+          "a sweep's result row (a JSON object with key and status); is this another file?");
+    }
+    std::string key = row["key"].get<std::string>();  // before the row is moved from
+    rows_[std::move(key)] = std::move(row);
+  }
+}
+
+std::size_t SweepResults::failed() const {
+  std::size_t n = 0;
+  for (const auto& [key, row] : rows_) n += row.value("status", "") != "ok";
+  return n;
+}
+
+void SweepResults::forgetFailed() {
+  std::erase_if(rows_, [](const auto& entry) { return entry.second.value("status", "") != "ok"; });
+}
+
+void SweepResults::append(const json& row) {
+  const std::string line = row.dump() + "\n";
+  const int fd = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("cannot open " + path_ + ": " + std::strerror(errno));
+  std::size_t written = 0;
+  while (written < line.size()) {
+    const ssize_t n = ::write(fd, line.data() + written, line.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = errno;
+      // Leave no torn line behind: cut the file back to where this row began.
+      if (written > 0) {
+        const off_t end = ::lseek(fd, 0, SEEK_END);
+        if (end >= static_cast<off_t>(written))
+          (void)::ftruncate(fd, end - static_cast<off_t>(written));
+      }
+      ::close(fd);
+      throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(error));
+    }
+    written += static_cast<std::size_t>(n);
+  }
+  const bool synced = ::fsync(fd) == 0;
+  const int error = errno;
+  ::close(fd);
+  if (!synced) throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(error));
+  rows_[row.at("key").get<std::string>()] = row;
+}
+
+void SweepResults::writeCsv(const std::string& path, const std::vector<std::string>& keys) const {
+  std::string text;
+  for (const std::string& column : sweepColumns()) text += (text.empty() ? "" : ",") + column;
+  text += "\n";
+  for (const std::string& key : keys) {
+    const auto found = rows_.find(key);
+    if (found == rows_.end()) continue;
+    std::string line;
+    bool first = true;
+    for (const std::string& column : sweepColumns()) {
+      if (!first) line += ",";
+      first = false;
+      line += found->second.contains(column) ? csvField(found->second[column]) : "";
+    }
+    text += line + "\n";
+  }
+  replaceFileAtomically(path, text, "sweep table");
+}
+
+}  // namespace sensornet::evaluation

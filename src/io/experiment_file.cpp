@@ -1,0 +1,272 @@
+#include "sensornet/io/experiment_file.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sensornet/core/input_error.hpp"
+#include "sensornet/core/words.hpp"
+#include "sensornet/io/scenario_file.hpp"
+#include "sensornet/io/yaml_text.hpp"
+#include "yaml_reader.hpp"
+
+namespace sensornet {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A number written so that reading it back gives the same double.
+std::string exact(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+// The values of an axis: a list, or one value.
+std::vector<YAML::Node> axisValues(const YamlReader& in, const YAML::Node& node,
+                                   const std::string& field) {
+  if (!node.IsSequence()) return {node};
+  if (node.size() == 0) in.fail(node, field, "a value or a non-empty list of values");
+  std::vector<YAML::Node> values;
+  for (const YAML::Node& v : node) values.push_back(v);
+  return values;
+}
+
+// Every combination of the axes, the first axis slowest.
+template <class Value>
+void cartesian(const std::vector<std::vector<Value>>& axes,
+               const std::function<void(const std::vector<Value>&)>& visit) {
+  std::vector<Value> chosen;
+  std::function<void(std::size_t)> go = [&](std::size_t a) {
+    if (a == axes.size()) {
+      visit(chosen);
+      return;
+    }
+    for (const Value& v : axes[a]) {
+      chosen.push_back(v);
+      go(a + 1);
+      chosen.pop_back();
+    }
+  };
+  go(0);
+}
+
+std::vector<SweepScenario> readScenario(const YamlReader& in, const YAML::Node& entry,
+                                        const std::string& field, const fs::path& folder) {
+  in.rejectUnknownKeys(entry, field, {"file", "random", "budget", "horizon", "intervals"});
+  const bool file = entry["file"].IsDefined();
+  const bool random = entry["random"].IsDefined();
+  if (file == random)
+    in.fail(entry, field, "either file: (a scenario file) or random: (a random plant)");
+  std::vector<std::optional<double>> budgets = {std::nullopt};
+  if (entry["budget"]) {
+    budgets.clear();
+    for (const YAML::Node& b : axisValues(in, entry["budget"], field + ".budget")) {
+      const double value = in.number(b, field + ".budget");
+      if (value <= 0.0) in.fail(b, field + ".budget", "a number > 0");
+      budgets.emplace_back(value);
+    }
+  }
+  std::vector<SweepScenario> out;
+  if (file) {
+    if (entry["horizon"] || entry["intervals"]) {
+      in.fail(entry, field, "horizon and intervals only with random: (a file has its own)");
+    }
+    if (!entry["file"].IsScalar())
+      in.fail(entry["file"], field + ".file", "the path of a scenario file");
+    fs::path path = entry["file"].Scalar();
+    if (path.is_relative()) path = folder / path;
+    for (const auto& budget : budgets)
+      out.push_back({path.lexically_normal().string(), std::nullopt, budget});
+    return out;
+  }
+  const YAML::Node r = entry["random"];
+  const std::string rf = field + ".random";
+  in.rejectUnknownKeys(r, rf,
+                       {"states", "sensors", "rows_per_sensor", "seed", "budget", "noise_scale"});
+  if (r["budget"] && entry["budget"])
+    in.fail(r["budget"], rf + ".budget", "the budget in one place only");
+  RandomPlantSpec base;
+  if (entry["horizon"]) base.horizon_s = in.number(entry["horizon"], field + ".horizon");
+  if (entry["intervals"])
+    base.intervals = static_cast<int>(in.integer(entry["intervals"], field + ".intervals"));
+  if (!(base.horizon_s > 0.0)) in.fail(entry["horizon"], field + ".horizon", "a number > 0");
+  if (base.intervals < 1 || base.intervals > 100000) {
+    in.fail(entry["intervals"], field + ".intervals", "an integer from 1 to 100000");
+  }
+  // Each key of random: is an axis (a list) or one value.
+  const std::vector<std::pair<const char*, bool>> keys = {
+      {"states", true}, {"sensors", true}, {"rows_per_sensor", false},
+      {"seed", true},   {"budget", false}, {"noise_scale", false}};
+  std::vector<std::vector<YAML::Node>> axes;
+  for (const auto& [key, required] : keys) {
+    if (required) in.required(r, key, rf + "." + key);
+    axes.push_back(r[key] ? axisValues(in, r[key], rf + "." + key)
+                          : std::vector<YAML::Node>{YAML::Node()});
+  }
+  cartesian<YAML::Node>(axes, [&](const std::vector<YAML::Node>& v) {
+    RandomPlantSpec spec = base;
+    const auto integer = [&](const YAML::Node& n, const char* key, long low) {
+      const long value = in.integer(n, rf + "." + key);
+      if (value < low) in.fail(n, rf + "." + key, "an integer >= " + std::to_string(low));
+      return value;
+    };
+    spec.state_dim = static_cast<int>(integer(v[0], "states", 1));
+    spec.sensor_count = static_cast<int>(integer(v[1], "sensors", 1));
+    if (v[2].IsDefined() && !v[2].IsNull())
+      spec.rows_per_sensor = static_cast<int>(integer(v[2], "rows_per_sensor", 1));
+    spec.seed = static_cast<std::uint64_t>(integer(v[3], "seed", 0));
+    if (v[4].IsDefined() && !v[4].IsNull()) {
+      spec.budget = in.number(v[4], rf + ".budget");
+      if (spec.budget <= 0.0) in.fail(v[4], rf + ".budget", "a number > 0");
+    }
+    if (v[5].IsDefined() && !v[5].IsNull()) {
+      spec.noise_scale = in.number(v[5], rf + ".noise_scale");
+      if (spec.noise_scale <= 0.0) in.fail(v[5], rf + ".noise_scale", "a number > 0");
+    }
+    if (spec.rows_per_sensor > spec.state_dim) {
+      in.fail(r, rf + ".rows_per_sensor", "an integer between 1 and random.states");
+    }
+    for (const auto& budget : budgets) out.push_back({"", spec, budget});
+  });
+  return out;
+}
+
+struct PlannerChoice {
+  std::string name;
+  PlanSurrogate surrogate = PlanSurrogate::Information;
+  double replan_every_s = 0.0;
+};
+
+PlannerChoice readPlanner(const YamlReader& in, const YAML::Node& node, const std::string& field) {
+  if (node.IsScalar()) {
+    const std::string& word = node.Scalar();
+    for (const WordOf<PlanSurrogate>& w : Words<PlanSurrogate>::kTable) {
+      if (word == w.text) return {word, w.value, 0.0};
+    }
+    in.fail(
+        node, field,
+        "info, cov, uniform, mc or {closed_loop: info|cov, replan_every: DT}, got '" + word + "'");
+  }
+  in.rejectUnknownKeys(node, field, {"closed_loop", "replan_every"});
+  const YAML::Node form = in.required(node, "closed_loop", field + ".closed_loop");
+  PlannerChoice p{"closed_loop", PlanSurrogate::Information, 0.0};
+  if (!form.IsScalar() || (form.Scalar() != "info" && form.Scalar() != "cov")) {
+    in.fail(form, field + ".closed_loop", "info or cov (the surrogate the tails are planned with)");
+  }
+  p.surrogate = form.Scalar() == "info" ? PlanSurrogate::Information : PlanSurrogate::Covariance;
+  p.replan_every_s = in.number(in.required(node, "replan_every", field + ".replan_every"),
+                               field + ".replan_every");
+  if (p.replan_every_s <= 0.0)
+    in.fail(node["replan_every"], field + ".replan_every", "a number > 0 (emulated seconds)");
+  return p;
+}
+
+}  // namespace
+
+Scenario SweepScenario::load(const std::string& source) const {
+  Scenario s;
+  if (random) {
+    s = generateRandomScenario(*random);
+    validateScenario(s, source);
+  } else {
+    s = loadScenarioFile(file);
+  }
+  return budget ? withBudget(std::move(s), *budget, source) : s;
+}
+
+std::string SweepCell::key() const {
+  std::string k = "scenario=";
+  if (scenario.random) {
+    const RandomPlantSpec& r = *scenario.random;
+    k += "random(states=" + std::to_string(r.state_dim) +
+         ",sensors=" + std::to_string(r.sensor_count) +
+         ",rows_per_sensor=" + std::to_string(r.rows_per_sensor) +
+         ",seed=" + std::to_string(r.seed) + ",budget=" + exact(r.budget) +
+         ",noise_scale=" + exact(r.noise_scale) + ",horizon=" + exact(r.horizon_s) +
+         ",intervals=" + std::to_string(r.intervals) + ")";
+  } else {
+    k += scenario.file;
+  }
+  if (scenario.budget) k += ";budget=" + exact(*scenario.budget);
+  k += ";planner=" + planner;
+  if (planner == "closed_loop") {
+    k += "(" + std::string(wordOf(surrogate)) + ",every=" + exact(replan_every_s) + ")";
+  }
+  return k + ";seed=" + std::to_string(seed) + ";runs=" + std::to_string(runs);
+}
+
+Experiment parseExperimentYaml(const std::string& text, const std::string& source) {
+  const YamlReader in(source);
+  const YAML::Node root = parseYamlText(text, source);
+  in.rejectUnknownKeys(root, "", {"name", "scenarios", "planners", "runs", "seeds"});
+  Experiment e;
+  e.source = source;
+  e.name = root["name"] && root["name"].IsScalar() ? root["name"].Scalar()
+                                                   : fs::path(source).stem().string();
+  const fs::path folder = fs::path(source).parent_path();
+
+  const YAML::Node scenarios = in.required(root, "scenarios", "scenarios");
+  if (!scenarios.IsSequence() || scenarios.size() == 0) {
+    in.fail(scenarios, "scenarios", "a list of {file: PATH} or {random: {...}} entries");
+  }
+  std::vector<SweepScenario> all_scenarios;
+  for (std::size_t i = 0; i < scenarios.size(); ++i) {
+    const std::string field = "scenarios[" + std::to_string(i) + "]";
+    for (SweepScenario& s : readScenario(in, scenarios[i], field, folder)) {
+      // Bad input before the first cell runs: every scenario is read and checked now.
+      (void)s.load(source + ":" + std::to_string(scenarios[i].Mark().line + 1) + " " + field);
+      all_scenarios.push_back(std::move(s));
+    }
+  }
+
+  const YAML::Node planners = in.required(root, "planners", "planners");
+  std::vector<PlannerChoice> all_planners;
+  for (const YAML::Node& p : axisValues(in, planners, "planners")) {
+    all_planners.push_back(
+        readPlanner(in, p, "planners[" + std::to_string(all_planners.size()) + "]"));
+  }
+
+  int runs = 1000;
+  if (root["runs"]) {
+    runs = static_cast<int>(in.integer(root["runs"], "runs"));
+    if (runs < 2 || runs > 100'000'000)
+      in.fail(root["runs"], "runs", "an integer from 2 to 100000000");
+  }
+  std::vector<std::uint64_t> seeds = {1};
+  if (root["seeds"]) {
+    seeds.clear();
+    for (const YAML::Node& s : axisValues(in, root["seeds"], "seeds")) {
+      const long seed = in.integer(s, "seeds");
+      if (seed < 0) in.fail(s, "seeds", "integers >= 0");
+      seeds.push_back(static_cast<std::uint64_t>(seed));
+    }
+  }
+
+  std::map<std::string, bool> seen;
+  for (const SweepScenario& s : all_scenarios) {
+    for (const PlannerChoice& p : all_planners) {
+      for (const std::uint64_t seed : seeds) {
+        SweepCell cell{s, p.name, p.surrogate, p.replan_every_s, seed, runs};
+        if (!seen.emplace(cell.key(), true).second) {
+          throw InputError(source, "scenarios",
+                           "cells that differ (two are the same: " + cell.key() + ")");
+        }
+        e.cells.push_back(std::move(cell));
+      }
+    }
+  }
+  return e;
+}
+
+Experiment loadExperimentFile(const std::string& path) {
+  return parseExperimentYaml(readTextFile(path, "experiment"), path);
+}
+
+}  // namespace sensornet

@@ -1,0 +1,198 @@
+// `sensornet sweep`: an experiment's cells equal what `coordinator plan` and `fusion_center
+// evaluate` print for the same inputs, a sweep stopped by Ctrl-C goes on where it stopped
+// without running a cell twice, a failed cell is not run again unless asked, and a bad
+// experiment file is one line and exit 2.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support/background_process.hpp"
+#include "support/process.hpp"
+#include "support/scratch_dir.hpp"
+
+namespace sensornet {
+namespace {
+
+using nlohmann::json;
+using sensornet::testing::ProcessResult;
+using sensornet::testing::runProcess;
+
+const std::string kLauncher = SENSORNET_LAUNCHER;
+const std::string kCoordinator = SENSORNET_COORDINATOR;
+const std::string kFusionCenter = SENSORNET_FUSION_CENTER;
+
+// A random plant of the first paper, small: 2 budgets x 2 planners x 2 seeds = 8 cells.
+std::string experiment(int runs, const std::string& seeds) {
+  return "name: small\n"
+         "scenarios:\n"
+         "  - random: {states: 3, sensors: 5, seed: 4, budget: [2, 4]}\n"
+         "    horizon: 2\n"
+         "    intervals: 6\n"
+         "planners: [info, cov]\n"
+         "runs: " +
+         std::to_string(runs) +
+         "\n"
+         "seeds: " +
+         seeds + "\n";
+}
+
+std::vector<json> rowsOf(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<json> rows;
+  for (std::string line; std::getline(in, line);) rows.push_back(json::parse(line));
+  return rows;
+}
+
+std::vector<std::string> linesOf(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+TEST(SweepCli, EveryCellIsWhatThePlannerAndTheEvaluatorPrint) {
+  const sensornet::testing::ScratchDir dir;
+  const std::string file = dir.write("small.yaml", experiment(300, "[1, 2]"));
+  const ProcessResult r =
+      runProcess({kLauncher, "sweep", file, "--out", dir.file("out"), "--jobs", "2", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json summary = json::parse(r.out);
+  EXPECT_EQ(summary.at("cells"), 8);
+  EXPECT_EQ(summary.at("done"), 8);
+  EXPECT_EQ(summary.at("failed"), 0);
+  const std::vector<json> rows = rowsOf(dir.file("out/results.jsonl"));
+  ASSERT_EQ(rows.size(), 8u);
+  std::set<std::string> cells;
+  for (const json& row : rows) {
+    cells.insert(row.at("planner").get<std::string>() + "/" + row.at("budget").dump() + "/" +
+                 row.at("seed").dump());
+  }
+  EXPECT_EQ(cells.size(), 8u);  // each cell once
+
+  // Every cell again through the programs, from a scenario file of the same plant and budget.
+  for (const json& row : rows) {
+    const std::string budget = row.at("budget").dump();
+    const std::string scenario =
+        dir.write("plant-" + budget + ".yaml",
+                  "horizon: 2\nintervals: 6\nrandom:\n  states: 3\n  sensors: 5\n"
+                  "  seed: 4\n  budget: " +
+                      budget + "\n");
+    const std::string plan = dir.file("plan.json");
+    const ProcessResult p =
+        runProcess({kCoordinator, "plan", "--scenario", scenario, "--surrogate",
+                    row.at("planner").get<std::string>(), "--out", plan, "--json"});
+    ASSERT_EQ(p.exit_code, 0) << p.err;
+    const json planned = json::parse(p.out);
+    EXPECT_EQ(row.at("objective"), planned.at("objective")) << row.dump();
+    EXPECT_EQ(row.at("bracket_info"), planned.at("bracket").at("info"));
+    EXPECT_EQ(row.at("bracket_cov"), planned.at("bracket").at("cov"));
+    const ProcessResult e =
+        runProcess({kFusionCenter, "evaluate", "--scenario", scenario, "--schedule", plan, "--runs",
+                    "300", "--seed", row.at("seed").dump(), "--json"});
+    ASSERT_EQ(e.exit_code, 0) << e.err;
+    const json evaluated = json::parse(e.out);
+    EXPECT_EQ(row.at("mean"), evaluated.at("mc").at("mean")) << row.dump();
+    EXPECT_EQ(row.at("ci95"), evaluated.at("mc").at("ci95"));
+  }
+
+  // The table: a header and one line per cell.
+  EXPECT_EQ(linesOf(dir.file("out/results.csv")).size(), 9u);
+}
+
+TEST(SweepCli, CtrlCKeepsTheCellsDoneAndTheSameCommandGoesOn) {
+  const sensornet::testing::ScratchDir dir;
+  const std::string file = dir.write("small.yaml", experiment(20000, "[1, 2, 3, 4, 5, 6]"));
+  const std::string results = dir.file("out/results.jsonl");
+  const std::vector<std::string> argv = {kLauncher,       "sweep",  file, "--out",
+                                         dir.file("out"), "--jobs", "1"};
+  {
+    sensornet::testing::BackgroundProcess sweep(argv, dir.file("first.log"));
+    // Ctrl-C once some cells are done (the 24 cells take tens of seconds).
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (linesOf(results).size() < 2 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    ::kill(sweep.pid(), SIGINT);
+    EXPECT_EQ(sweep.waitForExit(std::chrono::seconds(30)), std::optional<int>(1));
+  }
+  const std::vector<std::string> before = linesOf(results);
+  ASSERT_GE(before.size(), 2u);
+  ASSERT_LT(before.size(), 24u) << "the sweep ended before Ctrl-C";
+  std::ifstream log(dir.file("first.log"));
+  std::stringstream said;
+  said << log.rdbuf();
+  EXPECT_NE(said.str().find("interrupted: " + std::to_string(before.size()) + " of 24 cells done"),
+            std::string::npos)
+      << said.str();
+
+  const ProcessResult r = runProcess(argv, std::chrono::minutes(5));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find(std::to_string(before.size()) + " done before, " +
+                       std::to_string(24 - before.size()) + " to run"),
+            std::string::npos)
+      << r.err;
+  const std::vector<std::string> after = linesOf(results);
+  ASSERT_EQ(after.size(), 24u);
+  for (std::size_t i = 0; i < before.size(); ++i) EXPECT_EQ(after[i], before[i]);  // untouched
+  std::set<std::string> keys;
+  for (const std::string& line : after) keys.insert(json::parse(line).at("key").get<std::string>());
+  EXPECT_EQ(keys.size(), 24u);  // no cell twice
+}
+
+TEST(SweepCli, AFailedCellRunsAgainOnlyWhenAsked) {
+  const sensornet::testing::ScratchDir dir;
+  const std::string file = dir.write("small.yaml", experiment(100, "[1]"));
+  const std::vector<std::string> argv = {kLauncher, "sweep", file, "--out", dir.file("out")};
+  ASSERT_EQ(runProcess(argv).exit_code, 0);
+  // As if the first cell had failed in an earlier run.
+  std::vector<json> rows = rowsOf(dir.file("out/results.jsonl"));
+  ASSERT_EQ(rows.size(), 4u);
+  json failed = rows[0];
+  failed["status"] = "failed";
+  failed["reason"] = "the machine ran out of memory";
+  std::ofstream(dir.file("out/results.jsonl")) << failed.dump() << "\n";
+
+  ProcessResult r = runProcess(argv);
+  EXPECT_EQ(r.exit_code, 1) << r.err;  // a cell failed
+  EXPECT_NE(r.err.find("4 cells, 1 failed"), std::string::npos) << r.err;
+  EXPECT_EQ(rowsOf(dir.file("out/results.jsonl")).size(), 4u);  // the failed one was not run
+
+  r = runProcess({kLauncher, "sweep", file, "--out", dir.file("out"), "--retry-failed"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  rows = rowsOf(dir.file("out/results.jsonl"));
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows.back().at("key"), failed.at("key"));
+  EXPECT_EQ(rows.back().at("status"), "ok");
+  // The table has the cell's last row only.
+  const std::vector<std::string> csv = linesOf(dir.file("out/results.csv"));
+  ASSERT_EQ(csv.size(), 5u);
+  for (const std::string& line : csv) EXPECT_EQ(line.find("out of memory"), std::string::npos);
+}
+
+TEST(SweepCli, ABadExperimentIsOneLineAndExitTwo) {
+  const sensornet::testing::ScratchDir dir;
+  const std::string file = dir.write(
+      "bad.yaml", "scenarios:\n  - random: {states: 3, sensors: 5, seed: 1}\nplanners: [inf]\n");
+  const ProcessResult r = runProcess({kLauncher, "sweep", file, "--out", dir.file("out")});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("bad.yaml:3: planners[0]: expected info, cov"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out/results.jsonl")));
+}
+
+}  // namespace
+}  // namespace sensornet
