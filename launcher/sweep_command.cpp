@@ -17,7 +17,9 @@
 #include "sensornet/evaluation/sweep.hpp"
 #include "sensornet/io/command_line.hpp"
 #include "sensornet/io/experiment_file.hpp"
+#include "sensornet/io/output_file.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/report/sweep_page.hpp"
 
 namespace sensornet::launcher {
 namespace {
@@ -51,6 +53,7 @@ int runSweep(const SweepOptions& options) {
   makeFolders(out, "--out");
   const fs::path jsonl = out / "results.jsonl";
   const fs::path csv = out / "results.csv";
+  const fs::path page = out / "results.html";
   evaluation::SweepResults results(jsonl.string());
   if (options.retry_failed) results.forgetFailed();
 
@@ -127,6 +130,7 @@ int runSweep(const SweepOptions& options) {
   for (std::thread& t : pool) t.join();
 
   results.writeCsv(csv.string(), keys);
+  replaceFileAtomically(page, report::sweepPage(experiment.name, results.rows(keys)), "sweep page");
   const std::size_t done =
       std::count_if(keys.begin(), keys.end(), [&](const std::string& k) { return results.has(k); });
   const std::size_t failed = results.failed();
@@ -137,6 +141,7 @@ int runSweep(const SweepOptions& options) {
                {"failed", failed},
                {"results", jsonl.string()},
                {"table", csv.string()},
+               {"page", page.string()},
                {"interrupted", pendingInterrupt() != 0}});
   }
   if (!write_error.empty()) {
@@ -150,7 +155,8 @@ int runSweep(const SweepOptions& options) {
                  done, total);
     return kExitFailure;
   }
-  std::fprintf(stderr, "sweep: %zu cells, %zu failed; table %s\n", total, failed, csv.c_str());
+  std::fprintf(stderr, "sweep: %zu cells, %zu failed; table %s, page %s\n", total, failed, csv.c_str(),
+               page.c_str());
   return failed == 0 ? kExitOk : kExitFailure;
 }
 
@@ -165,7 +171,8 @@ Subcommand addSweepCommand(CLI::App& app) {
       "the Monte Carlo of `fusion_center evaluate` (the same numbers for the same inputs), "
       "several cells at a time. Each finished cell is a line of OUT/results.jsonl at once; "
       "after a Ctrl-C or a crash the same command runs only the cells not yet there. "
-      "OUT/results.csv is the table. Exit 0 when every cell is ok, 1 when one failed (its row "
+      "OUT/results.csv is the table and OUT/results.html the page (cost against each axis per "
+      "planner, with intervals and brackets). Exit 0 when every cell is ok, 1 when one failed (its row "
       "says why) or the sweep was stopped, 2 for bad input. Example:\n  sensornet sweep "
       "examples/experiments/planners-vs-budget.yaml --jobs 2");
   cmd->add_option(
@@ -184,7 +191,7 @@ Subcommand addSweepCommand(CLI::App& app) {
                 "run the cells whose earlier row says failed again (default: a cell in the "
                 "results is done, failed or not)");
   cmd->add_flag("--json", options->json,
-                "print {\"cells\", \"done\", \"failed\", \"results\", \"table\", \"interrupted\"} "
+                "print {\"cells\", \"done\", \"failed\", \"results\", \"table\", \"page\", \"interrupted\"} "
                 "as one JSON line at the end");
   return {cmd, [options] { return runSweep(*options); }};
 }

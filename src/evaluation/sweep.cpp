@@ -206,19 +206,26 @@ void SweepResults::append(const json& row) {
   rows_[row.at("key").get<std::string>()] = row;
 }
 
+std::vector<json> SweepResults::rows(const std::vector<std::string>& keys) const {
+  std::vector<json> out;
+  for (const std::string& key : keys) {
+    const auto found = rows_.find(key);
+    if (found != rows_.end()) out.push_back(found->second);
+  }
+  return out;
+}
+
 void SweepResults::writeCsv(const std::string& path, const std::vector<std::string>& keys) const {
   std::string text;
   for (const std::string& column : sweepColumns()) text += (text.empty() ? "" : ",") + column;
   text += "\n";
-  for (const std::string& key : keys) {
-    const auto found = rows_.find(key);
-    if (found == rows_.end()) continue;
+  for (const json& row : rows(keys)) {
     std::string line;
     bool first = true;
     for (const std::string& column : sweepColumns()) {
       if (!first) line += ",";
       first = false;
-      line += found->second.contains(column) ? csvField(found->second[column]) : "";
+      line += row.contains(column) ? csvField(row[column]) : "";
     }
     text += line + "\n";
   }

@@ -18,6 +18,7 @@
 #include "sensornet/io/command_line.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/report/report_files.hpp"
+#include "page_parts.hpp"
 
 namespace sensornet::report {
 namespace {
@@ -108,12 +109,6 @@ Axis episodeAxis(double first, double last, const std::string& label) {
     axis.ticks = niceTicks({first, last}, 10);
   }
   return axis;
-}
-
-std::string figure(const std::string& id, const std::string& heading, const std::string& svg,
-                   const std::string& caption) {
-  return "<figure id=\"fig-" + id + "\">\n<h2>" + escapeXml(heading) + "</h2>\n" + svg +
-         "<figcaption>" + caption + "</figcaption>\n</figure>\n";
 }
 
 std::string note(const std::string& heading, const std::string& text) {
@@ -865,44 +860,6 @@ std::string summaryTable(const RunRecord& run) {
   return t + "</table>\n";
 }
 
-constexpr const char* kStyle = R"(
-body { font-family: system-ui, "DejaVu Sans", Arial, sans-serif; color: #1a1a1a; margin: 24px auto;
-       max-width: 800px; padding: 0 12px; line-height: 1.4; }
-h1 { font-size: 22px; margin: 0 0 4px; } h2 { font-size: 16px; margin: 24px 0 6px; }
-.meta { color: #444; font-size: 13px; margin-bottom: 12px; }
-table { border-collapse: collapse; font-size: 13px; margin: 8px 0; }
-th, td { text-align: left; padding: 2px 10px 2px 0; vertical-align: top; }
-table.faults td, table.faults th, table.clocks td, table.clocks th { border-bottom: 1px solid #ddd; }
-figure { margin: 0 0 12px; break-inside: avoid; page-break-inside: avoid; }
-figcaption, .sub, .note p { font-size: 12.5px; color: #333; }
-svg.plot { display: block; max-width: 100%; height: auto; }
-svg.plot text { font-size: 12px; fill: #1a1a1a; }
-svg.plot .tick { font-size: 11px; } svg.plot .rule { font-size: 11px; }
-svg.plot .grid { stroke: #e4e4e4; stroke-width: 1; } svg.plot .frame { fill: none; stroke: #555; }
-@media print { body { margin: 0; max-width: none; } h2 { break-after: avoid; }
-  a { color: inherit; text-decoration: none; } }
-)";
-
-// Counts each plot's drawn marks (non-empty boxes) into data-marks, and errors into the body's
-// data-errors: what the browser test reads. Inline, fetches nothing.
-constexpr const char* kScript = R"(
-(function () {
-  var errors = 0;
-  window.addEventListener('error', function () { errors += 1; document.body.dataset.errors = errors; });
-  document.body.dataset.errors = 0;
-  var plots = document.querySelectorAll('svg.plot');
-  plots.forEach(function (svg) {
-    var drawn = 0;
-    svg.querySelectorAll('g.marks > *').forEach(function (mark) {
-      var box = mark.getBBox();
-      if (box.width > 0 || box.height > 0) drawn += 1;
-    });
-    svg.dataset.marks = drawn;
-  });
-  document.body.dataset.plots = plots.length;
-})();
-)";
-
 std::string formatCsv(double value) { return std::isfinite(value) ? formatNumber(value) : ""; }
 
 }  // namespace
@@ -973,7 +930,7 @@ std::string reportPage(const RunRecord& run, const std::string& source) {
   const std::string written = run.written_at.value_or("unknown date");
   std::string page = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
                      "<title>sensornet run " + escapeXml(run.run_id) + "</title>\n<style>" +
-                     kStyle + "</style>\n</head>\n<body>\n";
+                     kPageStyle + "</style>\n</head>\n<body>\n";
   page += "<h1>sensornet run " + escapeXml(run.run_id) + "</h1>\n<div class=\"meta\">scenario " +
           escapeXml(digest.empty() ? "(digest unknown)" : digest) + " · " +
           formatTick(run.scenario ? asDouble(run.scenario->sensors) : kNan) + " sensors, " +
@@ -987,7 +944,7 @@ std::string reportPage(const RunRecord& run, const std::string& source) {
   page += clocksTable(run.clocks);
   page += tracePlot(run);
   page += faultPlot(run);
-  page += std::string("<script>") + kScript + "</script>\n</body>\n</html>\n";
+  page += std::string("<script>") + kPageScript + "</script>\n</body>\n</html>\n";
   return page;
 }
 

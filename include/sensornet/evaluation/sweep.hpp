@@ -56,8 +56,9 @@ class SweepResults {
   // Appends one row and flushes it to the disk; throws std::runtime_error with the system's
   // reason when it cannot.
   void append(const nlohmann::json& row);
-  // The last row of every key, in the order of `keys` (cells not in the results left out),
-  // as CSV with sweepColumns(); written atomically.
+  // The last row of every key, in the order of `keys` (cells not in the results left out).
+  [[nodiscard]] std::vector<nlohmann::json> rows(const std::vector<std::string>& keys) const;
+  // rows(keys) as CSV with sweepColumns(); written atomically.
   void writeCsv(const std::string& path, const std::vector<std::string>& keys) const;
 
  private:

@@ -109,8 +109,13 @@ TEST(SweepCli, EveryCellIsWhatThePlannerAndTheEvaluatorPrint) {
     EXPECT_EQ(row.at("ci95"), evaluated.at("mc").at("ci95"));
   }
 
-  // The table: a header and one line per cell.
+  // The table: a header and one line per cell; the page plots cost against the budget.
   EXPECT_EQ(linesOf(dir.file("out/results.csv")).size(), 9u);
+  std::ifstream page(dir.file("out/results.html"));
+  std::stringstream html;
+  html << page.rdbuf();
+  EXPECT_NE(html.str().find("id=\"fig-budget\""), std::string::npos);
+  EXPECT_EQ(summary.at("page"), dir.file("out/results.html"));
 }
 
 TEST(SweepCli, CtrlCKeepsTheCellsDoneAndTheSameCommandGoesOn) {
