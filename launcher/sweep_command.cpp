@@ -129,8 +129,18 @@ int runSweep(const SweepOptions& options) {
   }
   for (std::thread& t : pool) t.join();
 
-  results.writeCsv(csv.string(), keys);
-  replaceFileAtomically(page, report::sweepPage(experiment.name, results.rows(keys)), "sweep page");
+  if (!write_error.empty()) {
+    std::fprintf(stderr, "sweep: stopped: %s (the cells written before are kept)\n",
+                 write_error.c_str());
+  }
+  try {
+    results.writeCsv(csv.string(), keys);
+    replaceFileAtomically(page, report::sweepPage(experiment.name, results.rows(keys)),
+                          "sweep page");
+  } catch (const std::exception& e) {  // a full disk: the rows written stay, say what did not
+    std::fprintf(stderr, "sweep: %s (the results in %s are whole)\n", e.what(), jsonl.c_str());
+    return kExitFailure;
+  }
   const std::size_t done =
       std::count_if(keys.begin(), keys.end(), [&](const std::string& k) { return results.has(k); });
   const std::size_t failed = results.failed();
@@ -144,19 +154,15 @@ int runSweep(const SweepOptions& options) {
                {"page", page.string()},
                {"interrupted", pendingInterrupt() != 0}});
   }
-  if (!write_error.empty()) {
-    std::fprintf(stderr, "sweep: stopped: %s (the cells written before are kept)\n",
-                 write_error.c_str());
-    return kExitFailure;
-  }
+  if (!write_error.empty()) return kExitFailure;
   if (done < total) {
     std::fprintf(stderr,
                  "sweep: interrupted: %zu of %zu cells done; the same command goes on from there\n",
                  done, total);
     return kExitFailure;
   }
-  std::fprintf(stderr, "sweep: %zu cells, %zu failed; table %s, page %s\n", total, failed, csv.c_str(),
-               page.c_str());
+  std::fprintf(stderr, "sweep: %zu cells, %zu failed; table %s, page %s\n", total, failed,
+               csv.c_str(), page.c_str());
   return failed == 0 ? kExitOk : kExitFailure;
 }
 
@@ -172,7 +178,8 @@ Subcommand addSweepCommand(CLI::App& app) {
       "several cells at a time. Each finished cell is a line of OUT/results.jsonl at once; "
       "after a Ctrl-C or a crash the same command runs only the cells not yet there. "
       "OUT/results.csv is the table and OUT/results.html the page (cost against each axis per "
-      "planner, with intervals and brackets). Exit 0 when every cell is ok, 1 when one failed (its row "
+      "planner, with intervals and brackets). Exit 0 when every cell is ok, 1 when one failed (its "
+      "row "
       "says why) or the sweep was stopped, 2 for bad input. Example:\n  sensornet sweep "
       "examples/experiments/planners-vs-budget.yaml --jobs 2");
   cmd->add_option(
@@ -190,9 +197,10 @@ Subcommand addSweepCommand(CLI::App& app) {
   cmd->add_flag("--retry-failed", options->retry_failed,
                 "run the cells whose earlier row says failed again (default: a cell in the "
                 "results is done, failed or not)");
-  cmd->add_flag("--json", options->json,
-                "print {\"cells\", \"done\", \"failed\", \"results\", \"table\", \"page\", \"interrupted\"} "
-                "as one JSON line at the end");
+  cmd->add_flag(
+      "--json", options->json,
+      "print {\"cells\", \"done\", \"failed\", \"results\", \"table\", \"page\", \"interrupted\"} "
+      "as one JSON line at the end");
   return {cmd, [options] { return runSweep(*options); }};
 }
 
