@@ -73,6 +73,19 @@ Feasibility checkFeasibility(const RateSchedule& schedule, const Scenario& scena
       }
     }
   }
+  const Eigen::VectorXd& energy = scenario.constraints.energy;
+  if (energy.size() == schedule.sensorCount()) {
+    const Eigen::VectorXd used = schedule.expectedCounts(0.0, schedule.horizon());
+    for (int j = 0; j < energy.size(); ++j) {
+      // The tolerance is a rate's, so the same schedule passes at any horizon.
+      const double over = used(j) - energy(j);
+      if (over > tol * std::max(1.0, schedule.horizon())) {
+        fail(over, "sensor " + std::to_string(j) + ": expected measurements over the horizon " +
+                       std::to_string(used(j)) + " exceed its energy budget " +
+                       std::to_string(energy(j)));
+      }
+    }
+  }
   return result;
 }
 
@@ -82,8 +95,13 @@ RateSchedule uniformSchedule(const Scenario& scenario) {
   for (int i = 0; i < row_sums.size(); ++i) {
     if (row_sums(i) > 0.0) rate = std::min(rate, scenario.constraints.b(i) / row_sums(i));
   }
-  return RateSchedule(scenario.horizon_s,
-                      Eigen::MatrixXd::Constant(scenario.intervals, scenario.sensorCount(), rate));
+  Eigen::MatrixXd rates =
+      Eigen::MatrixXd::Constant(scenario.intervals, scenario.sensorCount(), rate);
+  const Eigen::VectorXd& energy = scenario.constraints.energy;
+  for (Eigen::Index j = 0; j < energy.size(); ++j) {
+    rates.col(j) = rates.col(j).cwiseMin(energy(j) / scenario.horizon_s);
+  }
+  return RateSchedule(scenario.horizon_s, std::move(rates));
 }
 
 }  // namespace sensornet

@@ -372,6 +372,21 @@ void validateScenario(const Scenario& s, const std::string& source) {
                        "a number > 0, got " + std::to_string(s.constraints.b(i)));
     }
   }
+  const Eigen::VectorXd& energy = s.constraints.energy;
+  if (energy.size() > 0) {
+    if (energy.size() != m) {
+      throw InputError(source, "constraints.energy",
+                       std::to_string(m) + " values (one per sensor) or one for all, got " +
+                           std::to_string(energy.size()));
+    }
+    for (Eigen::Index j = 0; j < m; ++j) {
+      if (!(energy(j) > 0.0)) {
+        throw InputError(source, "constraints.energy[" + std::to_string(j) + "]",
+                         "a number of expected measurements over the horizon > 0 (.inf for no "
+                         "budget), got " + std::to_string(energy(j)));
+      }
+    }
+  }
 
   const Eigen::MatrixXd open_loop = checkPlantOverHorizon(s, source);
   checkSensorsOverHorizon(s, open_loop, source);
@@ -436,6 +451,9 @@ Scenario generateRandomScenario(const RandomPlantSpec& spec) {
   s.cost.WT = Eigen::MatrixXd::Identity(n, n);
   s.constraints.C = Eigen::MatrixXd::Ones(1, spec.sensor_count);
   s.constraints.b = Eigen::VectorXd::Constant(1, spec.budget);
+  if (spec.energy < std::numeric_limits<double>::infinity()) {
+    s.constraints.energy = Eigen::VectorXd::Constant(spec.sensor_count, spec.energy);
+  }
   return s;
 }
 

@@ -262,9 +262,11 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
       request.start_time = at;
       request.start_covariance = covarianceExpectedAt(settings, book, now, at);
       const ScheduleVersion* in_force = book.inForce(now.episode, at);
-      tail_plan = choosePlan(planned_for, request,
-                             in_force != nullptr ? in_force->schedule : book.latest().schedule,
-                             settings, "mid-episode", command_id);
+      // The rates before `at` are those in force: they are kept, and they spent the energy
+      // that the rest of the episode may not.
+      if (in_force != nullptr) request.warm_start = in_force->schedule;
+      tail_plan = choosePlan(planned_for, request, *request.warm_start, settings, "mid-episode",
+                             command_id);
     }
   }
   const Chosen full_plan =

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -35,9 +36,46 @@ std::string readTextFile(const std::string& path, const std::string& what) {
 
 namespace {
 
+// An energy budget: a number > 0, or .inf for none.
+double energyBudget(const YamlReader& in, const YAML::Node& node, const std::string& field) {
+  if (node.IsScalar()) {
+    const std::string& text = node.Scalar();
+    if (text == ".inf" || text == ".Inf" || text == ".INF") {
+      return std::numeric_limits<double>::infinity();
+    }
+  }
+  const double value = in.number(node, field);
+  if (!(value > 0.0)) {
+    in.fail(node, field,
+            "a number of expected measurements over the horizon > 0 (.inf for no budget), got " +
+                node.Scalar());
+  }
+  return value;
+}
+
+// `energy:` one budget for every sensor, or a list of one per sensor.
+Eigen::VectorXd energyBudgets(const YamlReader& in, const YAML::Node& node,
+                              const std::string& field, Eigen::Index sensors) {
+  if (node.IsSequence()) {
+    if (static_cast<Eigen::Index>(node.size()) != sensors) {
+      in.fail(node, field,
+              std::to_string(sensors) + " budgets (one per sensor) or one for all, got " +
+                  std::to_string(node.size()));
+    }
+    Eigen::VectorXd energy(sensors);
+    for (Eigen::Index j = 0; j < sensors; ++j) {
+      energy(j) = energyBudget(in, node[static_cast<std::size_t>(j)],
+                               field + "[" + std::to_string(j) + "]");
+    }
+    return energy;
+  }
+  return Eigen::VectorXd::Constant(sensors, energyBudget(in, node, field));
+}
+
 void readRandomForm(const YamlReader& in, const YAML::Node& random, Scenario& s) {
   in.rejectUnknownKeys(random, "random",
-                       {"states", "sensors", "rows_per_sensor", "seed", "budget", "noise_scale"});
+                       {"states", "sensors", "rows_per_sensor", "seed", "budget", "noise_scale",
+                        "energy"});
   RandomPlantSpec spec;
   spec.horizon_s = s.horizon_s;
   spec.intervals = s.intervals;
@@ -55,6 +93,12 @@ void readRandomForm(const YamlReader& in, const YAML::Node& random, Scenario& s)
   if (random["budget"]) spec.budget = in.number(random["budget"], "random.budget");
   if (random["noise_scale"]) {
     spec.noise_scale = in.number(random["noise_scale"], "random.noise_scale");
+  }
+  if (random["energy"]) {
+    if (!random["energy"].IsScalar()) {
+      in.fail(random["energy"], "random.energy", "one budget for every sensor");
+    }
+    spec.energy = energyBudget(in, random["energy"], "random.energy");
   }
   if (spec.state_dim < 1) in.fail(random["states"], "random.states", "an integer >= 1");
   if (spec.sensor_count < 1) in.fail(random["sensors"], "random.sensors", "an integer >= 1");
@@ -105,10 +149,13 @@ void readExplicitForm(const YamlReader& in, const YAML::Node& root, Scenario& s)
     if (cost["WT"]) s.cost.WT = in.matrix(cost["WT"], "cost.WT");
   }
   const YAML::Node constraints = in.required(root, "constraints", "constraints");
-  in.rejectUnknownKeys(constraints, "constraints", {"C", "b"});
+  in.rejectUnknownKeys(constraints, "constraints", {"C", "b", "energy"});
   s.constraints.C = constraints["C"] ? in.matrix(constraints["C"], "constraints.C")
                                      : Eigen::MatrixXd::Ones(1, m);
   s.constraints.b = in.vector(in.required(constraints, "b", "constraints.b"), "constraints.b");
+  if (constraints["energy"]) {
+    s.constraints.energy = energyBudgets(in, constraints["energy"], "constraints.energy", m);
+  }
 }
 
 // The node a validation field path such as "sensors[1].R" or "constraints.b[0]" points at,

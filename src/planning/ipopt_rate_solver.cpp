@@ -1,6 +1,8 @@
 #include <IpIpoptApplication.hpp>
 #include <IpTNLP.hpp>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -13,8 +15,9 @@ namespace sensornet::planning {
 namespace {
 
 // The NLP handed to IPOPT: min J(λ) over the planned rates, 0 <= λ_kj <= λ̄_j (implied by the
-// constraints, stated to help the interior-point method), and C λ_k <= b for every planned
-// interval: linear, so its Jacobian is constant. The Hessian is left to IPOPT's L-BFGS.
+// constraints, stated to help the interior-point method), C λ_k <= b for every planned
+// interval, then Σ_k h λ_kj <= E_j left for every sensor in service with an energy budget:
+// linear, so the Jacobian is constant. The Hessian is left to IPOPT's L-BFGS.
 class RateProgram : public Ipopt::TNLP {
  public:
   RateProgram(PlanningProblem& problem, const PlanRequest& request, Clock::time_point start)
@@ -32,15 +35,23 @@ class RateProgram : public Ipopt::TNLP {
       }
     }
     max_rates_ = problem_.polytope().maxRates();
+    const Eigen::VectorXd& energy = problem_.energyLeft();
+    for (std::size_t f = 0; f < problem_.inService().size() && energy.size() > 0; ++f) {
+      const int j = problem_.inService()[f];
+      if (energy(j) < std::numeric_limits<double>::infinity()) {
+        budgeted_.emplace_back(static_cast<int>(f), energy(j));
+        max_rates_(j) = std::min(max_rates_(j), energy(j) / problem_.intervalLength());
+      }
+    }
   }
 
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                     Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override {
     n = problem_.variables();
-    m = problem_.plannedIntervals() * static_cast<int>(rows_.size());
+    m = intervalRows() + static_cast<int>(budgeted_.size());
     int per_interval = 0;
     for (const auto& row : rows_) per_interval += static_cast<int>(row.size());
-    nnz_jac_g = problem_.plannedIntervals() * per_interval;
+    nnz_jac_g = problem_.plannedIntervals() * (per_interval + static_cast<int>(budgeted_.size()));
     nnz_h_lag = 0;
     index_style = C_STYLE;
     return true;
@@ -55,7 +66,8 @@ class RateProgram : public Ipopt::TNLP {
     }
     for (Ipopt::Index c = 0; c < m; ++c) {
       g_l[c] = -2e19;
-      g_u[c] = bounds_[static_cast<std::size_t>(c) % rows_.size()];
+      g_u[c] = c < intervalRows() ? bounds_[static_cast<std::size_t>(c) % rows_.size()]
+                                  : budgeted_[static_cast<std::size_t>(c - intervalRows())].second;
     }
     return true;
   }
@@ -96,6 +108,13 @@ class RateProgram : public Ipopt::TNLP {
         g[c++] = load;
       }
     }
+    for (const auto& [f, budget] : budgeted_) {
+      double used = 0.0;
+      for (int k = 0; k < problem_.plannedIntervals(); ++k) {
+        used += problem_.intervalLength() * x[static_cast<std::size_t>(k) * width + static_cast<std::size_t>(f)];
+      }
+      g[c++] = used;
+    }
     return true;
   }
 
@@ -118,6 +137,18 @@ class RateProgram : public Ipopt::TNLP {
         }
         ++c;
       }
+    }
+    for (const auto& budgeted : budgeted_) {
+      for (int k = 0; k < problem_.plannedIntervals(); ++k) {
+        if (values == nullptr) {
+          iRow[e] = c;
+          jCol[e] = k * width + budgeted.first;
+        } else {
+          values[e] = problem_.intervalLength();
+        }
+        ++e;
+      }
+      ++c;
     }
     return true;
   }
@@ -193,6 +224,10 @@ class RateProgram : public Ipopt::TNLP {
     }
   }
 
+  [[nodiscard]] int intervalRows() const {
+    return problem_.plannedIntervals() * static_cast<int>(rows_.size());
+  }
+
   // x is interval-major over the planned intervals and the sensors in service.
   void setVariables(const Ipopt::Number* x) {
     std::size_t i = 0;
@@ -223,6 +258,7 @@ class RateProgram : public Ipopt::TNLP {
   Eigen::MatrixXd rates_;
   std::vector<std::vector<std::pair<int, double>>> rows_;  // C restricted to sensors in service
   std::vector<double> bounds_;
+  std::vector<std::pair<int, double>> budgeted_;  // (index among those in service, energy left)
   Eigen::VectorXd max_rates_;
   bool cached_ = false;
   double cached_cost_ = 0.0;

@@ -25,7 +25,8 @@ PlanningProblem::PlanningProblem(const Scenario& scenario, const PlanRequest& re
       transcription_(form, scenario, transcriptionOptions(request)),
       first_interval_(transcription_.firstInterval()),
       rate_unit_(1.0),
-      rates_(Eigen::MatrixXd::Zero(scenario.intervals, scenario.sensorCount())) {
+      rates_(Eigen::MatrixXd::Zero(scenario.intervals, scenario.sensorCount())),
+      interval_length_(scenario.intervalLength()) {
   const Eigen::VectorXd max_rates = polytope_.maxRates();
   double unit = 0.0;
   for (int j = 0; j < scenario.sensorCount(); ++j) {
@@ -41,16 +42,38 @@ PlanningProblem::PlanningProblem(const Scenario& scenario, const PlanRequest& re
     sensor_information_(j) = std::isfinite(trace) && trace > 0.0 ? trace : 1.0;
   }
   if (request.warm_start) rates_ = request.warm_start->rates();
+  if (scenario.constraints.hasEnergyBudgets()) {
+    // Spent before the planned intervals, and in interval k0 up to the start time.
+    const double start_time = std::max(request.start_time, 0.0);
+    Eigen::VectorXd spent = Eigen::VectorXd::Zero(scenario.sensorCount());
+    for (int k = 0; k < intervals(); ++k) {
+      const double overlap = std::clamp(start_time - k * interval_length_, 0.0, interval_length_);
+      if (k < first_interval_) {
+        spent += interval_length_ * rates_.row(k).transpose();
+      } else if (k == first_interval_) {
+        spent += overlap * rates_.row(k).transpose();
+      }
+    }
+    energy_left_ = (scenario.constraints.energy - spent).cwiseMax(0.0);
+  }
   const bool warm = request.warm_start && request.surrogate != PlanSurrogate::Uniform;
-  const Eigen::VectorXd uniform = polytope_.uniformRates();
-  for (int k = first_interval_; k < intervals(); ++k) {
-    const Eigen::VectorXd start = warm ? polytope_.project(rates_.row(k).transpose()) : uniform;
-    rates_.row(k) = start.transpose();
+  if (warm) {
+    rates_ = projected(rates_);
+  } else {
+    rates_.bottomRows(plannedIntervals()) =
+        energy_left_.size() > 0
+            ? polytope_.uniformSchedule(plannedIntervals(), interval_length_, energy_left_)
+            : polytope_.uniformRates().transpose().replicate(plannedIntervals(), 1);
   }
 }
 
 Eigen::MatrixXd PlanningProblem::projected(const Eigen::MatrixXd& rates) const {
   Eigen::MatrixXd result = rates;
+  if (energy_left_.size() > 0) {
+    result.bottomRows(plannedIntervals()) = polytope_.projectSchedule(
+        rates.bottomRows(plannedIntervals()), interval_length_, energy_left_);
+    return result;
+  }
   for (int k = first_interval_; k < intervals(); ++k) {
     result.row(k) = polytope_.project(rates.row(k).transpose()).transpose();
   }

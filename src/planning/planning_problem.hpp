@@ -48,8 +48,16 @@ class PlanningProblem {
   [[nodiscard]] const Eigen::MatrixXd& rates() const { return rates_; }
   void setRates(const Eigen::MatrixXd& rates) { rates_ = rates; }
 
-  // `rates` with every planned interval projected onto the admissible rates.
+  // `rates` with its planned rows projected onto the admissible rates: every interval's
+  // polytope, and with energy budgets, the schedule-level set that adds them.
   [[nodiscard]] Eigen::MatrixXd projected(const Eigen::MatrixXd& rates) const;
+  // Per sensor, the energy the planned intervals may spend, Σ_{k >= k0} h λ_kj <= energyLeft()_j:
+  // E_j less what the rows before start_time spent (the warm start's, or 0), that part of
+  // interval k0 included, since k0 is re-planned as a whole (so both the schedule as written
+  // and the rates actually in force over time meet E_j). +infinity without a budget; empty when
+  // the scenario has none.
+  [[nodiscard]] const Eigen::VectorXd& energyLeft() const { return energy_left_; }
+  [[nodiscard]] double intervalLength() const { return interval_length_; }
   // The unit of rates in the scale-free measures: the largest λ̄_j of a sensor in service.
   [[nodiscard]] double rateUnit() const { return rate_unit_; }
   // max over planned rates of |a - b|, in rate units.
@@ -68,6 +76,8 @@ class PlanningProblem {
   double rate_unit_;
   Eigen::MatrixXd rates_;
   Eigen::VectorXd sensor_information_;
+  double interval_length_;
+  Eigen::VectorXd energy_left_;
 };
 
 // |J|, the unit of cost in the scale-free measures (1 when J is 0 or not finite).

@@ -468,11 +468,19 @@ class ProjectedQuasiNewton {
   }
 
   // A spectral projected gradient step, searched along the segment to the projected point.
+  // Its direction descends whenever the projection is exact; the projection under energy
+  // budgets is iterative and may stop short for a point very far outside (a spectral step of
+  // kMaxScaledStep after a step of negative curvature), so a step that does not descend is
+  // tried again 100 times shorter, a few times.
   std::optional<Iterate> projectedGradientStep() {
-    const MatrixXd direction =
-        problem_.projected(current_.x - (alpha_ * sigma_) * current_.gradient) - current_.x;
-    const double slope = problem_.inner(current_.gradient, direction);
-    if (!(slope < 0.0)) return std::nullopt;
+    MatrixXd direction;
+    double slope = 0.0;
+    for (double alpha = alpha_;; alpha = std::max(kMinScaledStep, 0.01 * alpha)) {
+      direction = problem_.projected(current_.x - (alpha * sigma_) * current_.gradient) - current_.x;
+      slope = problem_.inner(current_.gradient, direction);
+      if (slope < 0.0) break;
+      if (alpha <= kMinScaledStep || alpha < 1e-12 * alpha_) return std::nullopt;
+    }
     double t = 1.0;
     for (int i = 0; i < kMaxBacktracks; ++i) {
       Iterate trial = evaluate(current_.x + t * direction);

@@ -129,3 +129,89 @@ Eigen::VectorXd RatePolytope::project(const Eigen::Ref<const Eigen::VectorXd>& r
 }
 
 }  // namespace sensornet
+
+namespace sensornet {
+
+Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::MatrixXd>& rates,
+                                              double interval_length,
+                                              const Eigen::VectorXd& energy) const {
+  const auto& C = constraints_.C;
+  const auto& b = constraints_.b;
+  const Eigen::Index intervals = rates.rows();
+  const Eigen::Index sensors = rates.cols();
+  const Eigen::VectorXd weights = Eigen::VectorXd::Constant(intervals, interval_length);
+  // The energy rows that can bind; a budget of 0 leaves the sensor nothing.
+  std::vector<Eigen::Index> budgeted;
+  Eigen::MatrixXd shifted = rates;  // Y - Σ μ_ki C_i (in row k) - Σ ν_j h (in column j)
+  for (Eigen::Index j = 0; j < sensors; ++j) {
+    if (isExcluded(static_cast<int>(j)) || !(energy(j) > 0.0)) {
+      shifted.col(j).setZero();
+    } else if (energy(j) < std::numeric_limits<double>::infinity()) {
+      budgeted.push_back(j);
+    }
+  }
+  Eigen::MatrixXd mu = Eigen::MatrixXd::Zero(intervals, C.rows());
+  Eigen::VectorXd nu = Eigen::VectorXd::Zero(sensors);
+  Eigen::VectorXd z;
+  std::vector<std::pair<double, double>> breakpoints;
+  Eigen::MatrixXd lambda = shifted.cwiseMax(0.0);
+  constexpr double kTolerance = 1e-12;
+  for (int sweep = 0; sweep < kMaxScheduleSweeps; ++sweep) {
+    for (Eigen::Index k = 0; k < intervals; ++k) {
+      for (Eigen::Index i = 0; i < C.rows(); ++i) {
+        z = shifted.row(k).transpose() + mu(k, i) * C.row(i).transpose();
+        mu(k, i) = rowMultiplier(C.row(i).transpose(), z, b(i), breakpoints);
+        shifted.row(k) = (z - mu(k, i) * C.row(i).transpose()).transpose();
+      }
+    }
+    for (const Eigen::Index j : budgeted) {
+      z = shifted.col(j) + nu(j) * weights;
+      nu(j) = rowMultiplier(weights, z, energy(j), breakpoints);
+      shifted.col(j) = z - nu(j) * weights;
+    }
+    lambda = shifted.cwiseMax(0.0);
+    // Optimal when primal feasible and complementary: a row with a positive multiplier is tight.
+    bool optimal = true;
+    for (Eigen::Index k = 0; k < intervals && optimal; ++k) {
+      const Eigen::ArrayXd slack =
+          (C * lambda.row(k).transpose() - b).array() / b.array();
+      optimal = slack.maxCoeff() <= kTolerance &&
+                ((mu.row(k).transpose().array() <= 0.0) || (slack.abs() <= kTolerance)).all();
+    }
+    for (std::size_t e = 0; e < budgeted.size() && optimal; ++e) {
+      const Eigen::Index j = budgeted[e];
+      const double slack = (interval_length * lambda.col(j).sum() - energy(j)) / energy(j);
+      optimal = slack <= kTolerance && (nu(j) <= 0.0 || std::abs(slack) <= kTolerance);
+    }
+    if (optimal) break;
+  }
+  // Admissible exactly, whatever the sweeps reached: C >= 0 and h > 0, so scaling an interval
+  // or a sensor down leaves every other row as it was or looser.
+  for (Eigen::Index k = 0; k < intervals; ++k) {
+    const Eigen::VectorXd load = C * lambda.row(k).transpose();
+    double scale = 1.0;
+    for (Eigen::Index i = 0; i < load.size(); ++i) {
+      if (load(i) > b(i)) scale = std::min(scale, b(i) / load(i));
+    }
+    lambda.row(k) *= scale;
+  }
+  for (const Eigen::Index j : budgeted) {
+    const double used = interval_length * lambda.col(j).sum();
+    if (used > energy(j)) lambda.col(j) *= energy(j) / used;
+  }
+  return lambda;
+}
+
+Eigen::MatrixXd RatePolytope::uniformSchedule(int intervals, double interval_length,
+                                              const Eigen::VectorXd& energy) const {
+  const Eigen::VectorXd uniform = uniformRates();
+  Eigen::MatrixXd rates(intervals, sensorCount());
+  for (int j = 0; j < sensorCount(); ++j) {
+    const double cap = energy.size() > 0 ? std::max(0.0, energy(j)) / (intervals * interval_length)
+                                         : std::numeric_limits<double>::infinity();
+    rates.col(j).setConstant(std::min(uniform(j), cap));
+  }
+  return rates;
+}
+
+}  // namespace sensornet

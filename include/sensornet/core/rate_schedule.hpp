@@ -43,12 +43,14 @@ struct Feasibility {
   std::string reason;          // empty when feasible, else names interval and row or sensor
 };
 
-// Checks C λ_k <= b + tol and λ_k >= -tol for every interval k, and that the shape matches.
+// Checks C λ_k <= b + tol and λ_k >= -tol for every interval k, the energy budgets
+// ∫_0^T λ_j dt <= E_j + tol max(1, T) of every sensor that has one, and that the shape matches.
 [[nodiscard]] Feasibility checkFeasibility(const RateSchedule& schedule,
                                            const Scenario& scenario, double tol = 1e-9);
 
 // The largest rate r, equal for all sensors and constant in time, with C (r 1) <= b:
-// r = min_i b_i / Σ_j C_ij.
+// r = min_i b_i / Σ_j C_ij; a sensor with an energy budget E_j gets min(r, E_j / T), constant in
+// time too.
 [[nodiscard]] RateSchedule uniformSchedule(const Scenario& scenario);
 
 // Deterministic measurement instants, one sorted list per sensor.

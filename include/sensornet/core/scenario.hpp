@@ -1,13 +1,15 @@
 #pragma once
 // The model of one emulation: plant (eq. 1), sensors (eq. 2), cost weights (eq. 6) and the
-// pointwise resource constraints C λ(t) <= b (eq. 8) of the first paper, over a horizon cut into
-// N equal intervals on which rates are constant.
+// pointwise resource constraints C λ(t) <= b (eq. 8) of the first paper, with an optional energy
+// budget per sensor over the horizon, ∫_0^T λ_j(t) dt <= E_j, over a horizon cut into N equal
+// intervals on which rates are constant.
 //
 //   Scenario s = ...;              // from a YAML file (sensornet/io) or generateRandomScenario
 //   validateScenario(s, "my.yaml"); // throws InputError naming the bad field
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +39,14 @@ struct CostWeights {
 struct ResourceConstraints {
   Eigen::MatrixXd C;  // n_c x M, nonnegative, every column with a positive entry
   Eigen::VectorXd b;  // n_c, strictly positive
+  // Per-sensor energy budgets E_j over the horizon, ∫_0^T λ_j dt <= E_j, in expected
+  // measurements (a battery or bandwidth that lasts E_j sends); empty when there are none, and
+  // +infinity for a sensor without one. They couple the intervals, unlike C and b.
+  Eigen::VectorXd energy;
+
+  [[nodiscard]] bool hasEnergyBudgets() const {
+    return energy.size() > 0 && (energy.array() < std::numeric_limits<double>::infinity()).any();
+  }
 };
 
 struct Scenario {
@@ -99,6 +109,8 @@ struct RandomPlantSpec {
   int intervals = 30;
   double budget = 5.0;
   double noise_scale = 1.0;  // multiplies every R_j (the paper's R_scale sweep of Fig. 2)
+  // Every sensor's energy budget ∫ λ_j dt <= energy (not in the paper; infinity: none).
+  double energy = std::numeric_limits<double>::infinity();
 };
 
 [[nodiscard]] Scenario generateRandomScenario(const RandomPlantSpec& spec);

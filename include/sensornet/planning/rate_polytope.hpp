@@ -1,7 +1,7 @@
 #pragma once
 // The admissible rates of one interval, {λ ∈ R^M : λ >= 0, C λ <= b, λ_j = 0 for excluded j}
 // (eq. 8 of the first paper, with sensors taken out of service), and the Euclidean projection
-// onto it. The planner uses the projection to return exactly feasible schedules and to measure
+// onto it, or onto the schedules of several intervals under per-sensor energy budgets. The planner uses the projection to return exactly feasible schedules and to measure
 // first-order optimality (the projected gradient).
 //
 //   const RatePolytope polytope(scenario.constraints, /*excluded=*/{3});
@@ -37,6 +37,23 @@ class RatePolytope {
   // relative (or after 10000 sweeps), and the result is then scaled into the polytope, so it is
   // always admissible.
   [[nodiscard]] Eigen::VectorXd project(const Eigen::Ref<const Eigen::VectorXd>& rates) const;
+
+  // The same projection for consecutive intervals of length h under per-sensor energy budgets,
+  // which couple them: argmin ||Λ - Y||_F over K x M schedules Λ whose every row is in the
+  // polytope and whose columns meet Σ_k h Λ_kj <= energy_j (+infinity: no budget). Hildreth's
+  // coordinate ascent runs over all K n_c interval rows and the M energy rows, until every row
+  // holds and every row with a positive multiplier is tight, both to 1e-12 relative (or after
+  // kMaxScheduleSweeps sweeps), and the result is then scaled into the set (each interval into
+  // its rows, then each sensor into its budget), so it is always admissible.
+  [[nodiscard]] Eigen::MatrixXd projectSchedule(const Eigen::Ref<const Eigen::MatrixXd>& rates,
+                                                double interval_length,
+                                                const Eigen::VectorXd& energy) const;
+  // The uniform rates of every interval, each sensor's capped so that its column meets its
+  // budget: min(uniformRates()_j, energy_j / (K h)).
+  [[nodiscard]] Eigen::MatrixXd uniformSchedule(int intervals, double interval_length,
+                                                const Eigen::VectorXd& energy) const;
+
+  static constexpr int kMaxScheduleSweeps = 20000;
 
  private:
   ResourceConstraints constraints_;

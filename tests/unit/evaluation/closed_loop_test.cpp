@@ -91,7 +91,7 @@ TEST(ClosedLoop, EveryInstantWithRoomForASwitchPublishesATailAndThreadsChangeNot
 
 // Episode 3 of seed 17 with one instant at 0.6 s, recomputed: the filter runs to 0.6 under the
 // open-loop plan; the covariance is carried to the switch tick by the information form under
-// that plan; the planner plans [switch, T] from it, warm-started at the open-loop plan; the
+// that plan; the planner plans [switch, T] from it, warm-started at the schedule in force; the
 // filter goes on under the open-loop plan to the switch and under the tail after it.
 TEST(ClosedLoop, AnEpisodeEqualsTheFilterUnderThePlannersTailFromTheSwitchTick) {
   const Scenario s = loopScenario();
@@ -125,7 +125,7 @@ TEST(ClosedLoop, AnEpisodeEqualsTheFilterUnderThePlannersTailFromTheSwitchTick) 
     request.surrogate = PlanSurrogate::Information;
     request.start_time = at;
     request.start_covariance = rolloutInformationForm(s, in_force, carry).covariances.back();
-    request.warm_start = open_loop;  // the latest version before the tail: the open-loop plan
+    request.warm_start = in_force;  // the schedule in force: its rates before the switch stay
     request.max_seconds = options.replanner.max_plan_seconds;
     const PlanResult tail = planSchedule(s, request);
     ASSERT_EQ(tail.status, PlanStatus::Optimal) << "at " << instant;
