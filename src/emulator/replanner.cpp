@@ -42,20 +42,6 @@ RateSchedule withoutSensors(const RateSchedule& schedule, const std::set<int>& o
   return RateSchedule(schedule.horizon(), std::move(rates));
 }
 
-// `planned` with the rows of the intervals that end by `start_time` (those the planner does not
-// plan, PlanRequest::start_time) taken from `before`.
-RateSchedule withRowsBefore(const RateSchedule& planned, const RateSchedule& before,
-                            double start_time) {
-  Eigen::MatrixXd rates = planned.rates();
-  const double slack = 1e-12 * planned.horizon();
-  for (int k = 0; k < planned.intervals() &&
-                  planned.intervalStart(k) + planned.intervalLength() <= start_time + slack;
-       ++k) {
-    rates.row(k) = before.rates().row(k);
-  }
-  return RateSchedule(planned.horizon(), std::move(rates));
-}
-
 // The surrogate's cost of `schedule` over [start time, T] from the request's start covariance.
 double surrogateCost(const Scenario& scenario, const RateSchedule& schedule,
                      const PlanRequest& request) {
@@ -262,9 +248,18 @@ Replan Replanner::plan(ReplanSettings settings, const ScheduleBook& book, const 
       request.start_time = at;
       request.start_covariance = covarianceExpectedAt(settings, book, now, at);
       const ScheduleVersion* in_force = book.inForce(now.episode, at);
-      // The rates before `at` are those in force: they are kept, and they spent the energy
-      // that the rest of the episode may not.
+      // The rates before `at` are those in force, and the versions in force so far spent
+      // energy that the rest of the episode may not.
       if (in_force != nullptr) request.warm_start = in_force->schedule;
+      if (planned_for.constraints.hasEnergyBudgets()) {
+        Eigen::VectorXd spent = Eigen::VectorXd::Zero(planned_for.sensorCount());
+        for (const ScheduleSegment& piece : book.segments(now.episode, scenario_.horizon_s)) {
+          if (piece.from_s < at) {
+            spent += piece.version->schedule.expectedCounts(piece.from_s, std::min(piece.to_s, at));
+          }
+        }
+        request.energy_spent = spent;
+      }
       tail_plan = choosePlan(planned_for, request, *request.warm_start, settings, "mid-episode",
                              command_id);
     }
@@ -326,9 +321,8 @@ Replanner::Chosen Replanner::choosePlan(const Scenario& planned_for, const PlanR
     // The planner's own start (its uniform rates among the sensors in service); before the
     // switch the version keeps the warm start's rates, as a warm-started plan does.
     PlanRequest cold = request;
-    cold.warm_start.reset();
-    PlanResult own = planSchedule(planned_for, cold);
-    own.schedule = withRowsBefore(own.schedule, *request.warm_start, request.start_time);
+    cold.cold_start = true;  // the rows before the start stay the warm start's
+    const PlanResult own = planSchedule(planned_for, cold);
     if (certified(own)) {
       return {own.schedule, describePlan(own) + " from the planner's own start (" + tried + ")", ""};
     }

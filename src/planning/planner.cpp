@@ -51,6 +51,15 @@ void checkRequest(const Scenario& scenario, const PlanRequest& request) {
       throw InputError(kSource, "delivery", "factors in [0, 1]");
     }
   }
+  if (request.energy_spent) {
+    const Eigen::VectorXd& spent = *request.energy_spent;
+    if (spent.size() != scenario.sensorCount() || !spent.allFinite() ||
+        (spent.array() < 0.0).any()) {
+      throw InputError(kSource, "energy_spent",
+                       std::to_string(scenario.sensorCount()) +
+                           " finite expected counts >= 0 (one per sensor)");
+    }
+  }
   if (request.warm_start) {
     const RateSchedule& warm = *request.warm_start;
     if (warm.intervals() != scenario.intervals || warm.sensorCount() != scenario.sensorCount() ||

@@ -43,20 +43,15 @@ PlanningProblem::PlanningProblem(const Scenario& scenario, const PlanRequest& re
   }
   if (request.warm_start) rates_ = request.warm_start->rates();
   if (scenario.constraints.hasEnergyBudgets()) {
-    // Spent before the planned intervals, and in interval k0 up to the start time.
-    const double start_time = std::max(request.start_time, 0.0);
-    Eigen::VectorXd spent = Eigen::VectorXd::Zero(scenario.sensorCount());
-    for (int k = 0; k < intervals(); ++k) {
-      const double overlap = std::clamp(start_time - k * interval_length_, 0.0, interval_length_);
-      if (k < first_interval_) {
-        spent += interval_length_ * rates_.row(k).transpose();
-      } else if (k == first_interval_) {
-        spent += overlap * rates_.row(k).transpose();
-      }
-    }
+    // Spent before the start time: as the request says, or by the rows it keeps.
+    const Eigen::VectorXd spent =
+        request.energy_spent
+            ? *request.energy_spent
+            : RateSchedule(scenario.horizon_s, rates_).expectedCounts(0.0, request.start_time);
     energy_left_ = (scenario.constraints.energy - spent).cwiseMax(0.0);
   }
-  const bool warm = request.warm_start && request.surrogate != PlanSurrogate::Uniform;
+  const bool warm =
+      request.warm_start && request.surrogate != PlanSurrogate::Uniform && !request.cold_start;
   if (warm) {
     rates_ = projected(rates_);
   } else {

@@ -52,9 +52,9 @@ class PlanningProblem {
   // polytope, and with energy budgets, the schedule-level set that adds them.
   [[nodiscard]] Eigen::MatrixXd projected(const Eigen::MatrixXd& rates) const;
   // Per sensor, the energy the planned intervals may spend, Σ_{k >= k0} h λ_kj <= energyLeft()_j:
-  // E_j less what the rows before start_time spent (the warm start's, or 0), that part of
-  // interval k0 included, since k0 is re-planned as a whole (so both the schedule as written
-  // and the rates actually in force over time meet E_j). +infinity without a budget; empty when
+  // E_j less what was spent before start_time (PlanRequest::energy_spent), that part of
+  // interval k0 included, since k0 is re-planned as a whole: so both the schedule as written
+  // and the rates in force over the episode meet E_j. +infinity without a budget; empty when
   // the scenario has none.
   [[nodiscard]] const Eigen::VectorXd& energyLeft() const { return energy_left_; }
   [[nodiscard]] double intervalLength() const { return interval_length_; }

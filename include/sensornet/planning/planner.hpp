@@ -97,6 +97,14 @@ struct PlanRequest {
   // Absent: every factor is 1.
   std::optional<Eigen::MatrixXd> delivery;
   std::optional<RateSchedule> warm_start;  // initial guess (projected onto the admissible set)
+  // Start from the uniform rates of the sensors in service even with a warm start, whose rows
+  // before start_time still stay and still count as spent against the energy budgets.
+  bool cold_start = false;
+  // Expected measurements each sensor has sent before start_time in this episode, against its
+  // energy budget (Scenario::constraints.energy). Absent: what warm_start's rates (or 0) sent
+  // before it. A re-plan of a running episode passes what the versions in force sent, which
+  // warm_start's rows alone do not say when an earlier version took over inside an interval.
+  std::optional<Eigen::VectorXd> energy_spent;
   // Stop when kkt_residual (below) <= tolerance; for IPOPT, its scaled KKT tolerance.
   double tolerance = 1e-6;
   int max_iterations = 500;

@@ -150,5 +150,26 @@ TEST(ClosedLoop, RefusesOptionsOutOfRange) {
   EXPECT_THROW((void)simulateClosedLoop(s, short_plan, loopOptions(0.5, 10)), InputError);
 }
 
+// With energy budgets of 2, 3, 4 and 5 expected measurements per episode (14 in all, against
+// the 18 that the rate budget alone allows), each tail may spend only what the schedule in force
+// left, so an episode's expected count is at most 14 and its realized count is Poisson with
+// that mean or less. The mean count over 400 episodes exceeds 14 + 4 standard errors
+// (sqrt(14 / 400)) with probability below 4e-5; a tail that spent its whole budget again would
+// add about one budget's worth of the rest of the episode per sensor.
+TEST(ClosedLoop, TailsSpendOnlyTheEnergyTheScheduleInForceLeft) {
+  Scenario s = loopScenario();
+  s.constraints.energy = (Eigen::VectorXd(4) << 2.0, 3.0, 4.0, 5.0).finished();
+  validateScenario(s, "test");
+  const RateSchedule plan = infoPlan(s);
+  ASSERT_TRUE(checkFeasibility(plan, s).feasible);
+  const ClosedLoopResult closed = simulateClosedLoop(s, plan, loopOptions(0.4, 400));
+  EXPECT_EQ(closed.tails_mean, 3.0);
+  EXPECT_EQ(closed.refused, 0);
+  EXPECT_LE(closed.arrivals_mean, 14.0 + 4.0 * std::sqrt(14.0 / 400.0));
+  // The budgets bind: the open-loop plan spends them all, and so does the loop on average.
+  EXPECT_NEAR(plan.expectedCounts(0.0, s.horizon_s).sum(), 14.0, 1e-6);
+  EXPECT_GE(closed.arrivals_mean, 14.0 - 4.0 * std::sqrt(14.0 / 400.0));
+}
+
 }  // namespace
 }  // namespace sensornet::evaluation
