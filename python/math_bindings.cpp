@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -274,6 +275,15 @@ random_scenario; its matrices are numpy arrays (copies).)")
       .def_property_readonly("WT", [](const Scenario& s) { return s.cost.WT; })
       .def_property_readonly("C", [](const Scenario& s) { return s.constraints.C; })
       .def_property_readonly("b", [](const Scenario& s) { return s.constraints.b; })
+      .def_property_readonly(
+          "energy",
+          [](const Scenario& s) {
+            return s.constraints.energy.size() > 0
+                       ? Eigen::VectorXd(s.constraints.energy)
+                       : Eigen::VectorXd::Constant(s.sensorCount(),
+                                                   std::numeric_limits<double>::infinity());
+          },
+          "Each sensor's energy budget, expected measurements over the horizon (inf: none).")
       .def_property_readonly("H",
                              [](const Scenario& s) {
                                std::vector<Matrix> h;
@@ -291,6 +301,20 @@ random_scenario; its matrices are numpy arrays (copies).)")
           "with_budget",
           [](const Scenario& s, double budget) { return withBudget(s, budget, "budget"); },
           py::arg("budget"), "The same scenario with its one budget row 1'λ <= b set to `budget`.")
+      .def(
+          "with_energy",
+          [](const Scenario& s, const Eigen::VectorXd& energy) {
+            return withEnergy(s, energy, "energy");
+          },
+          py::arg("energy"),
+          "The same scenario with energy budgets ∫λ_j dt <= energy_j: one per sensor, or one "
+          "value for every sensor (inf: none).")
+      .def(
+          "with_energy",
+          [](const Scenario& s, double energy) {
+            return withEnergy(s, Eigen::VectorXd::Constant(1, energy), "energy");
+          },
+          py::arg("energy"))
       .def("__repr__", [](const Scenario& s) {
         return "Scenario(states=" + std::to_string(s.stateDim()) +
                ", sensors=" + std::to_string(s.sensorCount()) +
@@ -303,7 +327,7 @@ random_scenario; its matrices are numpy arrays (copies).)")
   m.def(
       "random_scenario",
       [](int states, int sensors, std::uint64_t seed, double noise_scale, double budget,
-         double horizon, int intervals, int rows_per_sensor) {
+         double horizon, int intervals, int rows_per_sensor, double energy) {
         RandomPlantSpec spec;
         spec.state_dim = states;
         spec.sensor_count = sensors;
@@ -313,12 +337,14 @@ random_scenario; its matrices are numpy arrays (copies).)")
         spec.horizon_s = horizon;
         spec.intervals = intervals;
         spec.rows_per_sensor = rows_per_sensor;
+        spec.energy = energy;
         Scenario s = generateRandomScenario(spec);
         validateScenario(s, "random_scenario");
         return s;
       },
       py::arg("states"), py::arg("sensors"), py::arg("seed"), py::arg("noise_scale"),
-      py::arg("budget"), py::arg("horizon"), py::arg("intervals"), py::arg("rows_per_sensor"));
+      py::arg("budget"), py::arg("horizon"), py::arg("intervals"), py::arg("rows_per_sensor"),
+      py::arg("energy"));
   m.def(
       "uniform_rates", [](const Scenario& s) { return uniformSchedule(s).rates(); },
       py::arg("scenario"));

@@ -114,10 +114,12 @@ def parse_scenario(text, source="scenario"):
 
 
 def random_scenario(states=5, sensors=30, seed=1, noise_scale=1.0, budget=5.0, horizon=3.0,
-                    intervals=30, rows_per_sensor=1):
-    """The first paper's random plant (Section V-A), as a scenario file's `random:` form makes it."""
+                    intervals=30, rows_per_sensor=1, energy=None):
+    """The first paper's random plant (Section V-A), as a scenario file's `random:` form makes it;
+    `energy` gives every sensor the budget ∫λ_j dt <= energy (expected measurements)."""
     return _m.random_scenario(int(states), int(sensors), int(seed), float(noise_scale),
-                              float(budget), float(horizon), int(intervals), int(rows_per_sensor))
+                              float(budget), float(horizon), int(intervals), int(rows_per_sensor),
+                              float("inf") if energy is None else float(energy))
 
 
 def _budgeted(scenario, budget):

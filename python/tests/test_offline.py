@@ -105,6 +105,35 @@ def test_a_plan_is_coordinator_plans_to_the_last_bit(tmp_path, random_file, surr
     assert again == p.bracket
 
 
+def test_an_energy_budget_is_met_binds_and_is_what_coordinator_plans(tmp_path, random_file):
+    # A budget of 1.5 expected measurements per sensor over the 2 s horizon, against the
+    # 3 Hz x 2 s = 6 that the rate budget lets one sensor take.
+    text = random_file(seed=7, budget=3.0).read_text().replace("  noise_scale:", "  energy: 1.5\n  noise_scale:")
+    scenario = tmp_path / "energy.yaml"
+    scenario.write_text(text)
+    out = tmp_path / "plan.json"
+    printed = run_json(COORDINATOR, "plan", "--scenario", str(scenario), "--surrogate", "info",
+                       "--out", str(out), "--json")
+    s = sensornet.random_scenario(states=4, sensors=6, seed=7, budget=3.0, horizon=2.0,
+                                  intervals=8, energy=1.5)
+    assert s.energy.tolist() == [1.5] * 6
+    p = sensornet.plan(s, surrogate="info")
+    assert p.objective == printed["objective"]
+    assert np.array_equal(p.rates, np.array(json.loads(out.read_text())["rates"]))
+    used = p.rates.sum(axis=0) * (2.0 / 8)  # ∫λ_j dt over 8 intervals of 0.25 s
+    assert np.all(used <= 1.5 * (1 + 1e-12))
+    assert np.sum(used >= 1.5 * (1 - 1e-6)) >= 1  # the budget binds somewhere
+    free = sensornet.plan(sensornet.random_scenario(states=4, sensors=6, seed=7, budget=3.0,
+                                                    horizon=2.0, intervals=8), surrogate="info")
+    assert (free.rates.sum(axis=0) * 0.25).max() > 1.5  # which it would not without it
+    assert free.objective < p.objective
+    # The same budget given to the plant of the file, per sensor.
+    assert sensornet.plan(sensornet.load_scenario(random_file(seed=7, budget=3.0)).with_energy(
+        [1.5] * 6), surrogate="info").objective == p.objective
+    with pytest.raises(ValueError, match="energy"):
+        s.with_energy([1.0, 2.0])
+
+
 def test_evaluate_is_fusion_center_evaluate_for_the_same_seed(tmp_path):
     # The default scenario: a non-symmetric A, sensors of one and two rows, two constraint rows.
     scenario = SOURCE / "scenarios" / "default.yaml"

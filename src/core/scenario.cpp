@@ -471,4 +471,17 @@ Scenario withBudget(Scenario scenario, double budget, const std::string& source)
   return scenario;
 }
 
+Scenario withEnergy(Scenario scenario, const Eigen::VectorXd& energy, const std::string& source) {
+  const Eigen::Index m = scenario.sensorCount();
+  if (energy.size() != 1 && energy.size() != m) {
+    throw InputError(source, "energy",
+                     "one budget for every sensor or " + std::to_string(m) + " (one per sensor), got " +
+                         std::to_string(energy.size()));
+  }
+  scenario.constraints.energy =
+      energy.size() == 1 ? Eigen::VectorXd::Constant(m, energy(0)) : energy;
+  validateScenario(scenario, source);
+  return scenario;
+}
+
 }  // namespace sensornet

@@ -43,6 +43,7 @@ json axesOf(const SweepCell& cell) {
     row["scenario"] = cell.scenario.file;
     row["budget"] = cell.scenario.budget ? json(*cell.scenario.budget) : json(nullptr);
   }
+  row["energy"] = cell.scenario.energy ? json(*cell.scenario.energy) : json(nullptr);
   row["planner"] = cell.planner;
   row["surrogate"] = std::string(wordOf(cell.surrogate));
   row["replan_every"] = cell.planner == "closed_loop" ? json(cell.replan_every_s) : json(nullptr);
@@ -104,6 +105,19 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
       row["open_mean"] = run.open_mean;
       row["gain_mean"] = run.gain.mean;
       row["gain_ci95"] = run.gain.ci95;
+    } else if (cell.planner == "timetable") {
+      MonteCarloOptions mc;
+      mc.runs = cell.runs;
+      mc.seed = cell.seed;
+      mc.threads = threads;
+      mc.progress = stopper(stop);
+      const OpenLoopRun run = runOpenLoop(scenario, plan.schedule, mc, ArrivalMode::Timetable);
+      row["mean"] = run.timetable->mean;
+      row["ci95"] = run.timetable->ci95;
+      row["std"] = run.timetable->std_dev;
+      row["arrivals_mean"] = run.timetable->arrivals_mean;
+      row["poisson_mean"] = run.mc.mean;  // the same plan with Poisson arrivals
+      row["poisson_ci95"] = run.mc.ci95;
     } else {
       MonteCarloOptions mc;
       mc.runs = cell.runs;
@@ -130,11 +144,12 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
 
 const std::vector<std::string>& sweepColumns() {
   static const std::vector<std::string> columns = {
-      "scenario",  "states",      "sensors",      "scenario_seed", "noise_scale",  "budget",
-      "planner",   "surrogate",   "replan_every", "seed",          "runs",         "status",
-      "reason",    "plan_status", "plan_seconds", "objective",     "bracket_info", "bracket_cov",
-      "mean",      "ci95",        "std",          "arrivals_mean", "open_mean",    "gain_mean",
-      "gain_ci95", "seconds",     "key"};
+      "scenario",     "states",       "sensors",     "scenario_seed", "noise_scale",
+      "budget",       "energy",       "planner",     "surrogate",     "replan_every",
+      "seed",         "runs",         "status",      "reason",        "plan_status",
+      "plan_seconds", "objective",    "bracket_info", "bracket_cov",  "mean",
+      "ci95",         "std",          "arrivals_mean", "open_mean",   "gain_mean",
+      "gain_ci95",    "poisson_mean", "poisson_ci95", "seconds",      "key"};
   return columns;
 }
 

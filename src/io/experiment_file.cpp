@@ -59,7 +59,7 @@ void cartesian(const std::vector<std::vector<Value>>& axes,
 
 std::vector<SweepScenario> readScenario(const YamlReader& in, const YAML::Node& entry,
                                         const std::string& field, const fs::path& folder) {
-  in.rejectUnknownKeys(entry, field, {"file", "random", "budget", "horizon", "intervals"});
+  in.rejectUnknownKeys(entry, field, {"file", "random", "budget", "energy", "horizon", "intervals"});
   const bool file = entry["file"].IsDefined();
   const bool random = entry["random"].IsDefined();
   if (file == random)
@@ -73,6 +73,24 @@ std::vector<SweepScenario> readScenario(const YamlReader& in, const YAML::Node& 
       budgets.emplace_back(value);
     }
   }
+  // Every sensor's energy budget, beside budget: or (random plants) inside random: too.
+  const bool inside = random && entry["random"].IsMap() && entry["random"]["energy"];
+  if (inside && entry["energy"]) {
+    in.fail(entry["random"]["energy"], field + ".random.energy", "the energy in one place only");
+  }
+  const YAML::Node energy_node = inside ? entry["random"]["energy"] : entry["energy"];
+  const std::string energy_field = field + (inside ? ".random.energy" : ".energy");
+  std::vector<std::optional<double>> energies = {std::nullopt};
+  if (energy_node) {
+    energies.clear();
+    for (const YAML::Node& e : axisValues(in, energy_node, energy_field)) {
+      const double value = in.number(e, energy_field);
+      if (value <= 0.0) {
+        in.fail(e, energy_field, "a number > 0 (expected measurements of each sensor)");
+      }
+      energies.emplace_back(value);
+    }
+  }
   std::vector<SweepScenario> out;
   if (file) {
     if (entry["horizon"] || entry["intervals"]) {
@@ -82,14 +100,17 @@ std::vector<SweepScenario> readScenario(const YamlReader& in, const YAML::Node& 
       in.fail(entry["file"], field + ".file", "the path of a scenario file");
     fs::path path = entry["file"].Scalar();
     if (path.is_relative()) path = folder / path;
-    for (const auto& budget : budgets)
-      out.push_back({path.lexically_normal().string(), std::nullopt, budget});
+    for (const auto& budget : budgets) {
+      for (const auto& energy : energies) {
+        out.push_back({path.lexically_normal().string(), std::nullopt, budget, energy});
+      }
+    }
     return out;
   }
   const YAML::Node r = entry["random"];
   const std::string rf = field + ".random";
-  in.rejectUnknownKeys(r, rf,
-                       {"states", "sensors", "rows_per_sensor", "seed", "budget", "noise_scale"});
+  in.rejectUnknownKeys(
+      r, rf, {"states", "sensors", "rows_per_sensor", "seed", "budget", "noise_scale", "energy"});
   if (r["budget"] && entry["budget"])
     in.fail(r["budget"], rf + ".budget", "the budget in one place only");
   RandomPlantSpec base;
@@ -133,7 +154,9 @@ std::vector<SweepScenario> readScenario(const YamlReader& in, const YAML::Node& 
     if (spec.rows_per_sensor > spec.state_dim) {
       in.fail(r, rf + ".rows_per_sensor", "an integer between 1 and random.states");
     }
-    for (const auto& budget : budgets) out.push_back({"", spec, budget});
+    for (const auto& budget : budgets) {
+      for (const auto& energy : energies) out.push_back({"", spec, budget, energy});
+    }
   });
   return out;
 }
@@ -150,9 +173,19 @@ PlannerChoice readPlanner(const YamlReader& in, const YAML::Node& node, const st
     for (const WordOf<PlanSurrogate>& w : Words<PlanSurrogate>::kTable) {
       if (word == w.text) return {word, w.value, 0.0};
     }
-    in.fail(
-        node, field,
-        "info, cov, uniform, mc or {closed_loop: info|cov, replan_every: DT}, got '" + word + "'");
+    // The default surrogate's plan, measured with deterministic instants.
+    if (word == "timetable") return {word, PlanSurrogate::Covariance, 0.0};
+    in.fail(node, field,
+            "info, cov, uniform, mc, timetable, {timetable: info|cov|uniform|mc} or "
+            "{closed_loop: info|cov, replan_every: DT}, got '" + word + "'");
+  }
+  if (node.IsMap() && node["timetable"]) {
+    in.rejectUnknownKeys(node, field, {"timetable"});
+    const YAML::Node form = node["timetable"];
+    for (const WordOf<PlanSurrogate>& w : Words<PlanSurrogate>::kTable) {
+      if (form.IsScalar() && form.Scalar() == w.text) return {"timetable", w.value, 0.0};
+    }
+    in.fail(form, field + ".timetable", "info, cov, uniform or mc (the plan the instants follow)");
   }
   in.rejectUnknownKeys(node, field, {"closed_loop", "replan_every"});
   const YAML::Node form = in.required(node, "closed_loop", field + ".closed_loop");
@@ -178,7 +211,9 @@ Scenario SweepScenario::load(const std::string& source) const {
   } else {
     s = loadScenarioFile(file);
   }
-  return budget ? withBudget(std::move(s), *budget, source) : s;
+  if (budget) s = withBudget(std::move(s), *budget, source);
+  if (energy) s = withEnergy(std::move(s), Eigen::VectorXd::Constant(1, *energy), source);
+  return s;
 }
 
 std::string SweepCell::key() const {
@@ -195,9 +230,12 @@ std::string SweepCell::key() const {
     k += scenario.file;
   }
   if (scenario.budget) k += ";budget=" + exact(*scenario.budget);
+  if (scenario.energy) k += ";energy=" + exact(*scenario.energy);
   k += ";planner=" + planner;
   if (planner == "closed_loop") {
     k += "(" + std::string(wordOf(surrogate)) + ",every=" + exact(replan_every_s) + ")";
+  } else if (planner == "timetable") {
+    k += "(" + std::string(wordOf(surrogate)) + ")";
   }
   return k + ";seed=" + std::to_string(seed) + ";runs=" + std::to_string(runs);
 }

@@ -45,6 +45,18 @@ double rowMultiplier(const Eigen::Ref<const Eigen::VectorXd>& c, const Eigen::Ve
   return 0.0;  // not reached: load(0) > b was checked above
 }
 
+// The largest factor in (0, 1] that brings C λ within b: C >= 0, so scaling rates down never
+// breaks a row they meet.
+double factorWithin(const Eigen::MatrixXd& C, const Eigen::VectorXd& b,
+                    const Eigen::Ref<const Eigen::VectorXd>& lambda) {
+  const Eigen::VectorXd load = C * lambda;
+  double scale = 1.0;
+  for (Eigen::Index i = 0; i < load.size(); ++i) {
+    if (load(i) > b(i)) scale = std::min(scale, b(i) / load(i));
+  }
+  return scale;
+}
+
 }  // namespace
 
 RatePolytope::RatePolytope(ResourceConstraints constraints, const std::vector<int>& excluded)
@@ -120,21 +132,13 @@ Eigen::VectorXd RatePolytope::project(const Eigen::Ref<const Eigen::VectorXd>& r
   }
   // Make the result admissible exactly, whatever the sweeps reached: C >= 0, so scaling down
   // never leaves the polytope.
-  const Eigen::VectorXd load = C * lambda;
-  double scale = 1.0;
-  for (Eigen::Index i = 0; i < load.size(); ++i) {
-    if (load(i) > b(i)) scale = std::min(scale, b(i) / load(i));
-  }
-  return scale * lambda;
+  return factorWithin(C, b, lambda) * lambda;
 }
-
-}  // namespace sensornet
-
-namespace sensornet {
 
 Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::MatrixXd>& rates,
                                               double interval_length,
-                                              const Eigen::VectorXd& energy) const {
+                                              const Eigen::VectorXd& energy,
+                                              ScheduleMultipliers* multipliers) const {
   const auto& C = constraints_.C;
   const auto& b = constraints_.b;
   const Eigen::Index intervals = rates.rows();
@@ -150,12 +154,72 @@ Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::Matr
       budgeted.push_back(j);
     }
   }
-  Eigen::MatrixXd mu = Eigen::MatrixXd::Zero(intervals, C.rows());
+  constexpr double kTolerance = 1e-12;
   Eigen::VectorXd nu = Eigen::VectorXd::Zero(sensors);
+  if (multipliers != nullptr && multipliers->budgets.size() == sensors) {
+    for (const Eigen::Index j : budgeted) nu(j) = std::max(0.0, multipliers->budgets(j));
+  }
+  // First, gradient ascent on the budgets' multipliers alone, each interval projected exactly
+  // (project()) at the rates shifted by h ν: the dual φ(ν) is concave with gradient
+  // g_j = h Σ_k λ_kj(ν) - E_j, Lipschitz with constant h² K. Barzilai-Borwein steps, projected
+  // onto ν >= 0, usually meet the budgets in tens of steps where the sweeps below took
+  // thousands (interval rows and budgets both binding); if not, the sweeps go on from its ν.
+  const Eigen::MatrixXd base = shifted;
+  const auto primalAt = [&](const Eigen::VectorXd& v) {
+    Eigen::RowVectorXd shift = Eigen::RowVectorXd::Zero(sensors);
+    for (const Eigen::Index j : budgeted) shift(j) = interval_length * v(j);
+    Eigen::MatrixXd out(intervals, sensors);
+    for (Eigen::Index k = 0; k < intervals; ++k) {
+      out.row(k) = project((base.row(k) - shift).transpose()).transpose();
+    }
+    return out;
+  };
+  const auto excess = [&](const Eigen::MatrixXd& lambda_at) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(sensors);
+    for (const Eigen::Index j : budgeted) g(j) = interval_length * lambda_at.col(j).sum() - energy(j);
+    return g;
+  };
+  const auto met = [&](const Eigen::VectorXd& g, const Eigen::VectorXd& v) {
+    for (const Eigen::Index j : budgeted) {
+      const double relative = g(j) / energy(j);
+      if (relative > kTolerance || (v(j) > 0.0 && std::abs(relative) > kTolerance)) return false;
+    }
+    return true;
+  };
+  if (!budgeted.empty()) {
+    const double lipschitz = interval_length * interval_length * static_cast<double>(intervals);
+    Eigen::MatrixXd at = primalAt(nu);
+    Eigen::VectorXd g = excess(at);
+    double step = 1.0 / lipschitz;
+    for (int it = 0; it < kMaxDualSteps; ++it) {
+      if (met(g, nu)) {
+        if (multipliers != nullptr) multipliers->budgets = nu;
+        for (const Eigen::Index j : budgeted) {  // exact, whatever the rounding
+          const double used = interval_length * at.col(j).sum();
+          if (used > energy(j)) at.col(j) *= energy(j) / used;
+        }
+        return at;
+      }
+      const Eigen::VectorXd next = (nu + step * g).cwiseMax(0.0);
+      Eigen::MatrixXd next_at = primalAt(next);
+      const Eigen::VectorXd next_g = excess(next_at);
+      const Eigen::VectorXd ds = next - nu;
+      const double curvature = -ds.dot(next_g - g);
+      // Where φ is flat along the step (a sensor with no rate left, whose ν only has to come
+      // down), longer steps.
+      step = curvature > 0.0 ? std::clamp(ds.squaredNorm() / curvature, 1e-3 / lipschitz,
+                                          1e6 / lipschitz)
+                             : std::min(4.0 * step, 1e6 / lipschitz);
+      nu = next;
+      at = std::move(next_at);
+      g = next_g;
+    }
+  }
+  Eigen::MatrixXd mu = Eigen::MatrixXd::Zero(intervals, C.rows());
+  for (const Eigen::Index j : budgeted) shifted.col(j).array() -= nu(j) * interval_length;
   Eigen::VectorXd z;
   std::vector<std::pair<double, double>> breakpoints;
   Eigen::MatrixXd lambda = shifted.cwiseMax(0.0);
-  constexpr double kTolerance = 1e-12;
   for (int sweep = 0; sweep < kMaxScheduleSweeps; ++sweep) {
     for (Eigen::Index k = 0; k < intervals; ++k) {
       for (Eigen::Index i = 0; i < C.rows(); ++i) {
@@ -185,15 +249,11 @@ Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::Matr
     }
     if (optimal) break;
   }
+  if (multipliers != nullptr) multipliers->budgets = nu;
   // Admissible exactly, whatever the sweeps reached: C >= 0 and h > 0, so scaling an interval
   // or a sensor down leaves every other row as it was or looser.
   for (Eigen::Index k = 0; k < intervals; ++k) {
-    const Eigen::VectorXd load = C * lambda.row(k).transpose();
-    double scale = 1.0;
-    for (Eigen::Index i = 0; i < load.size(); ++i) {
-      if (load(i) > b(i)) scale = std::min(scale, b(i) / load(i));
-    }
-    lambda.row(k) *= scale;
+    lambda.row(k) *= factorWithin(C, b, lambda.row(k).transpose());
   }
   for (const Eigen::Index j : budgeted) {
     const double used = interval_length * lambda.col(j).sum();

@@ -27,6 +27,7 @@ const std::vector<std::string> kColours = {"#1b2a49", "#e0891c", "#4a74b4",
 // The axes a page plots against, with their labels.
 const std::vector<std::pair<std::string, std::string>> kAxes = {
     {"budget", "budget b of 1'λ <= b (Hz)"},
+    {"energy", "energy budget E_j of each sensor (measurements)"},
     {"sensors", "sensors M"},
     {"states", "states n"},
     {"noise_scale", "noise scale R_scale"},
@@ -40,6 +41,7 @@ double numberOf(const json& row, const std::string& key) {
 // A series: the planner, and for the closed loop its surrogate and (unless it is the axis) DT.
 std::string seriesOf(const json& row, const std::string& axis) {
   std::string name = row.value("planner", std::string("?"));
+  if (name == "timetable") return name + " (" + row.value("surrogate", std::string("?")) + ")";
   if (name == "closed_loop") {
     name += " (" + row.value("surrogate", std::string("?"));
     if (axis != "replan_every")
@@ -172,6 +174,9 @@ std::string cellTable(const std::vector<json>& rows) {
                   formatTick(numberOf(row, "scenario_seed"));
       if (numberOf(row, "noise_scale") != 1.0)
         scenario += " R×" + formatTick(numberOf(row, "noise_scale"));
+    }
+    if (std::isfinite(numberOf(row, "energy"))) {
+      scenario += " E=" + formatTick(numberOf(row, "energy"));
     }
     const bool ok = row.value("status", std::string()) == "ok";
     t += "<tr><td>" + escapeXml(scenario) + "</td><td>" + formatTick(numberOf(row, "budget")) +

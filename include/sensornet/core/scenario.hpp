@@ -120,4 +120,10 @@ struct RandomPlantSpec {
 // one row, or the budget is not a positive number.
 [[nodiscard]] Scenario withBudget(Scenario scenario, double budget, const std::string& source);
 
+// The scenario with energy budgets ∫_0^T λ_j dt <= energy_j (one per sensor, or one for every
+// sensor; +infinity: none), validated. Throws InputError naming `source` for a count that is
+// neither 1 nor M, or a budget that is not a number > 0.
+[[nodiscard]] Scenario withEnergy(Scenario scenario, const Eigen::VectorXd& energy,
+                                  const std::string& source);
+
 }  // namespace sensornet

@@ -23,6 +23,7 @@ struct SweepScenario {
   std::string file;                       // a scenario file (as written, resolved), or empty
   std::optional<RandomPlantSpec> random;  // or a random plant
   std::optional<double> budget;
+  std::optional<double> energy;  // every sensor's energy budget (Scenario: constraints.energy)
 
   // The validated scenario (throws InputError naming `source` when it is not one).
   [[nodiscard]] Scenario load(const std::string& source) const;
@@ -30,7 +31,9 @@ struct SweepScenario {
 
 struct SweepCell {
   SweepScenario scenario;
-  std::string planner;                                   // info, cov, uniform, mc, or closed_loop
+  // info, cov, uniform, mc, closed_loop, or timetable (the plan of `surrogate` measured with
+  // deterministic instants: sensor j's k-th where ∫λ_j reaches k - 1/2)
+  std::string planner;
   PlanSurrogate surrogate = PlanSurrogate::Information;  // the plan's (closed loop: the tails')
   double replan_every_s = 0.0;                           // closed_loop only
   std::uint64_t seed = 1;                                // the Monte Carlo's (and mc's) seed

@@ -1,6 +1,7 @@
 #pragma once
 // The planner: the rate schedule λ(t), piecewise constant on the scenario's N intervals, that
-// minimizes a surrogate cost (eq. 12 of the first paper) under C λ_k <= b, λ_k >= 0 (eq. 8), for
+// minimizes a surrogate cost (eq. 12 of the first paper) under C λ_k <= b, λ_k >= 0 (eq. 8) and
+// the scenario's energy budgets Σ_k h λ_kj <= E_j (when it has them), for
 // the information-form surrogate (eq. 11, the paper's Info-NLP) or the covariance-form surrogate
 // (eq. 15, Cov-NLP), or the uniform baseline, or (PlanSurrogate::MonteCarlo, mc_planner.hpp)
 // the expected realized cost E[J(P)] itself, by a stochastic method. It also plans the rest of a running episode, from
@@ -26,7 +27,10 @@
 // (doubled from PlanRequest::substeps, at most 256; PlanResult::substeps says how many). The
 // default optimizer is a projected quasi-Newton method (L-BFGS on the binding face, spectral projected gradient as the
 // fallback) whose iterates are all feasible; IPOPT with a limited-memory Hessian is the
-// alternative (PlanMethod::Ipopt). The returned schedule is projected onto the admissible set
+// alternative (PlanMethod::Ipopt). Energy budgets couple the intervals: the projection then
+// runs over whole schedules (RatePolytope::projectSchedule), while the quasi-Newton steps' face
+// stays per interval, so where budgets bind the solve proceeds mostly by projected gradient
+// steps and may end at max_iterations a little short of the tolerance (docs/guide). The returned schedule is projected onto the admissible set
 // (rate_polytope.hpp), so it is feasible to rounding, and then scored with the ACCURATE
 // rollouts of surrogate.hpp (relative tolerance 1e-10); `objective` and `bracket` are those
 // numbers, not the planner's internal RK4 cost (`discretized_objective`, which differs by

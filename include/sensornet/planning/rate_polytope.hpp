@@ -45,14 +45,24 @@ class RatePolytope {
   // holds and every row with a positive multiplier is tight, both to 1e-12 relative (or after
   // kMaxScheduleSweeps sweeps), and the result is then scaled into the set (each interval into
   // its rows, then each sensor into its budget), so it is always admissible.
+  //
+  // `multipliers`, when given, starts the ascent from the multipliers it holds (those of the
+  // last projection of the same shape: the optimizer projects nearby points one after another,
+  // and the sweeps needed fell from thousands to tens) and receives the new ones.
+  struct ScheduleMultipliers {
+    Eigen::MatrixXd interval_rows;  // K x n_c
+    Eigen::VectorXd budgets;        // M
+  };
   [[nodiscard]] Eigen::MatrixXd projectSchedule(const Eigen::Ref<const Eigen::MatrixXd>& rates,
                                                 double interval_length,
-                                                const Eigen::VectorXd& energy) const;
+                                                const Eigen::VectorXd& energy,
+                                                ScheduleMultipliers* multipliers = nullptr) const;
   // The uniform rates of every interval, each sensor's capped so that its column meets its
   // budget: min(uniformRates()_j, energy_j / (K h)).
   [[nodiscard]] Eigen::MatrixXd uniformSchedule(int intervals, double interval_length,
                                                 const Eigen::VectorXd& energy) const;
 
+  static constexpr int kMaxDualSteps = 2000;
   static constexpr int kMaxScheduleSweeps = 20000;
 
  private:

@@ -118,6 +118,61 @@ TEST(SweepCli, EveryCellIsWhatThePlannerAndTheEvaluatorPrint) {
   EXPECT_EQ(summary.at("page"), dir.file("out/results.html"));
 }
 
+// Energy budgets as an axis, and the timetable planner: each cell is what the programs print for
+// a scenario file with the same budget (a timetable cell: `fusion_center evaluate --arrivals
+// timetable`), and its schedule spends at most the budget of every sensor (recomputed here from
+// the schedule file: Σ_k λ_kj T / N).
+TEST(SweepCli, EnergyAndTimetableCellsAreWhatTheProgramsPrintAndMeetTheirBudgets) {
+  const sensornet::testing::ScratchDir dir;
+  const std::string file = dir.write(
+      "energy.yaml",
+      "scenarios:\n  - random: {states: 3, sensors: 5, seed: 4, budget: 4}\n"
+      "    horizon: 2\n    intervals: 6\n    energy: [0.8, 3]\n"
+      "planners: [info, cov, uniform, {timetable: info}]\nruns: 200\n");
+  const ProcessResult r = runProcess({kLauncher, "sweep", file, "--out", dir.file("out"), "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<json> rows = rowsOf(dir.file("out/results.jsonl"));
+  ASSERT_EQ(rows.size(), 8u);
+  for (const json& row : rows) {
+    const double energy = row.at("energy").get<double>();
+    const std::string scenario = dir.write(
+        "plant.yaml", "horizon: 2\nintervals: 6\nrandom:\n  states: 3\n  sensors: 5\n"
+                      "  seed: 4\n  budget: 4\n  energy: " + row.at("energy").dump() + "\n");
+    const std::string plan = dir.file("plan.json");
+    const ProcessResult p =
+        runProcess({kCoordinator, "plan", "--scenario", scenario, "--surrogate",
+                    row.at("surrogate").get<std::string>(), "--out", plan, "--json"});
+    ASSERT_EQ(p.exit_code, 0) << p.err;
+    const json planned = json::parse(p.out);
+    EXPECT_EQ(row.at("objective"), planned.at("objective")) << row.dump();
+    EXPECT_EQ(row.at("bracket_cov"), planned.at("bracket").at("cov"));
+    std::ifstream in(plan);
+    const json schedule = json::parse(in);
+    std::vector<double> used(5, 0.0);
+    for (const json& interval : schedule.at("rates")) {
+      for (std::size_t j = 0; j < 5; ++j) used[j] += interval.at(j).get<double>() * 2.0 / 6.0;
+    }
+    EXPECT_LE(*std::max_element(used.begin(), used.end()), energy * (1.0 + 1e-9)) << row.dump();
+    if (energy == 0.8 && row.at("planner") != "uniform") {
+      // 4 Hz x 2 s = 8 measurements to share against 5 x 0.8 = 4: every budget binds.
+      EXPECT_GE(*std::min_element(used.begin(), used.end()), 0.8 * (1.0 - 1e-4)) << row.dump();
+    }
+    const bool timetable = row.at("planner") == "timetable";
+    const ProcessResult e = runProcess(
+        {kFusionCenter, "evaluate", "--scenario", scenario, "--schedule", plan, "--runs", "200",
+         "--seed", row.at("seed").dump(), "--arrivals", timetable ? "timetable" : "poisson",
+         "--json"});
+    ASSERT_EQ(e.exit_code, 0) << e.err;
+    const json evaluated = json::parse(e.out);
+    if (timetable) {
+      EXPECT_EQ(row.at("mean"), evaluated.at("timetable").at("cost")) << row.dump();
+      EXPECT_EQ(row.at("poisson_mean"), evaluated.at("mc").at("mean")) << row.dump();
+    } else {
+      EXPECT_EQ(row.at("mean"), evaluated.at("mc").at("mean")) << row.dump();
+    }
+  }
+}
+
 TEST(SweepCli, CtrlCKeepsTheCellsDoneAndTheSameCommandGoesOn) {
   const sensornet::testing::ScratchDir dir;
   const std::string file = dir.write("small.yaml", experiment(20000, "[1, 2, 3, 4, 5, 6]"));

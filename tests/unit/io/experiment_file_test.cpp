@@ -80,10 +80,49 @@ planners: cov
       std::string::npos);
 }
 
+// An energy axis beside budget: (or inside random:) multiplies the scenarios, reaches the
+// scenario each cell loads, and names its cells apart; without one the keys are as before.
+TEST(ExperimentFile, AnEnergyAxisReachesEveryCellsScenario) {
+  const Experiment e = parseExperimentYaml(R"(
+scenarios:
+  - random: {states: 3, sensors: 4, seed: 1, energy: [0.5, 2]}
+    intervals: 6
+  - file: ../../scenarios/paper.yaml
+    budget: [3, 4]
+    energy: 1.5
+planners: [info]
+)",
+                                           kSource);
+  ASSERT_EQ(e.cells.size(), 4u);
+  EXPECT_EQ(e.cells[0].scenario.energy, 0.5);
+  EXPECT_EQ(e.cells[1].scenario.energy, 2.0);
+  EXPECT_TRUE(e.cells[0].scenario.load("test").constraints.energy.isApprox(
+      Eigen::VectorXd::Constant(4, 0.5)));
+  const Scenario paper = e.cells[3].scenario.load("test");
+  EXPECT_EQ(paper.constraints.b(0), 4.0);
+  EXPECT_TRUE(paper.constraints.energy.isApprox(Eigen::VectorXd::Constant(paper.sensorCount(), 1.5)));
+  EXPECT_NE(e.cells[0].key(), e.cells[1].key());
+  EXPECT_NE(e.cells[0].key().find(";energy=0.5"), std::string::npos) << e.cells[0].key();
+  const Experiment plain = parseExperimentYaml(
+      "scenarios: [{random: {states: 3, sensors: 4, seed: 1}}]\nplanners: [info]\n", kSource);
+  EXPECT_EQ(plain.cells[0].key().find("energy"), std::string::npos);
+  EXPECT_FALSE(plain.cells[0].scenario.load("test").constraints.hasEnergyBudgets());
+  EXPECT_NE(errorOf("scenarios: [{random: {states: 2, sensors: 3, seed: 1, energy: 1}, energy: 2}]\n"
+                    "planners: [info]\n")
+                .find("the energy in one place only"),
+            std::string::npos);
+  EXPECT_NE(errorOf("scenarios: [{random: {states: 2, sensors: 3, seed: 1}, energy: [1, 0]}]\n"
+                    "planners: [info]\n")
+                .find("test.yaml:1: scenarios[0].energy: expected a number > 0"),
+            std::string::npos)
+      << errorOf("scenarios: [{random: {states: 2, sensors: 3, seed: 1}, energy: [1, 0]}]\n"
+                 "planners: [info]\n");
+}
+
 TEST(ExperimentFile, BadInputNamesTheFileLineAndField) {
   EXPECT_NE(errorOf("planners: [info]\n").find("scenarios"), std::string::npos);
   EXPECT_NE(errorOf("scenarios: [{random: {states: 2, sensors: 3, seed: 1}}]\nplanners: [best]\n")
-                .find("test.yaml:2: planners[0]: expected info, cov, uniform, mc or"),
+                .find("test.yaml:2: planners[0]: expected info, cov, uniform, mc, timetable,"),
             std::string::npos)
       << errorOf("scenarios: [{random: {states: 2, sensors: 3, seed: 1}}]\nplanners: [best]\n");
   EXPECT_NE(

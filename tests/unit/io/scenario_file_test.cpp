@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/core/rate_schedule.hpp"
 #include "support/eigen_near.hpp"
 #include "support/scratch_dir.hpp"
 
@@ -185,7 +187,62 @@ INSTANTIATE_TEST_SUITE_P(
                                     "seed: 1}\n"),
                         "random.states", ">= 1"},
         BadScenarioCase{"random and explicit", std::string(kValid) + "random: {states: 1}\n",
-                        "plant", "not both"}));
+                        "plant", "not both"},
+        BadScenarioCase{"energy zero", replaced("b: [3]", "b: [3]\n  energy: [2, 0]"),
+                        "constraints.energy[1]", "> 0"},
+        BadScenarioCase{"energy count", replaced("b: [3]", "b: [3]\n  energy: [2, 3, 4]"),
+                        "constraints.energy", "2 budgets (one per sensor) or one for all"},
+        BadScenarioCase{"energy not a number", replaced("b: [3]", "b: [3]\n  energy: lots"),
+                        "constraints.energy", "a number"},
+        BadScenarioCase{"energy NaN", replaced("b: [3]", "b: [3]\n  energy: [.nan, 1]"),
+                        "constraints.energy[0]", "finite"},
+        BadScenarioCase{"random energy list",
+                        std::string("horizon: 1\nintervals: 2\nrandom: {states: 2, sensors: 2, "
+                                    "seed: 1, energy: [1, 2]}\n"),
+                        "random.energy", "one budget for every sensor"}));
+
+// Energy budgets: one per sensor, .inf for none, or one number for every sensor; the random
+// form takes one for every sensor.
+TEST(ScenarioFile, EnergyBudgetsPerSensorOrForAll) {
+  const Scenario none = parseScenarioYaml(kValid, "ok.yaml");
+  EXPECT_EQ(none.constraints.energy.size(), 0);
+  EXPECT_FALSE(none.constraints.hasEnergyBudgets());
+  const Scenario listed = parseScenarioYaml(replaced("b: [3]", "b: [3]\n  energy: [2.5, .inf]"), "ok.yaml");
+  ASSERT_EQ(listed.constraints.energy.size(), 2);
+  EXPECT_DOUBLE_EQ(listed.constraints.energy(0), 2.5);
+  EXPECT_TRUE(std::isinf(listed.constraints.energy(1)));
+  EXPECT_TRUE(listed.constraints.hasEnergyBudgets());
+  const Scenario all = parseScenarioYaml(replaced("b: [3]", "b: [3]\n  energy: 4"), "ok.yaml");
+  EXPECT_TRUE(all.constraints.energy.isApprox(Eigen::Vector2d(4.0, 4.0)));
+  const Scenario random = parseScenarioYaml(
+      "horizon: 3\nintervals: 30\nrandom: {states: 4, sensors: 7, seed: 11, energy: 1.5}\n",
+      "r.yaml");
+  EXPECT_TRUE(random.constraints.energy.isApprox(Eigen::VectorXd::Constant(7, 1.5)));
+  const Scenario unlimited = parseScenarioYaml(
+      "horizon: 3\nintervals: 30\nrandom: {states: 4, sensors: 7, seed: 11, energy: .inf}\n",
+      "r.yaml");
+  EXPECT_FALSE(unlimited.constraints.hasEnergyBudgets());
+}
+
+// A schedule that overspends a budget is named by its sensor; 1e-9 of slack per second of
+// horizon is rounding.
+TEST(ScenarioFile, ASchedulePastAnEnergyBudgetIsInfeasible) {
+  const Scenario s = parseScenarioYaml(replaced("b: [3]", "b: [3]\n  energy: [2.5, .inf]"), "ok.yaml");
+  Eigen::MatrixXd rates = Eigen::MatrixXd::Zero(4, 2);
+  rates.col(0).setConstant(1.25);  // 1.25 Hz x 2 s = 2.5: on the budget
+  rates.col(1).setConstant(1.5);
+  EXPECT_TRUE(checkFeasibility(RateSchedule(2.0, rates), s).feasible);
+  rates(3, 0) += 1e-3;  // 0.5 s x 1e-3 Hz over
+  const Feasibility f = checkFeasibility(RateSchedule(2.0, rates), s);
+  EXPECT_FALSE(f.feasible);
+  EXPECT_NEAR(f.max_violation, 0.5e-3, 1e-12);
+  EXPECT_NE(f.reason.find("sensor 0"), std::string::npos) << f.reason;
+  EXPECT_NE(f.reason.find("energy budget 2.5"), std::string::npos) << f.reason;
+  // The uniform baseline: 1.5 Hz each by 1'λ <= 3, sensor 0 capped at 2.5 / 2 s.
+  const RateSchedule uniform = uniformSchedule(s);
+  EXPECT_DOUBLE_EQ(uniform.rate(2, 0), 1.25);
+  EXPECT_DOUBLE_EQ(uniform.rate(2, 1), 1.5);
+}
 
 // The valid fixture (horizon 2, intervals 4, two sensors) with a network section and faults.
 std::string withNetwork(const std::string& network, const std::string& faults = "") {
