@@ -15,6 +15,7 @@
 #include "sensornet/planning/mc_planner.hpp"
 #include "sensornet/planning/planner.hpp"
 #include "sensornet/planning/rate_polytope.hpp"
+#include "unit/planning/drift_free.hpp"
 
 namespace sensornet {
 namespace {
@@ -39,7 +40,8 @@ VectorXd projectOntoBudget(const VectorXd& y, double h, double e) {
 
 // Dykstra's method between A = the intervals' polytopes (row by row) and B = the budgets
 // (column by column): its iterates converge to the projection onto A ∩ B.
-MatrixXd dykstra(const RatePolytope& polytope, const MatrixXd& y, double h, const VectorXd& energy) {
+MatrixXd dykstra(const RatePolytope& polytope, const MatrixXd& y, double h,
+                 const VectorXd& energy) {
   MatrixXd x = y;
   MatrixXd p = MatrixXd::Zero(y.rows(), y.cols());
   MatrixXd q = p;
@@ -90,7 +92,8 @@ TEST(RatePolytope, ScheduleProjectionUnderEnergyBudgetsMatchesDykstra) {
       }
       const MatrixXd expected = dykstra(polytope, y, h, energy);
       EXPECT_LE((p - expected).cwiseAbs().maxCoeff(), 1e-7) << "trial " << trial << "\n"
-                                                             << p << "\n\n" << expected;
+                                                            << p << "\n\n"
+                                                            << expected;
     }
   }
 }
@@ -111,79 +114,6 @@ TEST(RatePolytope, AnExhaustedBudgetLeavesTheSensorNothingAndTheUniformRatesMeet
   EXPECT_TRUE(u.col(2).isConstant(2.0));
 }
 
-// A random scenario (3 states, 6 intervals) made drift-free: A = 0, Q = 0, P0 = 4 I.
-Scenario driftFreeScenario(std::uint64_t seed, int sensors) {
-  RandomPlantSpec spec;
-  spec.state_dim = 3;
-  spec.sensor_count = sensors;
-  spec.intervals = 6;
-  spec.horizon_s = 1.5;
-  spec.budget = 3.0;
-  spec.seed = seed;
-  Scenario s = generateRandomScenario(spec);
-  s.plant.A.setZero();
-  s.plant.Q.setZero();
-  s.plant.P0 = 4.0 * MatrixXd::Identity(3, 3);
-  return s;
-}
-
-// With A = 0, Q = 0 and W = 0 the information-form cost depends on the rates only through
-// their time averages ā_j = Σ_k λ_kj / N (Y(T) = Y0 + T Σ_j ā_j S_j), and the schedules meeting
-// 1'λ_k <= b and T ā_j <= E_j have exactly the averages in {ā >= 0, 1'ā <= b, ā_j <= E_j / T}
-// (a constant schedule realizes any of them). Solved here by projected gradient with a
-// bisection projection onto that capped simplex.
-double cappedConvexOptimum(const Scenario& s) {
-  const auto increments = s.informationIncrements();
-  const MatrixXd Y0 = s.plant.P0.inverse();
-  const double T = s.horizon_s;
-  const double budget = s.constraints.b(0);
-  const VectorXd cap = s.constraints.energy / T;
-  const auto information = [&](const VectorXd& l) {
-    MatrixXd Y = Y0;
-    for (int j = 0; j < l.size(); ++j) Y += T * l(j) * increments[static_cast<std::size_t>(j)];
-    return Y;
-  };
-  const auto cost = [&](const VectorXd& l) { return (s.cost.WT * information(l).inverse()).trace(); };
-  const auto gradient = [&](const VectorXd& l) {
-    const MatrixXd P = information(l).inverse();
-    const MatrixXd PWP = P * s.cost.WT * P;
-    VectorXd g(l.size());
-    for (int j = 0; j < l.size(); ++j) {
-      g(j) = -T * PWP.cwiseProduct(increments[static_cast<std::size_t>(j)]).sum();
-    }
-    return g;
-  };
-  const auto project = [&](const VectorXd& y) {
-    const auto clipped = [&](double mu) { return VectorXd((y.array() - mu).max(0.0).min(cap.array())); };
-    if (clipped(0.0).sum() <= budget) return clipped(0.0);
-    double low = 0.0;
-    double high = y.maxCoeff();
-    for (int it = 0; it < 200; ++it) {
-      const double middle = 0.5 * (low + high);
-      (clipped(middle).sum() > budget ? low : high) = middle;
-    }
-    return clipped(high);
-  };
-  VectorXd l = project(VectorXd::Constant(s.sensorCount(), budget / s.sensorCount()));
-  double f = cost(l);
-  double step = 1.0;
-  for (int it = 0; it < 20000; ++it) {
-    const VectorXd g = gradient(l);
-    for (;;) {
-      const VectorXd trial = project(l - step * g);
-      const double ft = cost(trial);
-      if (ft <= f + 1e-4 * g.dot(trial - l) || step < 1e-14) {
-        l = trial;
-        f = ft;
-        break;
-      }
-      step *= 0.5;
-    }
-    step *= 2.0;
-  }
-  return f;
-}
-
 VectorXd energyUsed(const RateSchedule& schedule) {
   return schedule.expectedCounts(0.0, schedule.horizon());
 }
@@ -193,7 +123,8 @@ VectorXd energyUsed(const RateSchedule& schedule) {
 Scenario withBindingBudget(Scenario s, int& binding) {
   const VectorXd used = energyUsed(planSchedule(s, {}).schedule);
   used.maxCoeff(&binding);
-  s.constraints.energy = VectorXd::Constant(s.sensorCount(), 2.0 * s.constraints.b(0) * s.horizon_s);
+  s.constraints.energy =
+      VectorXd::Constant(s.sensorCount(), 2.0 * s.constraints.b(0) * s.horizon_s);
   s.constraints.energy(0) = kInf;
   s.constraints.energy(binding) = 0.5 * used(binding);
   if (binding == 0) s.constraints.energy(0) = 0.5 * used(0);
@@ -203,11 +134,11 @@ Scenario withBindingBudget(Scenario s, int& binding) {
 
 TEST(EnergyBudget, BothOptimizersReachTheCappedConvexOptimumWithTheBudgetBinding) {
   for (std::uint64_t seed = 1; seed <= 2; ++seed) {
-    const Scenario free = driftFreeScenario(seed, 5);
+    const Scenario free = testing::driftFreeScenario(seed, 5);
     const double unconstrained = planSchedule(free, {}).objective;
     int binding = -1;
     const Scenario s = withBindingBudget(free, binding);
-    const double optimum = cappedConvexOptimum(s);
+    const double optimum = testing::convexInformationOptimum(s);
     EXPECT_GT(optimum, unconstrained * (1.0 + 1e-6)) << "the budget must cost something";
     for (const PlanMethod method : {PlanMethod::ProjectedGradient, PlanMethod::Ipopt}) {
       PlanRequest request;

@@ -15,6 +15,7 @@
 #include "sensornet/core/random.hpp"
 #include "sensornet/planning/rate_polytope.hpp"
 #include "sensornet/planning/surrogate_transcription.hpp"
+#include "unit/planning/drift_free.hpp"
 
 namespace sensornet {
 namespace {
@@ -421,76 +422,13 @@ TEST(Planner, SingleSensorGetsItsMaximumRateEverywhere) {
   }
 }
 
-// A random scenario (3 states, 6 intervals) made drift-free for convexOptimum: A = 0, Q = 0,
-// P0 = 4 I.
-Scenario driftFreeScenario(std::uint64_t seed, int sensors) {
-  Scenario s = smallRandomScenario(seed, 3, sensors, 6);
-  s.plant.A.setZero();
-  s.plant.Q.setZero();
-  s.plant.P0 = 4.0 * MatrixXd::Identity(3, 3);
-  return s;
-}
-
-// With A = 0, Q = 0 and W = 0 the information form is Y(T) = Y0 + h Σ_k Σ_j λ_kj S_j, so
-// J = <W_T, Y(T)^{-1}> depends on the rates only through the time averages λ̄_j = Σ_k λ_kj / N,
-// which range over the same polytope: the convex problem min <W_T, (Y0 + T Σ_j λ_j S_j)^{-1}>
-// over {λ >= 0, 1'λ <= b}. Solved here independently by projected gradient with a bisection
-// projection onto the capped simplex.
-double convexOptimum(const Scenario& s) {
-  const auto increments = s.informationIncrements();
-  const MatrixXd Y0 = s.plant.P0.inverse();
-  const double T = s.horizon_s;
-  const double budget = s.constraints.b(0);
-  auto cost = [&](const VectorXd& l) {
-    MatrixXd Y = Y0;
-    for (int j = 0; j < l.size(); ++j) Y += T * l(j) * increments[static_cast<std::size_t>(j)];
-    return (s.cost.WT * Y.inverse()).trace();
-  };
-  auto gradient = [&](const VectorXd& l) {
-    MatrixXd Y = Y0;
-    for (int j = 0; j < l.size(); ++j) Y += T * l(j) * increments[static_cast<std::size_t>(j)];
-    const MatrixXd P = Y.inverse();
-    const MatrixXd PWP = P * s.cost.WT * P;
-    VectorXd g(l.size());
-    for (int j = 0; j < l.size(); ++j) {
-      g(j) = -T * (PWP.cwiseProduct(increments[static_cast<std::size_t>(j)])).sum();
-    }
-    return g;
-  };
-  auto project = [&](const VectorXd& y) {
-    VectorXd p = y.cwiseMax(0.0);
-    if (p.sum() <= budget) return p;
-    double lo = 0.0, hi = y.maxCoeff();
-    for (int it = 0; it < 200; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      ((y.array() - mid).cwiseMax(0.0).sum() > budget ? lo : hi) = mid;
-    }
-    return VectorXd((y.array() - hi).cwiseMax(0.0));
-  };
-  VectorXd l = VectorXd::Constant(s.sensorCount(), budget / s.sensorCount());
-  double f = cost(l);
-  double step = 1.0;
-  for (int it = 0; it < 20000; ++it) {
-    const VectorXd g = gradient(l);
-    for (;;) {  // Armijo backtracking on the projection arc
-      const VectorXd trial = project(l - step * g);
-      const double ft = cost(trial);
-      if (ft <= f + 1e-4 * g.dot(trial - l) || step < 1e-14) {
-        l = trial;
-        f = ft;
-        break;
-      }
-      step *= 0.5;
-    }
-    step *= 2.0;
-  }
-  return f;
-}
+using testing::convexInformationOptimum;
+using testing::driftFreeScenario;
 
 TEST(Planner, MatchesAnIndependentSolveOfTheConvexInformationProblem) {
   for (std::uint64_t seed = 1; seed <= 2; ++seed) {
     const Scenario s = driftFreeScenario(seed, 5);
-    const double optimum = convexOptimum(s);
+    const double optimum = convexInformationOptimum(s);
     const PlanResult plan = planSchedule(s, {});
     expectFeasibleAndStationary(s, plan, 1e-6);
     // RK4 is exact for this linear flow, so the accurate objective is the same number.
@@ -508,7 +446,7 @@ TEST(Planner, MatchesTheConvexSolveWithSensorNoiseFourDecadesApart) {
     for (std::size_t j = 0; j < s.sensors.size(); ++j) {
       s.sensors[j].R *= std::pow(10.0, -2.0 + 4.0 * static_cast<double>(j) / 5.0);
     }
-    const double optimum = convexOptimum(s);
+    const double optimum = convexInformationOptimum(s);
     const PlanResult plan = planSchedule(s, {});
     EXPECT_EQ(plan.status, PlanStatus::Optimal);
     expectFeasibleAndStationary(s, plan, 1e-6);
