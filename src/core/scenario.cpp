@@ -475,8 +475,8 @@ Scenario withEnergy(Scenario scenario, const Eigen::VectorXd& energy, const std:
   const Eigen::Index m = scenario.sensorCount();
   if (energy.size() != 1 && energy.size() != m) {
     throw InputError(source, "energy",
-                     "one budget for every sensor or " + std::to_string(m) + " (one per sensor), got " +
-                         std::to_string(energy.size()));
+                     "one budget for every sensor or " + std::to_string(m) +
+                         " (one per sensor), got " + std::to_string(energy.size()));
   }
   scenario.constraints.energy =
       energy.size() == 1 ? Eigen::VectorXd::Constant(m, energy(0)) : energy;

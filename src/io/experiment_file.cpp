@@ -59,7 +59,8 @@ void cartesian(const std::vector<std::vector<Value>>& axes,
 
 std::vector<SweepScenario> readScenario(const YamlReader& in, const YAML::Node& entry,
                                         const std::string& field, const fs::path& folder) {
-  in.rejectUnknownKeys(entry, field, {"file", "random", "budget", "energy", "horizon", "intervals"});
+  in.rejectUnknownKeys(entry, field,
+                       {"file", "random", "budget", "energy", "horizon", "intervals"});
   const bool file = entry["file"].IsDefined();
   const bool random = entry["random"].IsDefined();
   if (file == random)

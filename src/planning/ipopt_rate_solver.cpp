@@ -111,7 +111,8 @@ class RateProgram : public Ipopt::TNLP {
     for (const auto& [f, budget] : budgeted_) {
       double used = 0.0;
       for (int k = 0; k < problem_.plannedIntervals(); ++k) {
-        used += problem_.intervalLength() * x[static_cast<std::size_t>(k) * width + static_cast<std::size_t>(f)];
+        used += problem_.intervalLength() *
+                x[static_cast<std::size_t>(k) * width + static_cast<std::size_t>(f)];
       }
       g[c++] = used;
     }

@@ -476,7 +476,8 @@ class ProjectedQuasiNewton {
     MatrixXd direction;
     double slope = 0.0;
     for (double alpha = alpha_;; alpha = std::max(kMinScaledStep, 0.01 * alpha)) {
-      direction = problem_.projected(current_.x - (alpha * sigma_) * current_.gradient) - current_.x;
+      direction =
+          problem_.projected(current_.x - (alpha * sigma_) * current_.gradient) - current_.x;
       slope = problem_.inner(current_.gradient, direction);
       if (slope < 0.0) break;
       if (alpha <= kMinScaledStep || alpha < 1e-12 * alpha_) return std::nullopt;

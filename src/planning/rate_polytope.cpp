@@ -176,7 +176,9 @@ Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::Matr
   };
   const auto excess = [&](const Eigen::MatrixXd& lambda_at) {
     Eigen::VectorXd g = Eigen::VectorXd::Zero(sensors);
-    for (const Eigen::Index j : budgeted) g(j) = interval_length * lambda_at.col(j).sum() - energy(j);
+    for (const Eigen::Index j : budgeted) {
+      g(j) = interval_length * lambda_at.col(j).sum() - energy(j);
+    }
     return g;
   };
   const auto met = [&](const Eigen::VectorXd& g, const Eigen::VectorXd& v) {

@@ -25,15 +25,16 @@
 // adjoint gradient (surrogate_transcription.hpp), as many steps as make the transcription's cost
 // agree with the accurate rollout's within 1e-2 relative at the start point and at the solution
 // (doubled from PlanRequest::substeps, at most 256; PlanResult::substeps says how many). The
-// default optimizer is a projected quasi-Newton method (L-BFGS on the binding face, spectral projected gradient as the
-// fallback) whose iterates are all feasible; IPOPT with a limited-memory Hessian is the
-// alternative (PlanMethod::Ipopt). Energy budgets couple the intervals: the projection then
-// runs over whole schedules (RatePolytope::projectSchedule), while the quasi-Newton steps' face
-// stays per interval, so where budgets bind the solve proceeds mostly by projected gradient
-// steps and may end at max_iterations a little short of the tolerance (docs/guide). The returned schedule is projected onto the admissible set
-// (rate_polytope.hpp), so it is feasible to rounding, and then scored with the ACCURATE
-// rollouts of surrogate.hpp (relative tolerance 1e-10); `objective` and `bracket` are those
-// numbers, not the planner's internal RK4 cost (`discretized_objective`, which differs by
+// default optimizer is a projected quasi-Newton method (L-BFGS on the binding face, spectral
+// projected gradient as the fallback) whose iterates are all feasible; IPOPT with a
+// limited-memory Hessian is the alternative (PlanMethod::Ipopt). Energy budgets couple the
+// intervals: the projection then runs over whole schedules (RatePolytope::projectSchedule),
+// while the quasi-Newton steps' face stays per interval, so where budgets bind the solve
+// proceeds mostly by projected gradient steps and may end at max_iterations a little short of
+// the tolerance (docs/guide/math-and-planners.md). The returned schedule is projected onto the
+// admissible set (rate_polytope.hpp), so it is feasible to rounding, and then scored with the
+// ACCURATE rollouts of surrogate.hpp (relative tolerance 1e-10); `objective` and `bracket` are
+// those numbers, not the planner's internal RK4 cost (`discretized_objective`, which differs by
 // O(h^4)).
 
 #include <Eigen/Core>

@@ -1,8 +1,9 @@
 #pragma once
 // The admissible rates of one interval, {λ ∈ R^M : λ >= 0, C λ <= b, λ_j = 0 for excluded j}
 // (eq. 8 of the first paper, with sensors taken out of service), and the Euclidean projection
-// onto it, or onto the schedules of several intervals under per-sensor energy budgets. The planner uses the projection to return exactly feasible schedules and to measure
-// first-order optimality (the projected gradient).
+// onto it, or onto the schedules of several intervals under per-sensor energy budgets. The
+// planner uses the projection to return exactly feasible schedules and to measure first-order
+// optimality (the projected gradient).
 //
 //   const RatePolytope polytope(scenario.constraints, /*excluded=*/{3});
 //   const Eigen::VectorXd lambda = polytope.project(proposal);   // nearest admissible rates
