@@ -16,6 +16,7 @@
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/plan_status.hpp"
 #include "sensornet/core/surrogate.hpp"
+#include "sensornet/io/scenario_file.hpp"
 #include "sensornet/evaluation/schedule_evaluation.hpp"
 #include "sensornet/io/output_file.hpp"
 #include "sensornet/io/plan_request.hpp"
@@ -45,7 +46,9 @@ json axesOf(const SweepCell& cell) {
   }
   row["energy"] = cell.scenario.energy ? json(*cell.scenario.energy) : json(nullptr);
   row["planner"] = cell.planner;
-  row["surrogate"] = std::string(wordOf(cell.surrogate));
+  row["surrogate"] =
+      cell.planner == "schedule" ? json(nullptr) : json(std::string(wordOf(cell.surrogate)));
+  row["schedule"] = cell.planner == "schedule" ? json(cell.schedule_file) : json(nullptr);
   row["replan_every"] = cell.planner == "closed_loop" ? json(cell.replan_every_s) : json(nullptr);
   row["seed"] = cell.seed;
   row["runs"] = cell.runs;
@@ -75,6 +78,29 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
   const auto began = std::chrono::steady_clock::now();
   try {
     const Scenario scenario = cell.scenario.load(cell.key());
+    if (cell.planner == "schedule") {
+      const RateSchedule schedule = loadScheduleFile(cell.schedule_file, scenario);
+      const CostBracket bracket = computeBracket(scenario, schedule);
+      row["plan_status"] = "file";
+      row["plan_seconds"] = 0.0;
+      row["objective"] = nullptr;
+      row["bracket_info"] = numberOrNull(bracket.info);
+      row["bracket_cov"] = numberOrNull(bracket.cov);
+      MonteCarloOptions mc;
+      mc.runs = cell.runs;
+      mc.seed = cell.seed;
+      mc.threads = threads;
+      mc.progress = stopper(stop);
+      const OpenLoopRun run = runOpenLoop(scenario, schedule, mc, scenario.arrivals);
+      row["mean"] = run.mc.mean;
+      row["ci95"] = run.mc.ci95;
+      row["std"] = run.mc.std_dev;
+      row["arrivals_mean"] = run.mc.arrivals_mean;
+      row["status"] = "ok";
+      row["seconds"] =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+      return row;
+    }
     // The open-loop plan (the closed loop's plan at every episode start): as `coordinator plan`.
     PlanChoices choices;
     choices.surrogate = cell.surrogate;
@@ -146,6 +172,7 @@ const std::vector<std::string>& sweepColumns() {
   static const std::vector<std::string> columns = {
       "scenario",     "states",       "sensors",     "scenario_seed", "noise_scale",
       "budget",       "energy",       "planner",     "surrogate",     "replan_every",
+      "schedule",
       "seed",         "runs",         "status",      "reason",        "plan_status",
       "plan_seconds", "objective",    "bracket_info", "bracket_cov",  "mean",
       "ci95",         "std",          "arrivals_mean", "open_mean",   "gain_mean",

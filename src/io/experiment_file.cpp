@@ -166,9 +166,11 @@ struct PlannerChoice {
   std::string name;
   PlanSurrogate surrogate = PlanSurrogate::Information;
   double replan_every_s = 0.0;
+  std::string schedule_file{};
 };
 
-PlannerChoice readPlanner(const YamlReader& in, const YAML::Node& node, const std::string& field) {
+PlannerChoice readPlanner(const YamlReader& in, const YAML::Node& node, const std::string& field,
+                          const fs::path& folder) {
   if (node.IsScalar()) {
     const std::string& word = node.Scalar();
     for (const WordOf<PlanSurrogate>& w : Words<PlanSurrogate>::kTable) {
@@ -177,8 +179,17 @@ PlannerChoice readPlanner(const YamlReader& in, const YAML::Node& node, const st
     // The default surrogate's plan, measured with deterministic instants.
     if (word == "timetable") return {word, PlanSurrogate::Covariance, 0.0};
     in.fail(node, field,
-            "info, cov, uniform, mc, timetable, {timetable: info|cov|uniform|mc} or "
-            "{closed_loop: info|cov, replan_every: DT}, got '" + word + "'");
+            "info, cov, uniform, mc, timetable, {timetable: info|cov|uniform|mc}, "
+            "{closed_loop: info|cov, replan_every: DT} or {schedule: FILE}, got '" + word + "'");
+  }
+  if (node.IsMap() && node["schedule"]) {
+    in.rejectUnknownKeys(node, field, {"schedule"});
+    if (!node["schedule"].IsScalar()) {
+      in.fail(node["schedule"], field + ".schedule", "the path of a schedule file (JSON)");
+    }
+    fs::path path = node["schedule"].Scalar();
+    if (path.is_relative()) path = folder / path;
+    return {"schedule", PlanSurrogate::Information, 0.0, path.lexically_normal().string()};
   }
   if (node.IsMap() && node["timetable"]) {
     in.rejectUnknownKeys(node, field, {"timetable"});
@@ -237,6 +248,8 @@ std::string SweepCell::key() const {
     k += "(" + std::string(wordOf(surrogate)) + ",every=" + exact(replan_every_s) + ")";
   } else if (planner == "timetable") {
     k += "(" + std::string(wordOf(surrogate)) + ")";
+  } else if (planner == "schedule") {
+    k += "(" + schedule_file + ")";
   }
   return k + ";seed=" + std::to_string(seed) + ";runs=" + std::to_string(runs);
 }
@@ -269,7 +282,7 @@ Experiment parseExperimentYaml(const std::string& text, const std::string& sourc
   std::vector<PlannerChoice> all_planners;
   for (const YAML::Node& p : axisValues(in, planners, "planners")) {
     all_planners.push_back(
-        readPlanner(in, p, "planners[" + std::to_string(all_planners.size()) + "]"));
+        readPlanner(in, p, "planners[" + std::to_string(all_planners.size()) + "]", folder));
   }
 
   int runs = 1000;
@@ -292,7 +305,11 @@ Experiment parseExperimentYaml(const std::string& text, const std::string& sourc
   for (const SweepScenario& s : all_scenarios) {
     for (const PlannerChoice& p : all_planners) {
       for (const std::uint64_t seed : seeds) {
-        SweepCell cell{s, p.name, p.surrogate, p.replan_every_s, seed, runs};
+        SweepCell cell{s, p.name, p.surrogate, p.replan_every_s, seed, runs, p.schedule_file};
+        if (!p.schedule_file.empty() && seed == seeds.front()) {
+          // A schedule that does not fit a scenario is bad input, found before any cell runs.
+          (void)loadScheduleFile(p.schedule_file, s.load(source));
+        }
         if (!seen.emplace(cell.key(), true).second) {
           throw InputError(source, "scenarios",
                            "cells that differ (two are the same: " + cell.key() + ")");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <set>
@@ -42,6 +43,12 @@ double numberOf(const json& row, const std::string& key) {
 std::string seriesOf(const json& row, const std::string& axis) {
   std::string name = row.value("planner", std::string("?"));
   if (name == "timetable") return name + " (" + row.value("surrogate", std::string("?")) + ")";
+  if (name == "schedule") {
+    const auto file = row.find("schedule");
+    return file != row.end() && file->is_string()
+               ? name + " " + std::filesystem::path(file->get<std::string>()).filename().string()
+               : name;
+  }
   if (name == "closed_loop") {
     name += " (" + row.value("surrogate", std::string("?"));
     if (axis != "replan_every")

@@ -31,13 +31,15 @@ struct SweepScenario {
 
 struct SweepCell {
   SweepScenario scenario;
-  // info, cov, uniform, mc, closed_loop, or timetable (the plan of `surrogate` measured with
-  // deterministic instants: sensor j's k-th where ∫λ_j reaches k - 1/2)
+  // info, cov, uniform, mc, closed_loop, timetable (the plan of `surrogate` measured with
+  // deterministic instants: sensor j's k-th where ∫λ_j reaches k - 1/2), or schedule (the
+  // schedule file `schedule_file`, measured as it is: the paper's fixed-schedule sweeps)
   std::string planner;
   PlanSurrogate surrogate = PlanSurrogate::Information;  // the plan's (closed loop: the tails')
   double replan_every_s = 0.0;                           // closed_loop only
   std::uint64_t seed = 1;                                // the Monte Carlo's (and mc's) seed
   int runs = 1000;                                       // Monte Carlo episodes
+  std::string schedule_file{};                           // schedule only (resolved)
 
   // "scenario=...;planner=...;seed=...;runs=..." with every number written exactly.
   [[nodiscard]] std::string key() const;

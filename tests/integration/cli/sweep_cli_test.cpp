@@ -118,34 +118,48 @@ TEST(SweepCli, EveryCellIsWhatThePlannerAndTheEvaluatorPrint) {
   EXPECT_EQ(summary.at("page"), dir.file("out/results.html"));
 }
 
-// Energy budgets as an axis, and the timetable planner: each cell is what the programs print for
-// a scenario file with the same budget (a timetable cell: `fusion_center evaluate --arrivals
-// timetable`), and its schedule spends at most the budget of every sensor (recomputed here from
-// the schedule file: Σ_k λ_kj T / N).
+// Energy budgets as an axis, the timetable planner and a fixed schedule file: each cell is what
+// the programs print for a scenario file with the same budget (a timetable cell: `fusion_center
+// evaluate --arrivals timetable`; a schedule cell: `fusion_center evaluate --schedule` of that
+// file), and its schedule spends at most the budget of every sensor (recomputed here from the
+// schedule file: Σ_k λ_kj T / N).
 TEST(SweepCli, EnergyAndTimetableCellsAreWhatTheProgramsPrintAndMeetTheirBudgets) {
   const sensornet::testing::ScratchDir dir;
+  // 0.25 Hz for 2 s, 0.5 expected measurements of each sensor, and an uneven row.
+  const std::string fixed = dir.write(
+      "fixed.json",
+      "{\"horizon\": 2, \"intervals\": 6, \"rates\": [[0.25, 0.25, 0.25, 0.25, 0.25], "
+      "[0.25, 0.25, 0.25, 0.25, 0.25], [0.25, 0.25, 0.25, 0.25, 0.25], "
+      "[0.25, 0.25, 0.25, 0.25, 0.25], [0.25, 0.25, 0.25, 0.25, 0.25], "
+      "[0.05, 0.45, 0.25, 0.25, 0.25]]}");
   const std::string file = dir.write(
       "energy.yaml",
       "scenarios:\n  - random: {states: 3, sensors: 5, seed: 4, budget: 4}\n"
       "    horizon: 2\n    intervals: 6\n    energy: [0.8, 3]\n"
-      "planners: [info, cov, uniform, {timetable: info}]\nruns: 200\n");
+      "planners: [info, cov, uniform, {timetable: info}, {schedule: fixed.json}]\nruns: 200\n");
   const ProcessResult r = runProcess({kLauncher, "sweep", file, "--out", dir.file("out"), "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<json> rows = rowsOf(dir.file("out/results.jsonl"));
-  ASSERT_EQ(rows.size(), 8u);
+  ASSERT_EQ(rows.size(), 10u);
   for (const json& row : rows) {
     const double energy = row.at("energy").get<double>();
     const std::string scenario = dir.write(
         "plant.yaml", "horizon: 2\nintervals: 6\nrandom:\n  states: 3\n  sensors: 5\n"
                       "  seed: 4\n  budget: 4\n  energy: " + row.at("energy").dump() + "\n");
-    const std::string plan = dir.file("plan.json");
-    const ProcessResult p =
-        runProcess({kCoordinator, "plan", "--scenario", scenario, "--surrogate",
-                    row.at("surrogate").get<std::string>(), "--out", plan, "--json"});
-    ASSERT_EQ(p.exit_code, 0) << p.err;
-    const json planned = json::parse(p.out);
-    EXPECT_EQ(row.at("objective"), planned.at("objective")) << row.dump();
-    EXPECT_EQ(row.at("bracket_cov"), planned.at("bracket").at("cov"));
+    const bool fixed_schedule = row.at("planner") == "schedule";
+    const std::string plan = fixed_schedule ? fixed : dir.file("plan.json");
+    if (fixed_schedule) {
+      EXPECT_EQ(row.at("schedule"), fixed);
+      EXPECT_EQ(row.at("plan_status"), "file");
+    } else {
+      const ProcessResult p =
+          runProcess({kCoordinator, "plan", "--scenario", scenario, "--surrogate",
+                      row.at("surrogate").get<std::string>(), "--out", plan, "--json"});
+      ASSERT_EQ(p.exit_code, 0) << p.err;
+      const json planned = json::parse(p.out);
+      EXPECT_EQ(row.at("objective"), planned.at("objective")) << row.dump();
+      EXPECT_EQ(row.at("bracket_cov"), planned.at("bracket").at("cov"));
+    }
     std::ifstream in(plan);
     const json schedule = json::parse(in);
     std::vector<double> used(5, 0.0);
@@ -153,7 +167,7 @@ TEST(SweepCli, EnergyAndTimetableCellsAreWhatTheProgramsPrintAndMeetTheirBudgets
       for (std::size_t j = 0; j < 5; ++j) used[j] += interval.at(j).get<double>() * 2.0 / 6.0;
     }
     EXPECT_LE(*std::max_element(used.begin(), used.end()), energy * (1.0 + 1e-9)) << row.dump();
-    if (energy == 0.8 && row.at("planner") != "uniform") {
+    if (energy == 0.8 && row.at("planner") != "uniform" && !fixed_schedule) {
       // 4 Hz x 2 s = 8 measurements to share against 5 x 0.8 = 4: every budget binds.
       EXPECT_GE(*std::min_element(used.begin(), used.end()), 0.8 * (1.0 - 1e-4)) << row.dump();
     }
@@ -170,6 +184,7 @@ TEST(SweepCli, EnergyAndTimetableCellsAreWhatTheProgramsPrintAndMeetTheirBudgets
     } else {
       EXPECT_EQ(row.at("mean"), evaluated.at("mc").at("mean")) << row.dump();
     }
+    EXPECT_EQ(row.at("bracket_info"), evaluated.at("bracket").at("info")) << row.dump();
   }
 }
 

@@ -119,6 +119,32 @@ planners: [info]
                  "planners: [info]\n");
 }
 
+// A fixed schedule file as a planner, relative to the experiment; one that does not fit a
+// scenario is bad input before any cell runs.
+TEST(ExperimentFile, AScheduleFileIsAPlannerThatMustFitEveryScenario) {
+  const Experiment e = parseExperimentYaml(R"(
+scenarios:
+  - random: {states: 5, sensors: 30, seed: 1, budget: 5, noise_scale: [1, 10]}
+planners: [{schedule: schedules/reference-info.json}, info]
+)",
+                                           kSource);
+  ASSERT_EQ(e.cells.size(), 4u);
+  EXPECT_EQ(e.cells[0].planner, "schedule");
+  EXPECT_EQ(e.cells[0].schedule_file,
+            std::string(SENSORNET_SOURCE_DIR) + "/examples/experiments/schedules/reference-info.json");
+  EXPECT_NE(e.cells[0].key(), e.cells[2].key());  // the two noise scales
+  EXPECT_NE(e.cells[0].key().find("planner=schedule("), std::string::npos) << e.cells[0].key();
+  const std::string misfit =
+      errorOf("scenarios: [{random: {states: 5, sensors: 4, seed: 1}}]\n"
+              "planners: [{schedule: schedules/reference-info.json}]\n");
+  EXPECT_NE(misfit.find("reference-info.json"), std::string::npos) << misfit;
+  EXPECT_NE(misfit.find("30 x 30"), std::string::npos) << misfit;
+  EXPECT_NE(errorOf("scenarios: [{random: {states: 5, sensors: 4, seed: 1}}]\n"
+                    "planners: [{schedule: nowhere.json}]\n")
+                .find("nowhere.json"),
+            std::string::npos);
+}
+
 TEST(ExperimentFile, BadInputNamesTheFileLineAndField) {
   EXPECT_NE(errorOf("planners: [info]\n").find("scenarios"), std::string::npos);
   EXPECT_NE(errorOf("scenarios: [{random: {states: 2, sensors: 3, seed: 1}}]\nplanners: [best]\n")
