@@ -78,43 +78,33 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
   const auto began = std::chrono::steady_clock::now();
   try {
     const Scenario scenario = cell.scenario.load(cell.key());
+    // The schedule measured: a fixed file, or the open-loop plan (the closed loop's plan at
+    // every episode start), planned as `coordinator plan` plans it.
+    RateSchedule schedule;
     if (cell.planner == "schedule") {
-      const RateSchedule schedule = loadScheduleFile(cell.schedule_file, scenario);
+      schedule = loadScheduleFile(cell.schedule_file, scenario);
       const CostBracket bracket = computeBracket(scenario, schedule);
       row["plan_status"] = "file";
       row["plan_seconds"] = 0.0;
       row["objective"] = nullptr;
       row["bracket_info"] = numberOrNull(bracket.info);
       row["bracket_cov"] = numberOrNull(bracket.cov);
-      MonteCarloOptions mc;
-      mc.runs = cell.runs;
-      mc.seed = cell.seed;
-      mc.threads = threads;
-      mc.progress = stopper(stop);
-      const OpenLoopRun run = runOpenLoop(scenario, schedule, mc, scenario.arrivals);
-      row["mean"] = run.mc.mean;
-      row["ci95"] = run.mc.ci95;
-      row["std"] = run.mc.std_dev;
-      row["arrivals_mean"] = run.mc.arrivals_mean;
-      row["status"] = "ok";
-      row["seconds"] =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-      return row;
+    } else {
+      PlanChoices choices;
+      choices.surrogate = cell.surrogate;
+      PlanRequest request = planRequest(scenario, cell.key(), choices);
+      request.realized.seed = cell.seed;
+      request.realized.threads = threads;
+      request.progress = [&stop](const PlanProgress&) { return !stop.load(); };
+      const PlanResult plan = planSchedule(scenario, request);
+      if (stop.load()) throw SweepStopped();
+      schedule = plan.schedule;
+      row["plan_status"] = statusText(plan.status, plan.failure);
+      row["plan_seconds"] = plan.solve_seconds;
+      row["objective"] = numberOrNull(plan.objective);
+      row["bracket_info"] = numberOrNull(plan.bracket.info);
+      row["bracket_cov"] = numberOrNull(plan.bracket.cov);
     }
-    // The open-loop plan (the closed loop's plan at every episode start): as `coordinator plan`.
-    PlanChoices choices;
-    choices.surrogate = cell.surrogate;
-    PlanRequest request = planRequest(scenario, cell.key(), choices);
-    request.realized.seed = cell.seed;
-    request.realized.threads = threads;
-    request.progress = [&stop](const PlanProgress&) { return !stop.load(); };
-    const PlanResult plan = planSchedule(scenario, request);
-    if (stop.load()) throw SweepStopped();
-    row["plan_status"] = statusText(plan.status, plan.failure);
-    row["plan_seconds"] = plan.solve_seconds;
-    row["objective"] = numberOrNull(plan.objective);
-    row["bracket_info"] = numberOrNull(plan.bracket.info);
-    row["bracket_cov"] = numberOrNull(plan.bracket.cov);
     if (cell.planner == "closed_loop") {
       ClosedLoopOptions loop;
       loop.replan_every_s = cell.replan_every_s;
@@ -123,7 +113,7 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
       loop.seed = cell.seed;
       loop.threads = threads;
       loop.progress = stopper(stop);
-      const ClosedLoopRun run = runClosedLoop(scenario, plan.schedule, loop);
+      const ClosedLoopRun run = runClosedLoop(scenario, schedule, loop);
       row["mean"] = run.closed.mean;
       row["ci95"] = run.closed.ci95;
       row["std"] = run.closed.std_dev;
@@ -131,30 +121,25 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
       row["open_mean"] = run.open_mean;
       row["gain_mean"] = run.gain.mean;
       row["gain_ci95"] = run.gain.ci95;
-    } else if (cell.planner == "timetable") {
-      MonteCarloOptions mc;
-      mc.runs = cell.runs;
-      mc.seed = cell.seed;
-      mc.threads = threads;
-      mc.progress = stopper(stop);
-      const OpenLoopRun run = runOpenLoop(scenario, plan.schedule, mc, ArrivalMode::Timetable);
-      row["mean"] = run.timetable->mean;
-      row["ci95"] = run.timetable->ci95;
-      row["std"] = run.timetable->std_dev;
-      row["arrivals_mean"] = run.timetable->arrivals_mean;
-      row["poisson_mean"] = run.mc.mean;  // the same plan with Poisson arrivals
-      row["poisson_ci95"] = run.mc.ci95;
     } else {
       MonteCarloOptions mc;
       mc.runs = cell.runs;
       mc.seed = cell.seed;
       mc.threads = threads;
       mc.progress = stopper(stop);
-      const OpenLoopRun run = runOpenLoop(scenario, plan.schedule, mc, scenario.arrivals);
-      row["mean"] = run.mc.mean;
-      row["ci95"] = run.mc.ci95;
-      row["std"] = run.mc.std_dev;
-      row["arrivals_mean"] = run.mc.arrivals_mean;
+      const bool timetable = cell.planner == "timetable";
+      const OpenLoopRun run = runOpenLoop(scenario, schedule, mc,
+                                          timetable ? ArrivalMode::Timetable : scenario.arrivals);
+      // A timetable cell's cost is the timetable's, the Poisson mean beside it.
+      const MonteCarloResult& measured = timetable ? *run.timetable : run.mc;
+      row["mean"] = measured.mean;
+      row["ci95"] = measured.ci95;
+      row["std"] = measured.std_dev;
+      row["arrivals_mean"] = measured.arrivals_mean;
+      if (timetable) {
+        row["poisson_mean"] = run.mc.mean;
+        row["poisson_ci95"] = run.mc.ci95;
+      }
     }
     row["status"] = "ok";
   } catch (const SweepStopped&) {

@@ -66,7 +66,7 @@ Eigen::MatrixXd PlanningProblem::projected(const Eigen::MatrixXd& rates) const {
   Eigen::MatrixXd result = rates;
   if (energy_left_.size() > 0) {
     result.bottomRows(plannedIntervals()) = polytope_.projectSchedule(
-        rates.bottomRows(plannedIntervals()), interval_length_, energy_left_, &multipliers_);
+        rates.bottomRows(plannedIntervals()), interval_length_, energy_left_, &budget_multipliers_);
     return result;
   }
   for (int k = first_interval_; k < intervals(); ++k) {

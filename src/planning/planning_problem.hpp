@@ -80,7 +80,7 @@ class PlanningProblem {
   Eigen::VectorXd energy_left_;
   // The last schedule projection's multipliers, where the next one starts (projected() is
   // const to its callers; each problem is used by one thread).
-  mutable RatePolytope::ScheduleMultipliers multipliers_;
+  mutable Eigen::VectorXd budget_multipliers_;
 };
 
 // |J|, the unit of cost in the scale-free measures (1 when J is 0 or not finite).

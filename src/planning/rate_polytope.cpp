@@ -138,7 +138,7 @@ Eigen::VectorXd RatePolytope::project(const Eigen::Ref<const Eigen::VectorXd>& r
 Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::MatrixXd>& rates,
                                               double interval_length,
                                               const Eigen::VectorXd& energy,
-                                              ScheduleMultipliers* multipliers) const {
+                                              Eigen::VectorXd* budget_multipliers) const {
   const auto& C = constraints_.C;
   const auto& b = constraints_.b;
   const Eigen::Index intervals = rates.rows();
@@ -156,8 +156,8 @@ Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::Matr
   }
   constexpr double kTolerance = 1e-12;
   Eigen::VectorXd nu = Eigen::VectorXd::Zero(sensors);
-  if (multipliers != nullptr && multipliers->budgets.size() == sensors) {
-    for (const Eigen::Index j : budgeted) nu(j) = std::max(0.0, multipliers->budgets(j));
+  if (budget_multipliers != nullptr && budget_multipliers->size() == sensors) {
+    for (const Eigen::Index j : budgeted) nu(j) = std::max(0.0, (*budget_multipliers)(j));
   }
   // First, gradient ascent on the budgets' multipliers alone, each interval projected exactly
   // (project()) at the rates shifted by h ν: the dual φ(ν) is concave with gradient
@@ -195,7 +195,7 @@ Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::Matr
     double step = 1.0 / lipschitz;
     for (int it = 0; it < kMaxDualSteps; ++it) {
       if (met(g, nu)) {
-        if (multipliers != nullptr) multipliers->budgets = nu;
+        if (budget_multipliers != nullptr) *budget_multipliers = nu;
         for (const Eigen::Index j : budgeted) {  // exact, whatever the rounding
           const double used = interval_length * at.col(j).sum();
           if (used > energy(j)) at.col(j) *= energy(j) / used;
@@ -251,7 +251,7 @@ Eigen::MatrixXd RatePolytope::projectSchedule(const Eigen::Ref<const Eigen::Matr
     }
     if (optimal) break;
   }
-  if (multipliers != nullptr) multipliers->budgets = nu;
+  if (budget_multipliers != nullptr) *budget_multipliers = nu;
   // Admissible exactly, whatever the sweeps reached: C >= 0 and h > 0, so scaling an interval
   // or a sensor down leaves every other row as it was or looser.
   for (Eigen::Index k = 0; k < intervals; ++k) {

@@ -47,17 +47,14 @@ class RatePolytope {
   // kMaxScheduleSweeps sweeps), and the result is then scaled into the set (each interval into
   // its rows, then each sensor into its budget), so it is always admissible.
   //
-  // `multipliers`, when given, starts the ascent from the multipliers it holds (those of the
-  // last projection of the same shape: the optimizer projects nearby points one after another,
-  // and the sweeps needed fell from thousands to tens) and receives the new ones.
-  struct ScheduleMultipliers {
-    Eigen::MatrixXd interval_rows;  // K x n_c
-    Eigen::VectorXd budgets;        // M
-  };
+  // `budget_multipliers`, when given, starts the ascent on the budgets' multipliers from those
+  // it holds (the last projection's, when it has M of them: the optimizer projects nearby
+  // points one after another) and receives the new ones.
   [[nodiscard]] Eigen::MatrixXd projectSchedule(const Eigen::Ref<const Eigen::MatrixXd>& rates,
                                                 double interval_length,
                                                 const Eigen::VectorXd& energy,
-                                                ScheduleMultipliers* multipliers = nullptr) const;
+                                                Eigen::VectorXd* budget_multipliers =
+                                                    nullptr) const;
   // The uniform rates of every interval, each sensor's capped so that its column meets its
   // budget: min(uniformRates()_j, energy_j / (K h)).
   [[nodiscard]] Eigen::MatrixXd uniformSchedule(int intervals, double interval_length,
