@@ -129,10 +129,10 @@ std::size_t logLineCount(const fs::path& log) {
 // The coordinator's journal: the episode announced last and its start (realtime ns).
 std::optional<std::pair<int, std::int64_t>> announced(const fs::path& journal) {
   const json j = json::parse(readText(journal), nullptr, false);
-  if (!j.is_object() || !j.contains("announced") || !j["announced"].is_object()) return std::nullopt;
-  const json& a = j["announced"];
-  if (!a["episode"].is_number_integer() || !a["start_wall_ns"].is_number_integer()) return std::nullopt;
-  return std::make_pair(a["episode"].get<int>(), a["start_wall_ns"].get<std::int64_t>());
+  if (!j.is_object() || !j.contains("announced") || !field(j, "announced").is_object()) return std::nullopt;
+  const json& a = field(j, "announced");
+  if (!field(a, "episode").is_number_integer() || !field(a, "start_wall_ns").is_number_integer()) return std::nullopt;
+  return std::make_pair(field(a, "episode").get<int>(), field(a, "start_wall_ns").get<std::int64_t>());
 }
 
 std::string scenarioPath(const Options& o, const Trial& t, const fs::path& dir) {
@@ -357,11 +357,11 @@ std::vector<std::optional<double>> cleanCosts(const Options& o, const Trial& t) 
     (void)reapLeftovers(run_id);
     const json report = json::parse(readText(dir / "report.json"), nullptr, false);
     costs = json::array();
-    if (report.is_object() && report["per_episode"].is_array()) {
-      for (const json& e : report["per_episode"]) {
+    if (report.is_object() && field(report, "per_episode").is_array()) {
+      for (const json& e : field(report, "per_episode")) {
         const auto k = e.value("episode", std::size_t{0});
         if (costs.size() <= k) costs.insert(costs.end(), k + 1 - costs.size(), nullptr);
-        costs[k] = e.value("complete", false) ? e["realized_cost"] : json(nullptr);
+        costs[k] = e.value("complete", false) ? field(e, "realized_cost") : json(nullptr);
       }
     }
     std::ofstream(cached) << costs.dump() << '\n';

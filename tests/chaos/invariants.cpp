@@ -140,11 +140,11 @@ void checkAccounting(const json& per_episode, std::vector<std::string>& v) {
   for (const json& e : per_episode) {
     const json& sent = e.value("sent", json());
     for (std::size_t j = 0; sent.is_array() && j < sent.size(); ++j) {
-      const std::uint64_t s = at(sent, j), rec = at(e["received"], j), lost = at(e["lost"], j),
-                          dropped = at(e["dropped_by_network"], j),
+      const std::uint64_t s = at(sent, j), rec = at(field(e, "received"), j), lost = at(field(e, "lost"), j),
+                          dropped = at(field(e, "dropped_by_network"), j),
                           refused = at(e.value("refused", json()), j);
       if (s != rec + lost + dropped + refused) {
-        v.push_back("accounting: episode " + e["episode"].dump() + " sensor " + std::to_string(j) +
+        v.push_back("accounting: episode " + field(e, "episode").dump() + " sensor " + std::to_string(j) +
                     ": sent " + std::to_string(s) + " != received " + std::to_string(rec) +
                     " + lost " + std::to_string(lost) + " + dropped " + std::to_string(dropped) +
                     " + refused " + std::to_string(refused));
@@ -154,21 +154,21 @@ void checkAccounting(const json& per_episode, std::vector<std::string>& v) {
 }
 
 void checkSummary(const json& report, std::vector<std::string>& v) {
-  const json& per_episode = report["per_episode"];
-  const json& s = report["summary"];
+  const json& per_episode = field(report, "per_episode");
+  const json& s = field(report, "summary");
   std::vector<double> costs;
   std::uint64_t sent = 0, received = 0, lost = 0;
   std::size_t incomplete = 0;
   for (const json& e : per_episode) {
-    if (e.value("complete", false) && e["realized_cost"].is_number()) {
-      costs.push_back(e["realized_cost"].get<double>());
+    if (e.value("complete", false) && field(e, "realized_cost").is_number()) {
+      costs.push_back(field(e, "realized_cost").get<double>());
     } else {
       ++incomplete;
     }
-    for (std::size_t j = 0; e["sent"].is_array() && j < e["sent"].size(); ++j) {
-      sent += at(e["sent"], j);
-      received += at(e["received"], j);
-      lost += at(e["lost"], j);
+    for (std::size_t j = 0; field(e, "sent").is_array() && j < field(e, "sent").size(); ++j) {
+      sent += at(field(e, "sent"), j);
+      received += at(field(e, "received"), j);
+      lost += at(field(e, "lost"), j);
     }
   }
   const auto expectCount = [&](const char* key, std::uint64_t want) {
@@ -183,21 +183,21 @@ void checkSummary(const json& report, std::vector<std::string>& v) {
   expectCount("received", received);
   expectCount("lost", lost);
   if (costs.empty()) {
-    if (!s["mean"].is_null()) v.push_back("summary: mean " + s["mean"].dump() + " without a complete episode");
+    if (!field(s, "mean").is_null()) v.push_back("summary: mean " + field(s, "mean").dump() + " without a complete episode");
     return;
   }
   double mean = 0.0;
   for (const double c : costs) mean += c;
   mean /= static_cast<double>(costs.size());
-  if (!s["mean"].is_number() || !near(s["mean"].get<double>(), mean, kCostRelTolerance)) {
-    v.push_back("summary: mean " + s["mean"].dump() + ", recomputed " + num(mean));
+  if (!field(s, "mean").is_number() || !near(field(s, "mean").get<double>(), mean, kCostRelTolerance)) {
+    v.push_back("summary: mean " + field(s, "mean").dump() + ", recomputed " + num(mean));
   }
   if (costs.size() >= 2) {
     double ss = 0.0;
     for (const double c : costs) ss += (c - mean) * (c - mean);
     const double sd = std::sqrt(ss / static_cast<double>(costs.size() - 1));
-    if (!s["std"].is_number() || !near(s["std"].get<double>(), sd, 1e-7)) {
-      v.push_back("summary: std " + s["std"].dump() + ", recomputed " + num(sd));
+    if (!field(s, "std").is_number() || !near(field(s, "std").get<double>(), sd, 1e-7)) {
+      v.push_back("summary: std " + field(s, "std").dump() + ", recomputed " + num(sd));
     }
   }
 }
@@ -242,10 +242,10 @@ void checkCosts(const TrialRecord& r, const json& per_episode, std::vector<std::
     }
   }
   for (const json& e : per_episode) {
-    if (!e.value("complete", false) || !e["realized_cost"].is_number()) continue;
+    if (!e.value("complete", false) || !field(e, "realized_cost").is_number()) continue;
     const auto k = e.value("episode", std::size_t{0});
     if (k >= limit || k >= r.clean_costs.size() || !r.clean_costs[k]) continue;
-    const double cost = e["realized_cost"].get<double>();
+    const double cost = field(e, "realized_cost").get<double>();
     if (!near(cost, *r.clean_costs[k], kCostRelTolerance)) {
       v.push_back("cost: episode " + std::to_string(k) + " realized " + num(cost) +
                   ", clean run " + num(*r.clean_costs[k]));
@@ -254,14 +254,14 @@ void checkCosts(const TrialRecord& r, const json& per_episode, std::vector<std::
   // One version without a death; none only when no episode ran (a run stopped before the
   // coordinator's schedule reached the fusion center).
   const auto ran = [&r] {
-    const json& episodes = (*r.report)["per_episode"];
+    const json& episodes = field((*r.report), "per_episode");
     return episodes.is_array() && !episodes.empty();
   };
-  const auto versions = [&r] { return (*r.report)["schedule_versions"].size(); };
+  const auto versions = [&r] { return field((*r.report), "schedule_versions").size(); };
   if (limit == std::numeric_limits<std::size_t>::max() && r.report &&
-      (*r.report)["schedule_versions"].is_array() &&
+      field((*r.report), "schedule_versions").is_array() &&
       (versions() > 1 || (versions() == 0 && ran()))) {
-    v.push_back("schedule: " + std::to_string((*r.report)["schedule_versions"].size()) +
+    v.push_back("schedule: " + std::to_string(field((*r.report), "schedule_versions").size()) +
                 " versions without a sensor death");
   }
 }
@@ -304,9 +304,9 @@ void checkIncomplete(const TrialRecord& r, const json& per_episode, std::vector<
   if (first_terminal_at < 1e300 && r.exit_code == 128 + 9) return;  // everything cut
   for (const json& e : per_episode) {
     if (e.value("complete", false)) continue;
-    const std::string reason = e["incomplete_reason"].is_string() ? e["incomplete_reason"].get<std::string>() : "";
+    const std::string reason = field(e, "incomplete_reason").is_string() ? field(e, "incomplete_reason").get<std::string>() : "";
     if (!explained(r, reason, first_terminal_at)) {
-      v.push_back("incomplete: episode " + e["episode"].dump() + " (" + reason +
+      v.push_back("incomplete: episode " + field(e, "episode").dump() + " (" + reason +
                   ") follows from no injected fault");
     }
   }
@@ -327,7 +327,7 @@ void checkDeathsListed(const TrialRecord& r, const json& report, std::vector<std
   }
   for (const auto& [name, count] : killed) {
     int listed = 0;
-    for (const json& fault : report["faults"]) {
+    for (const json& fault : field(report, "faults")) {
       if (fault.value("kind", "") == "process_killed" && fault.value("process", "") == name) ++listed;
     }
     if (listed < count) {
@@ -351,7 +351,7 @@ bool networkOnly(const TrialRecord& r) {
 // cut keeps from hearing the end, seed 4035): a partition the run ends in leaves nothing that
 // tells it from silent sensors.
 void checkNetworkNamed(const TrialRecord& r, const json& report, std::vector<std::string>& v) {
-  if (!networkOnly(r) || !report["faults"].is_array()) return;
+  if (!networkOnly(r) || !field(report, "faults").is_array()) return;
   double run_went_on_until_s = r.ended_at_s - 2.0;
   if (r.report_written_at_s >= 0.0) run_went_on_until_s = std::min(run_went_on_until_s, r.report_written_at_s - 2.0);
   for (const InjectedFault& f : r.faults) {
@@ -359,7 +359,7 @@ void checkNetworkNamed(const TrialRecord& r, const json& report, std::vector<std
       return;
     }
   }
-  for (const json& fault : report["faults"]) {
+  for (const json& fault : field(report, "faults")) {
     if (sensornet::report::isConsequence(fault) || fault.value("kind", "") == "network_partition") continue;
     v.push_back("cause: only the network was faulted, and the report blames " + fault.value("kind", "?") +
                 " in " + fault.value("process", "?") + ": " + fault.value("detail", "").substr(0, 160));
@@ -396,13 +396,13 @@ void checkClocks(const TrialRecord& r, const json& report, std::vector<std::stri
     }
     return false;
   };
-  const json& clocks = report["clocks"];
+  const json& clocks = field(report, "clocks");
   const double bound = clocks.is_object() ? clocks.value("bound_s", 1e-3) : 1e-3;
   std::set<int> measured_hosts;
   std::map<int, double> best_uncertainty;  // host -> the least uncertainty of its processes
-  for (const json& p : clocks.is_object() ? clocks["processes"] : json::array()) {
-    if (!p["sensors"].is_array() || p["sensors"].empty()) continue;
-    const int host = hostOf(r.trial, p["sensors"][0].get<int>());
+  for (const json& p : clocks.is_object() ? field(clocks, "processes") : json::array()) {
+    if (!field(p, "sensors").is_array() || field(p, "sensors").empty()) continue;
+    const int host = hostOf(r.trial, field(p, "sensors")[0].get<int>());
     measured_hosts.insert(host);
     const double u = p.value("uncertainty_s", 0.0);
     best_uncertainty[host] = best_uncertainty.count(host) > 0 ? std::min(best_uncertainty[host], u) : u;
@@ -417,7 +417,7 @@ void checkClocks(const TrialRecord& r, const json& report, std::vector<std::stri
   }
   bool named_any = false;
   std::set<int> named_hosts;
-  for (const json& fault : report["faults"]) {
+  for (const json& fault : field(report, "faults")) {
     if (fault.value("kind", "") != "clock_offset") continue;
     named_any = true;
     const std::string detail = fault.value("detail", "");
@@ -438,11 +438,11 @@ void checkClocks(const TrialRecord& r, const json& report, std::vector<std::stri
       }
     }
   }
-  const json& latency = report["latency_s"];
-  if (named_any && latency.is_object() && !latency["median"].is_null()) {
-    v.push_back("clock: a clock_offset fault, and the latency median " + latency["median"].dump() + " is given");
+  const json& latency = field(report, "latency_s");
+  if (named_any && latency.is_object() && !field(latency, "median").is_null()) {
+    v.push_back("clock: a clock_offset fault, and the latency median " + field(latency, "median").dump() + " is given");
   }
-  const bool rebuilt = std::any_of(report["faults"].begin(), report["faults"].end(), [](const json& f) {
+  const bool rebuilt = std::any_of(field(report, "faults").begin(), field(report, "faults").end(), [](const json& f) {
     return f.value("kind", "") == "report_missing" || f.value("kind", "") == "report_invalid";
   });
   if (rebuilt || r.exit_code == 128 + 9) return;
@@ -455,6 +455,13 @@ void checkClocks(const TrialRecord& r, const json& report, std::vector<std::stri
 }
 
 }  // namespace
+
+const json& field(const json& object, std::string_view key) {
+  static const json kNull;
+  if (!object.is_object()) return kNull;
+  const auto it = object.find(key);
+  return it == object.end() ? kNull : *it;
+}
 
 ExpectedOutcome expectedOutcome(const TrialRecord& r) {
   ExpectedOutcome out;
@@ -533,14 +540,14 @@ std::vector<std::string> checkInvariants(const TrialRecord& r) {
     if (r.exit_code != table) {
       v.push_back("exit code " + std::to_string(r.exit_code) + " with status " + status);
     }
-    if (status != "completed" && sensornet::report::causeCount(report["faults"]) == 0) {
+    if (status != "completed" && sensornet::report::causeCount(field(report, "faults")) == 0) {
       v.push_back("cause: status " + status + " with no fault that is not a consequence");
     }
     checkDeathsListed(r, report, v);
     checkNetworkNamed(r, report, v);
     checkClocks(r, report, v);
   }
-  const json& per_episode = report["per_episode"];
+  const json& per_episode = field(report, "per_episode");
   if (!per_episode.is_array()) {
     v.push_back("report: no per_episode");
     return v;

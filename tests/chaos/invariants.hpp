@@ -12,11 +12,17 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fault_schedule.hpp"
 
 namespace sensornet::chaos {
+
+// `object[key]`, or null where `object` is not an object or has no `key`. The checker reads
+// whatever a faulted run left, and nlohmann's const operator[] reads past the end on a missing
+// key (undefined behaviour: the checker itself segfaulted on such a report).
+[[nodiscard]] const nlohmann::json& field(const nlohmann::json& object, std::string_view key);
 
 // A planned fault as it was carried out.
 struct InjectedFault {
