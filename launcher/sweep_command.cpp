@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "interrupts.hpp"
+#include "sweep_runs.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/evaluation/sweep.hpp"
 #include "sensornet/io/command_line.hpp"
@@ -66,9 +67,14 @@ int runSweep(const SweepOptions& options) {
   const std::size_t total = experiment.cells.size();
   const std::size_t already = total - todo.size();
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const std::size_t jobs =
-      std::min<std::size_t>(std::max<std::size_t>(1, todo.size()),
-                            options.jobs > 0 ? static_cast<std::size_t>(options.jobs) : cores);
+  // An emulated cell is a whole run of several processes that keep time: one at a time unless
+  // asked, so that runs do not slow one another past their deadlines.
+  const bool emulated = std::any_of(experiment.cells.begin(), experiment.cells.end(),
+                                    [](const SweepCell& c) { return c.emulate.has_value(); });
+  const std::size_t jobs = std::min<std::size_t>(
+      std::max<std::size_t>(1, todo.size()),
+      options.jobs > 0 ? static_cast<std::size_t>(options.jobs) : emulated ? 1 : cores);
+  const evaluation::EmulatedRunner runner = emulatedRunner(out);
   const int threads = static_cast<int>(std::max<std::size_t>(1, cores / jobs));
   std::fprintf(stderr, "sweep %s: %zu cells, %zu done before, %zu to run, %zu at a time -> %s\n",
                experiment.name.c_str(), total, already, todo.size(), jobs, jsonl.c_str());
@@ -87,7 +93,7 @@ int runSweep(const SweepOptions& options) {
       if (i >= todo.size() || stop.load()) return;
       nlohmann::json row;
       try {
-        row = evaluation::runSweepCell(*todo[i], threads, stop);
+        row = evaluation::runSweepCell(*todo[i], threads, stop, runner);
       } catch (const evaluation::SweepStopped&) {
         return;  // not a result: the cell runs again next time
       }

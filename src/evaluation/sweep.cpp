@@ -51,7 +51,16 @@ json axesOf(const SweepCell& cell) {
   row["schedule"] = cell.planner == "schedule" ? json(cell.schedule_file) : json(nullptr);
   row["replan_every"] = cell.planner == "closed_loop" ? json(cell.replan_every_s) : json(nullptr);
   row["seed"] = cell.seed;
-  row["runs"] = cell.runs;
+  if (cell.emulate) {  // the run's --seed; whole runs, not a Monte Carlo
+    const EmulatedRuns& e = *cell.emulate;
+    row["runs"] = nullptr;
+    row["episodes"] = e.episodes;
+    row["time_scale"] = e.time_scale;
+    row["network"] = e.network_name.empty() ? json("scenario") : json(e.network_name);
+    row["faults"] = e.faults_name.empty() ? json("scenario") : json(e.faults_name);
+  } else {
+    row["runs"] = cell.runs;
+  }
   return row;
 }
 
@@ -73,11 +82,15 @@ std::string csvField(const json& value) {
 
 }  // namespace
 
-json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& stop) {
+json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& stop,
+                  const EmulatedRunner& emulate) {
   json row = axesOf(cell);
   const auto began = std::chrono::steady_clock::now();
   try {
-    const Scenario scenario = cell.scenario.load(cell.key());
+    // An emulated cell's scenario is the file its run reads (with its network and faults), and
+    // its plan is the one `sensornet launch` would make of it: for what the network delivers.
+    const Scenario scenario = cell.emulate ? parseScenarioYaml(cell.scenarioYaml(), cell.key())
+                                           : cell.scenario.load(cell.key());
     // The schedule measured: a fixed file, or the open-loop plan (the closed loop's plan at
     // every episode start), planned as `coordinator plan` plans it.
     RateSchedule schedule;
@@ -92,6 +105,7 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
     } else {
       PlanChoices choices;
       choices.surrogate = cell.surrogate;
+      choices.network_aware = cell.emulate && scenario.network.has_value();
       PlanRequest request = planRequest(scenario, cell.key(), choices);
       request.realized.seed = cell.seed;
       request.realized.threads = threads;
@@ -105,7 +119,10 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
       row["bracket_info"] = numberOrNull(plan.bracket.info);
       row["bracket_cov"] = numberOrNull(plan.bracket.cov);
     }
-    if (cell.planner == "closed_loop") {
+    if (cell.emulate) {
+      if (!emulate) throw std::runtime_error("an emulated cell, and no launcher to run it");
+      emulate(cell, schedule, stop, row);
+    } else if (cell.planner == "closed_loop") {
       ClosedLoopOptions loop;
       loop.replan_every_s = cell.replan_every_s;
       loop.surrogate = cell.surrogate;
@@ -157,11 +174,13 @@ const std::vector<std::string>& sweepColumns() {
   static const std::vector<std::string> columns = {
       "scenario",     "states",       "sensors",     "scenario_seed", "noise_scale",
       "budget",       "energy",       "planner",     "surrogate",     "replan_every",
-      "schedule",
-      "seed",         "runs",         "status",      "reason",        "plan_status",
+      "schedule",     "seed",         "runs",        "episodes",      "time_scale",
+      "network",      "faults",       "status",      "reason",        "plan_status",
       "plan_seconds", "objective",    "bracket_info", "bracket_cov",  "mean",
       "ci95",         "std",          "arrivals_mean", "open_mean",   "gain_mean",
-      "gain_ci95",    "poisson_mean", "poisson_ci95", "seconds",      "key"};
+      "gain_ci95",    "poisson_mean", "poisson_ci95", "run_status",   "exit_code",
+      "delivered_bracket_info", "delivered_bracket_cov", "episodes_complete", "sent",    "received",    "lost",          "dropped_by_network",
+      "report",       "seconds",      "key"};
   return columns;
 }
 

@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -26,6 +28,23 @@ std::string exact(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", value);
   return text;
+}
+
+// A short digest of a section's text, so that a key changes when the section under a name does.
+std::string digest(const std::string& text) {
+  std::uint64_t h = 14695981039346656037ULL;  // FNV-1a, 64 bits
+  for (const unsigned char c : text) h = (h ^ c) * 1099511628211ULL;
+  char hex[24];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+std::string flowYaml(const YAML::Node& node) {
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out << node;
+  return out.c_str();
 }
 
 // The values of an axis: a list, or one value.
@@ -213,6 +232,91 @@ PlannerChoice readPlanner(const YamlReader& in, const YAML::Node& node, const st
   return p;
 }
 
+// An emulated cell's scenario file is a scenario (its network and faults sections fit the plant):
+// bad input names the experiment's section, not the file the sweep writes.
+void checkEmulatedScenario(const SweepCell& cell, const YAML::Node& emulate,
+                           const std::string& source) {
+  try {
+    (void)parseScenarioYaml(cell.scenarioYaml(), "the scenario");
+  } catch (const InputError& e) {
+    const YamlReader in(source);
+    const EmulatedRuns& m = *cell.emulate;
+    const bool network = e.field().rfind("network", 0) == 0;
+    const std::string& name = network ? m.network_name : m.faults_name;
+    const YAML::Node at = name.empty() ? emulate : emulate[network ? "network" : "faults"][name];
+    in.fail(at, "emulate." + (name.empty() ? e.field() : std::string(network ? "network." : "faults.") + name + " (" + e.field() + ")"),
+            e.expected() + (cell.scenario.file.empty() ? "" : " for " + cell.scenario.file));
+  }
+}
+
+// `emulate:`: the emulated runs' settings, one EmulatedRuns per value of its axes (time_scale,
+// network, faults).
+std::vector<EmulatedRuns> readEmulate(const YamlReader& in, const YAML::Node& node) {
+  in.rejectUnknownKeys(node, "emulate",
+                       {"episodes", "time_scale", "network", "faults", "on_sensor_failure"});
+  EmulatedRuns base;
+  if (node["episodes"]) {
+    base.episodes = static_cast<int>(in.integer(node["episodes"], "emulate.episodes"));
+    if (base.episodes < 1 || base.episodes > 100000) {
+      in.fail(node["episodes"], "emulate.episodes", "an integer from 1 to 100000");
+    }
+  }
+  if (const YAML::Node p = node["on_sensor_failure"]) {
+    if (!p.IsScalar() || (p.Scalar() != "replan" && p.Scalar() != "continue" && p.Scalar() != "stop")) {
+      in.fail(p, "emulate.on_sensor_failure", "replan, continue or stop");
+    }
+    base.on_sensor_failure = p.Scalar();
+  }
+  std::vector<double> scales;
+  if (node["time_scale"]) {
+    for (const YAML::Node& v : axisValues(in, node["time_scale"], "emulate.time_scale")) {
+      const double scale = in.number(v, "emulate.time_scale");
+      if (scale < 0.001 || scale > 10000) {
+        in.fail(v, "emulate.time_scale", "a number from 0.001 to 10000 (emulated s per wall s)");
+      }
+      scales.push_back(scale);
+    }
+  } else {
+    scales.push_back(base.time_scale);
+  }
+  // network: and faults: map a name (the results' column) to a section; absent: the scenario's.
+  using Named = std::pair<std::string, std::string>;
+  const auto sections = [&](const char* key, const char* what) {
+    std::vector<Named> out;
+    const YAML::Node map = node[key];
+    if (!map) return std::vector<Named>{{"", ""}};
+    const std::string field = std::string("emulate.") + key;
+    if (!map.IsMap() || map.size() == 0) {
+      in.fail(map, field, std::string("names, each with ") + what + " (or ~ for none)");
+    }
+    for (const auto& entry : map) {
+      const std::string name = entry.first.Scalar();
+      if (name.empty() || name.find_first_of(",;()#") != std::string::npos) {
+        in.fail(entry.first, field, "a name without , ; ( ) #, got '" + name + "'");
+      }
+      out.emplace_back(name, entry.second.IsNull() ? "~" : flowYaml(entry.second));
+    }
+    return out;
+  };
+  const std::vector<Named> networks = sections("network", "a scenario's network: section");
+  const std::vector<Named> faults = sections("faults", "a scenario's faults: list");
+  std::vector<EmulatedRuns> out;
+  for (const double scale : scales) {
+    for (const auto& [network_name, network_yaml] : networks) {
+      for (const auto& [faults_name, faults_yaml] : faults) {
+        EmulatedRuns e = base;
+        e.time_scale = scale;
+        e.network_name = network_name;
+        e.network_yaml = network_yaml;
+        e.faults_name = faults_name;
+        e.faults_yaml = faults_yaml;
+        out.push_back(std::move(e));
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Scenario SweepScenario::load(const std::string& source) const {
@@ -251,13 +355,70 @@ std::string SweepCell::key() const {
   } else if (planner == "schedule") {
     k += "(" + schedule_file + ")";
   }
-  return k + ";seed=" + std::to_string(seed) + ";runs=" + std::to_string(runs);
+  k += ";seed=" + std::to_string(seed);
+  if (!emulate) return k + ";runs=" + std::to_string(runs);
+  const EmulatedRuns& e = *emulate;
+  const auto section = [](const std::string& name, const std::string& yaml) {
+    return name.empty() ? std::string("scenario") : name + "#" + digest(yaml).substr(0, 8);
+  };
+  return k + ";emulate(episodes=" + std::to_string(e.episodes) +
+         ",time_scale=" + exact(e.time_scale) +
+         ",network=" + section(e.network_name, e.network_yaml) +
+         ",faults=" + section(e.faults_name, e.faults_yaml) +
+         ",on_sensor_failure=" + (e.on_sensor_failure.empty() ? "default" : e.on_sensor_failure) + ")";
+}
+
+std::string SweepCell::id() const { return digest(key()); }
+
+std::string SweepCell::scenarioYaml() const {
+  YAML::Node root;
+  if (scenario.random) {
+    const RandomPlantSpec& r = *scenario.random;
+    root["horizon"] = exact(r.horizon_s);
+    root["intervals"] = r.intervals;
+    YAML::Node random;
+    random["states"] = r.state_dim;
+    random["sensors"] = r.sensor_count;
+    random["rows_per_sensor"] = r.rows_per_sensor;
+    random["seed"] = r.seed;
+    random["budget"] = exact(scenario.budget.value_or(r.budget));
+    random["noise_scale"] = exact(r.noise_scale);
+    if (scenario.energy) {
+      random["energy"] = std::isinf(*scenario.energy) ? std::string(".inf") : exact(*scenario.energy);
+    } else if (!std::isinf(r.energy)) {
+      random["energy"] = exact(r.energy);
+    }
+    root["random"] = random;
+  } else {
+    root = parseYamlText(readTextFile(scenario.file, "scenario"), scenario.file);
+    // withBudget's and withEnergy's changes, as the file says them.
+    if (scenario.budget) root["constraints"]["b"] = std::vector<std::string>{exact(*scenario.budget)};
+    if (scenario.energy) {
+      root["constraints"]["energy"] =
+          std::isinf(*scenario.energy) ? std::string(".inf") : exact(*scenario.energy);
+    }
+  }
+  if (emulate) {
+    const auto put = [&root](const char* key, const std::string& name, const std::string& yaml) {
+      if (name.empty()) return;  // the scenario's own
+      if (yaml == "~") {
+        root.remove(key);
+      } else {
+        root[key] = YAML::Load(yaml);
+      }
+    };
+    put("network", emulate->network_name, emulate->network_yaml);
+    put("faults", emulate->faults_name, emulate->faults_yaml);
+  }
+  YAML::Emitter out;
+  out << root;
+  return std::string(out.c_str()) + "\n";
 }
 
 Experiment parseExperimentYaml(const std::string& text, const std::string& source) {
   const YamlReader in(source);
   const YAML::Node root = parseYamlText(text, source);
-  in.rejectUnknownKeys(root, "", {"name", "scenarios", "planners", "runs", "seeds"});
+  in.rejectUnknownKeys(root, "", {"name", "scenarios", "planners", "runs", "seeds", "emulate"});
   Experiment e;
   e.source = source;
   e.name = root["name"] && root["name"].IsScalar() ? root["name"].Scalar()
@@ -301,20 +462,35 @@ Experiment parseExperimentYaml(const std::string& text, const std::string& sourc
     }
   }
 
+  // Emulated runs: every value of emulate:'s axes; else one in-process Monte Carlo.
+  std::vector<std::optional<EmulatedRuns>> measures = {std::nullopt};
+  if (const YAML::Node emulate = root["emulate"]) {
+    if (root["runs"]) {
+      in.fail(root["runs"], "runs", "no runs: beside emulate: (emulated cells run emulate.episodes)");
+    }
+    measures.clear();
+    for (EmulatedRuns& m : readEmulate(in, emulate)) measures.emplace_back(std::move(m));
+  }
+
   std::map<std::string, bool> seen;
   for (const SweepScenario& s : all_scenarios) {
     for (const PlannerChoice& p : all_planners) {
       for (const std::uint64_t seed : seeds) {
-        SweepCell cell{s, p.name, p.surrogate, p.replan_every_s, seed, runs, p.schedule_file};
-        if (!p.schedule_file.empty() && seed == seeds.front()) {
-          // A schedule that does not fit a scenario is bad input, found before any cell runs.
-          (void)loadScheduleFile(p.schedule_file, s.load(source));
+        for (const std::optional<EmulatedRuns>& measure : measures) {
+          SweepCell cell{s, p.name, p.surrogate, p.replan_every_s, seed, runs, p.schedule_file, measure};
+          if (!p.schedule_file.empty() && seed == seeds.front()) {
+            // A schedule that does not fit a scenario is bad input, found before any cell runs.
+            (void)loadScheduleFile(p.schedule_file, s.load(source));
+          }
+          if (measure && seed == seeds.front() && &p == &all_planners.front()) {
+            checkEmulatedScenario(cell, root["emulate"], source);
+          }
+          if (!seen.emplace(cell.key(), true).second) {
+            throw InputError(source, "scenarios",
+                             "cells that differ (two are the same: " + cell.key() + ")");
+          }
+          e.cells.push_back(std::move(cell));
         }
-        if (!seen.emplace(cell.key(), true).second) {
-          throw InputError(source, "scenarios",
-                           "cells that differ (two are the same: " + cell.key() + ")");
-        }
-        e.cells.push_back(std::move(cell));
       }
     }
   }

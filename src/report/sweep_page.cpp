@@ -32,15 +32,30 @@ const std::vector<std::pair<std::string, std::string>> kAxes = {
     {"sensors", "sensors M"},
     {"states", "states n"},
     {"noise_scale", "noise scale R_scale"},
-    {"replan_every", "re-planned every DT (s)"}};
+    {"replan_every", "re-planned every DT (s)"},
+    {"time_scale", "emulated runs' time scale (emulated s per wall s)"}};
 
 double numberOf(const json& row, const std::string& key) {
   const auto it = row.find(key);
   return it != row.end() && it->is_number() ? it->get<double>() : kNan;
 }
 
-// A series: the planner, and for the closed loop its surrogate and (unless it is the axis) DT.
+std::string planSeriesOf(const json& row, const std::string& axis);
+
+// A series: the planner, and for the closed loop its surrogate and (unless it is the axis) DT;
+// for an emulated cell also the network and faults it ran with, when not the scenario's own.
 std::string seriesOf(const json& row, const std::string& axis) {
+  std::string name = planSeriesOf(row, axis);
+  for (const char* section : {"network", "faults"}) {
+    const auto it = row.find(section);
+    if (it != row.end() && it->is_string() && *it != "scenario") {
+      name += std::string(" · ") + section + " " + it->get<std::string>();
+    }
+  }
+  return name;
+}
+
+std::string planSeriesOf(const json& row, const std::string& axis) {
   std::string name = row.value("planner", std::string("?"));
   if (name == "timetable") return name + " (" + row.value("surrogate", std::string("?")) + ")";
   if (name == "schedule") {
@@ -162,17 +177,31 @@ std::string axisPlot(const std::string& axis, const std::string& label,
   const std::string heading = "Realized cost against " + label;
   return figure(
       axis, heading, plot.svg("plot-" + axis, heading),
-      "Each point: the mean of the cells' Monte Carlo means at that value (over the other "
-      "axes: plants, seeds), with its 95% Student-t interval over those cells (a single "
-      "cell: its own Monte Carlo interval). Dashed and dotted: the mean bracket of the "
+      "Each point: the mean of the cells' means (a Monte Carlo's, or an emulated run's over its "
+      "complete episodes) at that value (over the other axes: plants, seeds), with its 95% "
+      "Student-t interval over those cells (a single cell: its own interval). Dashed and "
+      "dotted: the mean bracket of the "
       "same cells, J(P_info) <= E[J] <= J(P_cov).");
+}
+
+// How a cell was measured: "1000 runs" in process, or "5 episodes at x4: degraded (exit 3)".
+std::string measuredBy(const json& row) {
+  if (std::isfinite(numberOf(row, "runs"))) return formatTick(numberOf(row, "runs")) + " runs";
+  std::string text = formatTick(numberOf(row, "episodes")) + " episodes at x" +
+                     formatTick(numberOf(row, "time_scale"));
+  const auto status = row.find("run_status");
+  if (status != row.end() && status->is_string()) {
+    text += ": " + status->get<std::string>() + " (exit " + formatTick(numberOf(row, "exit_code")) + ")";
+  }
+  return text;
 }
 
 std::string cellTable(const std::vector<json>& rows) {
   std::string t =
       "<h2>Cells</h2>\n<table "
       "class=\"faults\">\n<tr><th>scenario</th><th>budget</th><th>planner</th>"
-      "<th>seed</th><th>status</th><th>E[J] ± 95%</th><th>bracket</th><th>plan</th></tr>\n";
+      "<th>seed</th><th>measured by</th><th>status</th><th>E[J] ± 95%</th><th>bracket</th>"
+      "<th>plan</th></tr>\n";
   for (const json& row : rows) {
     std::string scenario = row.value("scenario", std::string("?"));
     if (scenario == "random") {
@@ -186,10 +215,12 @@ std::string cellTable(const std::vector<json>& rows) {
       scenario += " E=" + formatTick(numberOf(row, "energy"));
     }
     const bool ok = row.value("status", std::string()) == "ok";
-    t += "<tr><td>" + escapeXml(scenario) + "</td><td>" + formatTick(numberOf(row, "budget")) +
+    const double budget = numberOf(row, "budget");  // none: the file's own constraints
+    t += "<tr><td>" + escapeXml(scenario) + "</td><td>" +
+         (std::isfinite(budget) ? formatTick(budget) : std::string("file's")) +
          "</td><td>" + escapeXml(seriesOf(row, "")) + "</td><td>" +
-         formatTick(numberOf(row, "seed")) + "</td><td>" +
-         (ok ? "ok" : "failed: " + escapeXml(row.value("reason", std::string("?")))) + "</td><td>" +
+         formatTick(numberOf(row, "seed")) + "</td><td>" + escapeXml(measuredBy(row)) +
+         "</td><td>" + (ok ? "ok" : "failed: " + escapeXml(row.value("reason", std::string("?")))) + "</td><td>" +
          (ok ? formatTick(numberOf(row, "mean")) + " ± " + formatTick(numberOf(row, "ci95")) : "") +
          "</td><td>" +
          (ok ? "[" + formatTick(numberOf(row, "bracket_info")) + ", " +

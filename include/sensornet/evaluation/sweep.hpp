@@ -15,12 +15,14 @@
 // closed loop: `fusion_center evaluate --replan-every`).
 
 #include <atomic>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "sensornet/core/rate_schedule.hpp"
 #include "sensornet/io/experiment_file.hpp"
 
 namespace sensornet::evaluation {
@@ -30,12 +32,22 @@ struct SweepStopped : std::runtime_error {
   SweepStopped() : std::runtime_error("stopped") {}
 };
 
+// Measures a cell of `emulate:` (cell.emulate) by a whole emulated run of its scenario and
+// `schedule`: the launcher's, which starts `sensornet launch`. It fills `row` with what the run
+// gave (mean, ci95, std, arrivals_mean, run_status, exit_code, counts, report) and throws
+// std::runtime_error with the reason when the run gave no measurement (the row keeps what it
+// filled), SweepStopped when `stop` was set while it ran.
+using EmulatedRunner = std::function<void(const SweepCell& cell, const RateSchedule& schedule,
+                                          const std::atomic<bool>& stop, nlohmann::json& row)>;
+
 // One row: the cell's key and axes, then "status" ("ok", or "failed" with "reason"), the plan
 // (plan_status, plan_seconds, objective, bracket_info, bracket_cov), the Monte Carlo (mean,
-// ci95, std, runs, arrivals_mean; closed loop also open_mean, gain_mean, gain_ci95), seconds.
-// A cell whose scenario, plan or Monte Carlo throws is a failed row, not an exception.
+// ci95, std, runs, arrivals_mean; closed loop also open_mean, gain_mean, gain_ci95) or the
+// emulated run (`emulate`), seconds. A cell whose scenario, plan or measurement throws is a
+// failed row, not an exception; an emulated cell without `emulate` is one.
 [[nodiscard]] nlohmann::json runSweepCell(const SweepCell& cell, int threads,
-                                          const std::atomic<bool>& stop);
+                                          const std::atomic<bool>& stop,
+                                          const EmulatedRunner& emulate = {});
 
 // The columns of results.csv, in order (a row lacks the ones its cell has not).
 [[nodiscard]] const std::vector<std::string>& sweepColumns();

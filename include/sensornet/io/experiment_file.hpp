@@ -29,6 +29,19 @@ struct SweepScenario {
   [[nodiscard]] Scenario load(const std::string& source) const;
 };
 
+// How an emulated cell is measured (the experiment's `emulate:`): whole `sensornet launch` runs
+// of the cell's scenario and schedule over Cyclone DDS, instead of the in-process Monte Carlo.
+struct EmulatedRuns {
+  int episodes = 5;
+  double time_scale = 4.0;  // emulated seconds per wall second
+  // The network and faults sections the cell's scenario file gets, each named in the results;
+  // an empty name keeps the scenario's own section. The YAML is the section's value (flow
+  // style), "~" for none.
+  std::string network_name, network_yaml;
+  std::string faults_name, faults_yaml;
+  std::string on_sensor_failure;  // replan, continue or stop; empty: the launcher's default
+};
+
 struct SweepCell {
   SweepScenario scenario;
   // info, cov, uniform, mc, closed_loop, timetable (the plan of `surrogate` measured with
@@ -40,9 +53,17 @@ struct SweepCell {
   std::uint64_t seed = 1;                                // the Monte Carlo's (and mc's) seed
   int runs = 1000;                                       // Monte Carlo episodes
   std::string schedule_file{};                           // schedule only (resolved)
+  // Measured by emulated runs (then `seed` is the run's --seed and `runs` is not used).
+  std::optional<EmulatedRuns> emulate{};
 
-  // "scenario=...;planner=...;seed=...;runs=..." with every number written exactly.
+  // "scenario=...;planner=...;seed=...;runs=..." with every number written exactly (an
+  // emulated cell: ";emulate(...)" in place of the runs, with a digest of each section).
   [[nodiscard]] std::string key() const;
+  // 16 hex digits of a digest of key(): names the cell's folder and run.
+  [[nodiscard]] std::string id() const;
+  // The cell's scenario as a scenario file: the file or random plant with the cell's budget,
+  // energy, and (emulated) network and faults sections. Loading it gives scenario.load().
+  [[nodiscard]] std::string scenarioYaml() const;
 };
 
 struct Experiment {

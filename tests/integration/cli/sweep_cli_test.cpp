@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -256,6 +258,140 @@ TEST(SweepCli, AFailedCellRunsAgainOnlyWhenAsked) {
   const std::vector<std::string> csv = linesOf(dir.file("out/results.csv"));
   ASSERT_EQ(csv.size(), 5u);
   for (const std::string& line : csv) EXPECT_EQ(line.find("out of memory"), std::string::npos);
+}
+
+// Emulated cells (`emulate:`): each is a whole `sensornet launch` of its scenario and plan.
+// 2 planners x 2 networks x 2 fault sets = 8 cells, a run of 2 episodes each. Checked against
+// what is recomputed here, not the rows' own word:
+// - each row's mean and interval are the report's complete episodes' costs (Student t, 95%);
+// - the run outcome follows the table (docs/ARCHITECTURE.md): loss the network section asks for
+//   degrades nothing (exit 0, completed); a scripted crash under --on-sensor-failure stop fails
+//   the run (exit 1), so the cell is failed, naming the crash, and the others still run;
+// - every measurement sent is accounted for: sent = received + lost + dropped_by_network;
+// - a timetable cell on a perfect network costs what `fusion_center evaluate --arrivals
+//   timetable` computes offline, to 1e-4 relative (the emulation puts each instant on the
+//   plant's tick, T / 2^20, the offline evaluation does not);
+// - a lossy cov cell's plan is `coordinator plan --network-aware` of a scenario file written
+//   here, and a native `sensornet launch` of it with the same seed gives the same cost in every
+//   episode, bit for bit;
+// - Ctrl-C stops the run under way and leaves none of its processes; the same command then
+//   runs the cells not yet done, and those done are untouched.
+TEST(SweepCli, EmulatedCellsAreTheRunsOfSensornetLaunch) {
+  const sensornet::testing::ScratchDir dir;
+  const std::string file = dir.write(
+      "emulated.yaml",
+      "scenarios:\n  - random: {states: 3, sensors: 4, seed: 6, budget: 5}\n"
+      "    horizon: 2\n    intervals: 8\n"
+      "planners: [cov, {timetable: info}]\n"
+      "seeds: [7]\n"
+      "emulate:\n"
+      "  episodes: 2\n  time_scale: 4\n  on_sensor_failure: stop\n"
+      "  network: {perfect: ~, lossy: {default: {loss: 0.3}}}\n"
+      "  faults: {none: [], crash: [{kind: crash, sensor: 2, episode: 1, at: 0.5}]}\n");
+  const std::string results = dir.file("out/results.jsonl");
+  const std::vector<std::string> argv = {kLauncher, "sweep", file, "--out", dir.file("out")};
+  {
+    sensornet::testing::BackgroundProcess sweep(argv, dir.file("first.log"));
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (linesOf(results).size() < 1 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // the next run under way
+    const std::string runs = "sweep-" + std::to_string(sweep.pid()) + "-";
+    EXPECT_FALSE(sensornet::testing::processesMentioning(runs).empty()) << "no run under way";
+    ::kill(sweep.pid(), SIGINT);
+    EXPECT_EQ(sweep.waitForExit(std::chrono::seconds(60)), std::optional<int>(1));
+    EXPECT_EQ(sensornet::testing::processesMentioning(runs), std::vector<pid_t>{});
+  }
+  const std::vector<std::string> before = linesOf(results);
+  ASSERT_GE(before.size(), 1u);
+  ASSERT_LT(before.size(), 8u) << "the sweep ended before Ctrl-C";
+
+  const ProcessResult r = runProcess(argv, std::chrono::minutes(5));
+  EXPECT_EQ(r.exit_code, 1) << r.err;  // the crash cells failed
+  EXPECT_NE(r.err.find("8 cells, 4 failed"), std::string::npos) << r.err;
+  const std::vector<std::string> after = linesOf(results);
+  ASSERT_EQ(after.size(), 8u);
+  for (std::size_t i = 0; i < before.size(); ++i) EXPECT_EQ(after[i], before[i]);
+
+  int checked_timetable = 0, checked_native = 0;
+  for (const std::string& line : after) {
+    const json row = json::parse(line);
+    SCOPED_TRACE(row.at("key").get<std::string>());
+    const bool crash = row.at("faults") == "crash";
+    const bool lossy = row.at("network") == "lossy";
+    std::ifstream in(row.at("report").get<std::string>());
+    const json report = json::parse(in);
+    EXPECT_EQ(row.at("exit_code"), crash ? 1 : 0);
+    EXPECT_EQ(row.at("run_status"), crash ? "failed" : "completed");
+    EXPECT_EQ(row.at("status"), crash ? "failed" : "ok");
+    if (crash) {
+      EXPECT_NE(row.at("reason").get<std::string>().find("crash in sensor_agent-2"), std::string::npos);
+      continue;
+    }
+    // The mean and its interval from the episodes' costs.
+    std::vector<double> costs;
+    std::uint64_t sent = 0, accounted = 0;
+    for (const json& e : report.at("per_episode")) {
+      if (e.at("complete").get<bool>()) costs.push_back(e.at("realized_cost").get<double>());
+      for (std::size_t j = 0; j < e.at("sent").size(); ++j) {
+        sent += e.at("sent")[j].get<std::uint64_t>();
+        accounted += e.at("received")[j].get<std::uint64_t>() + e.at("lost")[j].get<std::uint64_t>() +
+                     e.at("dropped_by_network")[j].get<std::uint64_t>();
+      }
+    }
+    ASSERT_EQ(costs.size(), 2u);
+    const double mean = (costs[0] + costs[1]) / 2.0;
+    const double sd = std::abs(costs[0] - costs[1]) / std::sqrt(2.0);
+    EXPECT_NEAR(row.at("mean").get<double>(), mean, 1e-12 * mean);
+    EXPECT_NEAR(row.at("ci95").get<double>(), 12.7062047361747 * sd / std::sqrt(2.0), 1e-9 * mean);
+    EXPECT_EQ(row.at("sent"), sent);
+    EXPECT_EQ(sent, accounted);
+    EXPECT_GT(sent, 0u);
+    EXPECT_EQ(row.at("dropped_by_network").get<std::uint64_t>() > 0, lossy);
+
+    const std::string scenario = dir.write(
+        "plant-" + row.at("network").get<std::string>() + ".yaml",
+        "horizon: 2\nintervals: 8\nrandom: {states: 3, sensors: 4, seed: 6, budget: 5}\n" +
+            std::string(lossy ? "network: {default: {loss: 0.3}}\n" : ""));
+    const std::string schedule = std::filesystem::path(row.at("report").get<std::string>())
+                                     .replace_filename("schedule.json")
+                                     .string();
+    if (row.at("planner") == "timetable" && !lossy) {
+      const ProcessResult e =
+          runProcess({kFusionCenter, "evaluate", "--scenario", scenario, "--schedule", schedule,
+                      "--runs", "10", "--seed", "7", "--arrivals", "timetable", "--json"});
+      ASSERT_EQ(e.exit_code, 0) << e.err;
+      const double offline = json::parse(e.out).at("timetable").at("cost").get<double>();
+      EXPECT_NEAR(costs[0], offline, 1e-4 * offline);
+      EXPECT_EQ(costs[0], costs[1]);  // the same instants in every episode, no noise in the cost
+      ++checked_timetable;
+    }
+    if (row.at("planner") == "cov" && lossy) {
+      const std::string plan = dir.file("native-plan.json");
+      const ProcessResult p =
+          runProcess({kCoordinator, "plan", "--scenario", scenario, "--surrogate", "cov",
+                      "--network-aware", "--out", plan, "--json"});
+      ASSERT_EQ(p.exit_code, 0) << p.err;
+      EXPECT_EQ(row.at("objective"), json::parse(p.out).at("objective"));
+      std::ifstream planned(plan), used(schedule);
+      EXPECT_EQ(json::parse(planned).at("rates"), json::parse(used).at("rates"));
+      const ProcessResult native = runProcess(
+          {kLauncher, "launch", scenario, "--schedule", plan, "--episodes", "2", "--time-scale", "4",
+           "--seed", "7", "--run-id", "native-" + std::to_string(::getpid()), "--report",
+           dir.file("native/report.json"), "--log-dir", dir.file("native/logs"), "--no-html"},
+          std::chrono::minutes(2));
+      ASSERT_EQ(native.exit_code, 0) << native.err;
+      std::ifstream native_in(dir.file("native/report.json"));
+      const json native_report = json::parse(native_in);
+      for (std::size_t k = 0; k < 2; ++k) {
+        EXPECT_EQ(native_report.at("per_episode")[k].at("realized_cost").get<double>(), costs[k]);
+      }
+      ++checked_native;
+    }
+  }
+  EXPECT_EQ(checked_timetable, 1);
+  EXPECT_EQ(checked_native, 1);
 }
 
 TEST(SweepCli, ABadExperimentIsOneLineAndExitTwo) {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "sensornet/core/input_error.hpp"
+#include "sensornet/io/scenario_file.hpp"
 
 namespace sensornet {
 namespace {
@@ -143,6 +144,92 @@ planners: [{schedule: schedules/reference-info.json}, info]
                     "planners: [{schedule: nowhere.json}]\n")
                 .find("nowhere.json"),
             std::string::npos);
+}
+
+// emulate: makes every cell a whole run: its axes (time_scale, named network and fault sections)
+// multiply the cells, and each cell's scenario file is the scenario its Monte Carlo would load,
+// with the section of its name in place of the file's own (~: none), read back field by field.
+TEST(ExperimentFile, EmulatedCellsWriteTheScenarioTheirRunReads) {
+  const Experiment e = parseExperimentYaml(R"(
+scenarios:
+  - file: ../../scenarios/lossy.yaml
+    energy: 2.5
+  - random: {states: 3, sensors: 4, seed: 5, budget: 3}
+    intervals: 6
+planners: [cov]
+seeds: [1, 2]
+emulate:
+  episodes: 3
+  time_scale: [2, 8]
+  network: {own: ~, lossy: {default: {loss: 0.25}}}
+  faults: {crash: [{kind: crash, sensor: 1, episode: 2, at: 0.5}]}
+)",
+                                           kSource);
+  // 2 scenarios x 1 planner x 2 seeds x 2 time scales x 2 networks.
+  ASSERT_EQ(e.cells.size(), 16u);
+  std::set<std::string> keys, ids;
+  for (const SweepCell& c : e.cells) {
+    keys.insert(c.key());
+    ids.insert(c.id());
+    ASSERT_TRUE(c.emulate.has_value());
+    EXPECT_EQ(c.emulate->episodes, 3);
+    EXPECT_EQ(c.key().find(";runs="), std::string::npos);
+    const Scenario loaded = c.scenario.load("test");
+    const Scenario written = parseScenarioYaml(c.scenarioYaml(), "written");
+    EXPECT_EQ(written.plant.A, loaded.plant.A);
+    EXPECT_EQ(written.plant.Q, loaded.plant.Q);
+    ASSERT_EQ(written.sensorCount(), loaded.sensorCount());
+    for (int j = 0; j < loaded.sensorCount(); ++j) {
+      EXPECT_EQ(written.sensors[j].H, loaded.sensors[j].H);
+      EXPECT_EQ(written.sensors[j].R, loaded.sensors[j].R);
+    }
+    EXPECT_EQ(written.constraints.C, loaded.constraints.C);
+    EXPECT_EQ(written.constraints.b, loaded.constraints.b);
+    EXPECT_EQ(written.constraints.energy, loaded.constraints.energy);
+    EXPECT_EQ(written.horizon_s, loaded.horizon_s);
+    if (c.emulate->network_name == "lossy") {
+      ASSERT_TRUE(written.network.has_value());
+      EXPECT_EQ(written.network->links.at(1).loss, 0.25);
+      EXPECT_TRUE(written.network->outages.empty());  // lossy.yaml's own section is replaced
+    } else {
+      EXPECT_FALSE(written.network.has_value());  // ~: none, though lossy.yaml has one
+    }
+    ASSERT_EQ(written.faults.size(), 1u);
+    EXPECT_EQ(written.faults[0].sensor, 1);
+    EXPECT_EQ(written.faults[0].episode, 2u);
+  }
+  EXPECT_EQ(keys.size(), 16u);
+  EXPECT_EQ(ids.size(), 16u);
+  EXPECT_EQ(e.cells[0].emulate->time_scale, 2.0);
+  EXPECT_TRUE(e.cells[0].scenario.load("test").constraints.energy.isApprox(
+      Eigen::VectorXd::Constant(6, 2.5)));
+  // The same name with another section is another cell (a digest of it is in the key).
+  const std::string other = parseExperimentYaml(
+      "scenarios: [{random: {states: 3, sensors: 4, seed: 5}}]\nplanners: [cov]\n"
+      "emulate: {network: {lossy: {default: {loss: 0.5}}}}\n", kSource).cells[0].key();
+  const std::string first = parseExperimentYaml(
+      "scenarios: [{random: {states: 3, sensors: 4, seed: 5}}]\nplanners: [cov]\n"
+      "emulate: {network: {lossy: {default: {loss: 0.25}}}}\n", kSource).cells[0].key();
+  EXPECT_NE(other, first);
+  EXPECT_NE(first.find("network=lossy#"), std::string::npos) << first;
+}
+
+TEST(ExperimentFile, BadEmulatedRunsAreOneLineNamingTheSection) {
+  const std::string head = "scenarios: [{random: {states: 2, sensors: 3, seed: 1}}]\nplanners: [info]\n";
+  EXPECT_NE(errorOf(head + "runs: 100\nemulate: {episodes: 2}\n").find("test.yaml:3: runs: expected no runs: beside emulate:"),
+            std::string::npos) << errorOf(head + "runs: 100\nemulate: {episodes: 2}\n");
+  EXPECT_NE(errorOf(head + "emulate: {episodes: 0}\n").find("emulate.episodes: expected an integer from 1"),
+            std::string::npos);
+  EXPECT_NE(errorOf(head + "emulate: {time_scale: [1, 0]}\n").find("emulate.time_scale: expected a number from 0.001"),
+            std::string::npos);
+  EXPECT_NE(errorOf(head + "emulate: {on_sensor_failure: ignore}\n").find("emulate.on_sensor_failure: expected replan, continue or stop"),
+            std::string::npos);
+  EXPECT_NE(errorOf(head + "emulate: {episode: 3}\n").find("episode"), std::string::npos);
+  const std::string loss = errorOf(head + "emulate:\n  network:\n    bad: {default: {loss: 2}}\n");
+  EXPECT_NE(loss.find("test.yaml:5: emulate.network.bad (network.default.loss): expected"), std::string::npos) << loss;
+  const std::string sensor = errorOf(head + "emulate:\n  faults:\n    far: [{kind: crash, sensor: 7, episode: 0, at: 1}]\n");
+  EXPECT_NE(sensor.find("test.yaml:5: emulate.faults.far (faults[0].sensor): expected"), std::string::npos) << sensor;
+  EXPECT_EQ(sensor.find('\n'), std::string::npos);
 }
 
 TEST(ExperimentFile, BadInputNamesTheFileLineAndField) {
