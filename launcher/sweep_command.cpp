@@ -181,7 +181,9 @@ Subcommand addSweepCommand(CLI::App& app) {
       "Run an experiment: every cell (one value of each axis: scenario files or random plants "
       "and their budgets, planners, seeds) planned as `coordinator plan` plans and measured by "
       "the Monte Carlo of `fusion_center evaluate` (the same numbers for the same inputs), "
-      "several cells at a time. Each finished cell is a line of OUT/results.jsonl at once; "
+      "several cells at a time; with the experiment's emulate: section, by a whole `sensornet "
+      "launch` of the cell instead (its network and faults, time scale, episodes; the run's "
+      "files in OUT/runs/ID, one run at a time by default). Each finished cell is a line of OUT/results.jsonl at once; "
       "after a Ctrl-C or a crash the same command runs only the cells not yet there. "
       "OUT/results.csv is the table and OUT/results.html the page (cost against each axis per "
       "planner, with intervals and brackets). Exit 0 when every cell is ok, 1 when one failed (its "
@@ -196,7 +198,7 @@ Subcommand addSweepCommand(CLI::App& app) {
                   "the results folder (made if missing; default sweeps/NAME, NAME the experiment's "
                   "name: or its file's stem)");
   cmd->add_option("--jobs", options->jobs,
-                  "cells at a time (0: one per core); each cell's Monte "
+                  "cells at a time (0: one per core, or 1 for emulated cells); each cell's Monte "
                   "Carlo gets the cores divided among them")
       ->capture_default_str()
       ->check(integerRange(0, 1024));

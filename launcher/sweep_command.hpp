@@ -1,6 +1,7 @@
 #pragma once
 // `sensornet sweep EXPERIMENT.yaml`: every cell of an experiment (experiment_file.hpp) planned
-// and measured in process (evaluation/sweep.hpp), --jobs cells at a time, with progress and an
+// and measured in process (evaluation/sweep.hpp) or, with emulate:, by whole runs of `sensornet
+// launch` (sweep_runs.hpp), --jobs cells at a time, with progress and an
 // estimate of the time left on standard error. Each finished cell is one line of
 // OUT/results.jsonl at once, so Ctrl-C or a crash loses only the cells under way, and the same
 // command again runs only the cells not yet there; OUT/results.csv is the table of them all,

@@ -47,10 +47,13 @@ std::vector<std::string> launchArgv(const SweepCell& cell, const fs::path& dir, 
       // A run that hangs is a failed cell, not a stuck sweep: four times its emulated length
       // in wall time, and a minute for the start.
       "--timeout", number(60.0 + 4.0 * e.episodes * (horizon_s / e.time_scale + 1.0))};
+  // What re-plans (after a sensor's death; the closed loop's tails) are made with: the cell's.
+  if (cell.planner != "schedule") {
+    argv.insert(argv.end(), {"--surrogate", std::string(wordOf(cell.surrogate))});
+  }
   if (cell.planner == "timetable") argv.insert(argv.end(), {"--arrivals", "timetable"});
   if (cell.planner == "closed_loop") {
-    argv.insert(argv.end(), {"--replan-every", number(cell.replan_every_s), "--surrogate",
-                             std::string(wordOf(cell.surrogate))});
+    argv.insert(argv.end(), {"--replan-every", number(cell.replan_every_s)});
   }
   if (!e.on_sensor_failure.empty()) {
     argv.insert(argv.end(), {"--on-sensor-failure", e.on_sensor_failure});

@@ -12,7 +12,8 @@
 //
 // A cell is measured as `coordinator plan` and `fusion_center evaluate` measure it: the same
 // plan for the same scenario and planner, the same Monte Carlo for the same seed and runs (the
-// closed loop: `fusion_center evaluate --replan-every`).
+// closed loop: `fusion_center evaluate --replan-every`). An emulated cell (emulate:) is planned
+// the same way and measured by the EmulatedRunner the caller gives: the launcher's whole run.
 
 #include <atomic>
 #include <functional>
