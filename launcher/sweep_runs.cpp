@@ -36,14 +36,10 @@ std::vector<std::string> launchArgv(const SweepCell& cell, const fs::path& dir, 
   const EmulatedRuns& e = *cell.emulate;
   std::vector<std::string> argv = {
       fs::read_symlink("/proc/self/exe").string(), "launch", (dir / "scenario.yaml").string(),
-      "--schedule", (dir / "schedule.json").string(),
-      "--episodes", std::to_string(e.episodes),
-      "--time-scale", number(e.time_scale),
-      "--seed", std::to_string(cell.seed),
-      "--run-id", "sweep-" + std::to_string(::getpid()) + "-" + cell.id(),
-      "--report", (dir / "report.json").string(),
-      "--log-dir", (dir / "logs").string(),
-      "--no-html",
+      "--schedule", (dir / "schedule.json").string(), "--episodes", std::to_string(e.episodes),
+      "--time-scale", number(e.time_scale), "--seed", std::to_string(cell.seed), "--run-id",
+      "sweep-" + std::to_string(::getpid()) + "-" + cell.id(), "--report",
+      (dir / "report.json").string(), "--log-dir", (dir / "logs").string(), "--no-html",
       // A run that hangs is a failed cell, not a stuck sweep: four times its emulated length
       // in wall time, and a minute for the start.
       "--timeout", number(60.0 + 4.0 * e.episodes * (horizon_s / e.time_scale + 1.0))};
@@ -117,18 +113,21 @@ void runCell(const fs::path& out, const SweepCell& cell, const RateSchedule& sch
     row["ci95"] = orNull(s.ci95);
     row["std"] = orNull(s.std_dev);
     const std::uint64_t episodes = run->finishedEpisodes();
-    row["arrivals_mean"] =
-        episodes > 0 ? json(static_cast<double>(s.sent) / static_cast<double>(episodes)) : json(nullptr);
-    row["delivered_bracket_info"] = s.delivered_bracket ? orNull(s.delivered_bracket->info) : json(nullptr);
-    row["delivered_bracket_cov"] = s.delivered_bracket ? orNull(s.delivered_bracket->cov) : json(nullptr);
+    row["arrivals_mean"] = episodes > 0
+                               ? json(static_cast<double>(s.sent) / static_cast<double>(episodes))
+                               : json(nullptr);
+    row["delivered_bracket_info"] =
+        s.delivered_bracket ? orNull(s.delivered_bracket->info) : json(nullptr);
+    row["delivered_bracket_cov"] =
+        s.delivered_bracket ? orNull(s.delivered_bracket->cov) : json(nullptr);
     row["episodes_complete"] = s.episodes_complete;
     row["sent"] = s.sent;
     row["received"] = s.received;
     row["lost"] = s.lost;
     row["dropped_by_network"] = s.dropped_by_network;
   }
-  const bool measured = (exit->exit_code == 0 || exit->exit_code == 3) && exit->signal == 0 && run &&
-                        run->summary.mean.has_value();
+  const bool measured = (exit->exit_code == 0 || exit->exit_code == 3) && exit->signal == 0 &&
+                        run && run->summary.mean.has_value();
   if (!measured) throw std::runtime_error(whyFailed(exit->exit_code, run, dir));
 }
 
@@ -136,9 +135,8 @@ void runCell(const fs::path& out, const SweepCell& cell, const RateSchedule& sch
 
 evaluation::EmulatedRunner emulatedRunner(fs::path out) {
   return [out = std::move(out)](const SweepCell& cell, const RateSchedule& schedule,
-                                const std::atomic<bool>& stop, json& row) {
-    runCell(out, cell, schedule, stop, row);
-  };
+                                const std::atomic<bool>& stop,
+                                json& row) { runCell(out, cell, schedule, stop, row); };
 }
 
 }  // namespace sensornet::launcher

@@ -171,16 +171,16 @@ json runSweepCell(const SweepCell& cell, int threads, const std::atomic<bool>& s
 }
 
 const std::vector<std::string>& sweepColumns() {
+  // clang-format off
   static const std::vector<std::string> columns = {
-      "scenario",     "states",       "sensors",     "scenario_seed", "noise_scale",
-      "budget",       "energy",       "planner",     "surrogate",     "replan_every",
-      "schedule",     "seed",         "runs",        "episodes",      "time_scale",
-      "network",      "faults",       "status",      "reason",        "plan_status",
-      "plan_seconds", "objective",    "bracket_info", "bracket_cov",  "mean",
-      "ci95",         "std",          "arrivals_mean", "open_mean",   "gain_mean",
-      "gain_ci95",    "poisson_mean", "poisson_ci95", "run_status",   "exit_code",
-      "delivered_bracket_info", "delivered_bracket_cov", "episodes_complete", "sent",    "received",    "lost",          "dropped_by_network",
-      "report",       "seconds",      "key"};
+      "scenario", "states", "sensors", "scenario_seed", "noise_scale", "budget", "energy",
+      "planner", "surrogate", "replan_every", "schedule", "seed", "runs", "episodes", "time_scale",
+      "network", "faults", "status", "reason", "plan_status", "plan_seconds", "objective",
+      "bracket_info", "bracket_cov", "mean", "ci95", "std", "arrivals_mean", "open_mean",
+      "gain_mean", "gain_ci95", "poisson_mean", "poisson_ci95", "run_status", "exit_code",
+      "delivered_bracket_info", "delivered_bracket_cov", "episodes_complete", "sent", "received",
+      "lost", "dropped_by_network", "report", "seconds", "key"};
+  // clang-format on
   return columns;
 }
 

@@ -14,6 +14,7 @@
 
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/words.hpp"
+#include "sensornet/emulator/vocabulary.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/yaml_text.hpp"
 #include "yaml_reader.hpp"
@@ -243,8 +244,11 @@ void checkEmulatedScenario(const SweepCell& cell, const YAML::Node& emulate,
     const EmulatedRuns& m = *cell.emulate;
     const bool network = e.field().rfind("network", 0) == 0;
     const std::string& name = network ? m.network_name : m.faults_name;
-    const YAML::Node at = name.empty() ? emulate : emulate[network ? "network" : "faults"][name];
-    in.fail(at, "emulate." + (name.empty() ? e.field() : std::string(network ? "network." : "faults.") + name + " (" + e.field() + ")"),
+    const char* section = network ? "network" : "faults";
+    const YAML::Node at = name.empty() ? emulate : emulate[section][name];
+    const std::string field =
+        name.empty() ? e.field() : std::string(section) + "." + name + " (" + e.field() + ")";
+    in.fail(at, "emulate." + field,
             e.expected() + (cell.scenario.file.empty() ? "" : " for " + cell.scenario.file));
   }
 }
@@ -262,10 +266,13 @@ std::vector<EmulatedRuns> readEmulate(const YamlReader& in, const YAML::Node& no
     }
   }
   if (const YAML::Node p = node["on_sensor_failure"]) {
-    if (!p.IsScalar() || (p.Scalar() != "replan" && p.Scalar() != "continue" && p.Scalar() != "stop")) {
-      in.fail(p, "emulate.on_sensor_failure", "replan, continue or stop");
+    using emulator::FailurePolicy;
+    if (!p.IsScalar()) in.fail(p, "emulate.on_sensor_failure", wordChoices<FailurePolicy>());
+    try {
+      base.on_sensor_failure = wordOf(parseWord<FailurePolicy>(p.Scalar(), "", ""));
+    } catch (const InputError& e) {
+      in.fail(p, "emulate.on_sensor_failure", e.expected());
     }
-    base.on_sensor_failure = p.Scalar();
   }
   std::vector<double> scales;
   if (node["time_scale"]) {
@@ -364,8 +371,8 @@ std::string SweepCell::key() const {
   return k + ";emulate(episodes=" + std::to_string(e.episodes) +
          ",time_scale=" + exact(e.time_scale) +
          ",network=" + section(e.network_name, e.network_yaml) +
-         ",faults=" + section(e.faults_name, e.faults_yaml) +
-         ",on_sensor_failure=" + (e.on_sensor_failure.empty() ? "default" : e.on_sensor_failure) + ")";
+         ",faults=" + section(e.faults_name, e.faults_yaml) + ",on_sensor_failure=" +
+         (e.on_sensor_failure.empty() ? "default" : e.on_sensor_failure) + ")";
 }
 
 std::string SweepCell::id() const { return digest(key()); }
@@ -383,16 +390,15 @@ std::string SweepCell::scenarioYaml() const {
     random["seed"] = r.seed;
     random["budget"] = exact(scenario.budget.value_or(r.budget));
     random["noise_scale"] = exact(r.noise_scale);
-    if (scenario.energy) {
-      random["energy"] = std::isinf(*scenario.energy) ? std::string(".inf") : exact(*scenario.energy);
-    } else if (!std::isinf(r.energy)) {
-      random["energy"] = exact(r.energy);
-    }
+    const double energy = scenario.energy.value_or(r.energy);
+    if (!std::isinf(energy)) random["energy"] = exact(energy);
     root["random"] = random;
   } else {
     root = parseYamlText(readTextFile(scenario.file, "scenario"), scenario.file);
     // withBudget's and withEnergy's changes, as the file says them.
-    if (scenario.budget) root["constraints"]["b"] = std::vector<std::string>{exact(*scenario.budget)};
+    if (scenario.budget) {
+      root["constraints"]["b"] = std::vector<std::string>{exact(*scenario.budget)};
+    }
     if (scenario.energy) {
       root["constraints"]["energy"] =
           std::isinf(*scenario.energy) ? std::string(".inf") : exact(*scenario.energy);
@@ -466,7 +472,8 @@ Experiment parseExperimentYaml(const std::string& text, const std::string& sourc
   std::vector<std::optional<EmulatedRuns>> measures = {std::nullopt};
   if (const YAML::Node emulate = root["emulate"]) {
     if (root["runs"]) {
-      in.fail(root["runs"], "runs", "no runs: beside emulate: (emulated cells run emulate.episodes)");
+      in.fail(root["runs"], "runs",
+              "no runs: beside emulate: (emulated cells run emulate.episodes)");
     }
     measures.clear();
     for (EmulatedRuns& m : readEmulate(in, emulate)) measures.emplace_back(std::move(m));
@@ -477,7 +484,8 @@ Experiment parseExperimentYaml(const std::string& text, const std::string& sourc
     for (const PlannerChoice& p : all_planners) {
       for (const std::uint64_t seed : seeds) {
         for (const std::optional<EmulatedRuns>& measure : measures) {
-          SweepCell cell{s, p.name, p.surrogate, p.replan_every_s, seed, runs, p.schedule_file, measure};
+          SweepCell cell{s,    p.name, p.surrogate,     p.replan_every_s,
+                         seed, runs,   p.schedule_file, measure};
           if (!p.schedule_file.empty() && seed == seeds.front()) {
             // A schedule that does not fit a scenario is bad input, found before any cell runs.
             (void)loadScheduleFile(p.schedule_file, s.load(source));

@@ -191,7 +191,8 @@ std::string measuredBy(const json& row) {
                      formatTick(numberOf(row, "time_scale"));
   const auto status = row.find("run_status");
   if (status != row.end() && status->is_string()) {
-    text += ": " + status->get<std::string>() + " (exit " + formatTick(numberOf(row, "exit_code")) + ")";
+    text += ": " + status->get<std::string>() + " (exit " + formatTick(numberOf(row, "exit_code")) +
+            ")";
   }
   return text;
 }
@@ -217,10 +218,10 @@ std::string cellTable(const std::vector<json>& rows) {
     const bool ok = row.value("status", std::string()) == "ok";
     const double budget = numberOf(row, "budget");  // none: the file's own constraints
     t += "<tr><td>" + escapeXml(scenario) + "</td><td>" +
-         (std::isfinite(budget) ? formatTick(budget) : std::string("file's")) +
-         "</td><td>" + escapeXml(seriesOf(row, "")) + "</td><td>" +
-         formatTick(numberOf(row, "seed")) + "</td><td>" + escapeXml(measuredBy(row)) +
-         "</td><td>" + (ok ? "ok" : "failed: " + escapeXml(row.value("reason", std::string("?")))) + "</td><td>" +
+         (std::isfinite(budget) ? formatTick(budget) : std::string("file's")) + "</td><td>" +
+         escapeXml(seriesOf(row, "")) + "</td><td>" + formatTick(numberOf(row, "seed")) +
+         "</td><td>" + escapeXml(measuredBy(row)) + "</td><td>" +
+         (ok ? "ok" : "failed: " + escapeXml(row.value("reason", std::string("?")))) + "</td><td>" +
          (ok ? formatTick(numberOf(row, "mean")) + " ± " + formatTick(numberOf(row, "ci95")) : "") +
          "</td><td>" +
          (ok ? "[" + formatTick(numberOf(row, "bracket_info")) + ", " +

@@ -278,16 +278,16 @@ TEST(SweepCli, AFailedCellRunsAgainOnlyWhenAsked) {
 //   runs the cells not yet done, and those done are untouched.
 TEST(SweepCli, EmulatedCellsAreTheRunsOfSensornetLaunch) {
   const sensornet::testing::ScratchDir dir;
-  const std::string file = dir.write(
-      "emulated.yaml",
-      "scenarios:\n  - random: {states: 3, sensors: 4, seed: 6, budget: 5}\n"
-      "    horizon: 2\n    intervals: 8\n"
-      "planners: [cov, {timetable: info}]\n"
-      "seeds: [7]\n"
-      "emulate:\n"
-      "  episodes: 2\n  time_scale: 4\n  on_sensor_failure: stop\n"
-      "  network: {perfect: ~, lossy: {default: {loss: 0.3}}}\n"
-      "  faults: {none: [], crash: [{kind: crash, sensor: 2, episode: 1, at: 0.5}]}\n");
+  const std::string file =
+      dir.write("emulated.yaml",
+                "scenarios:\n  - random: {states: 3, sensors: 4, seed: 6, budget: 5}\n"
+                "    horizon: 2\n    intervals: 8\n"
+                "planners: [cov, {timetable: info}]\n"
+                "seeds: [7]\n"
+                "emulate:\n"
+                "  episodes: 2\n  time_scale: 4\n  on_sensor_failure: stop\n"
+                "  network: {perfect: ~, lossy: {default: {loss: 0.3}}}\n"
+                "  faults: {none: [], crash: [{kind: crash, sensor: 2, episode: 1, at: 0.5}]}\n");
   const std::string results = dir.file("out/results.jsonl");
   const std::vector<std::string> argv = {kLauncher, "sweep", file, "--out", dir.file("out")};
   {
@@ -326,7 +326,8 @@ TEST(SweepCli, EmulatedCellsAreTheRunsOfSensornetLaunch) {
     EXPECT_EQ(row.at("run_status"), crash ? "failed" : "completed");
     EXPECT_EQ(row.at("status"), crash ? "failed" : "ok");
     if (crash) {
-      EXPECT_NE(row.at("reason").get<std::string>().find("crash in sensor_agent-2"), std::string::npos);
+      EXPECT_NE(row.at("reason").get<std::string>().find("crash in sensor_agent-2"),
+                std::string::npos);
       continue;
     }
     // The mean and its interval from the episodes' costs.
@@ -336,7 +337,8 @@ TEST(SweepCli, EmulatedCellsAreTheRunsOfSensornetLaunch) {
       if (e.at("complete").get<bool>()) costs.push_back(e.at("realized_cost").get<double>());
       for (std::size_t j = 0; j < e.at("sent").size(); ++j) {
         sent += e.at("sent")[j].get<std::uint64_t>();
-        accounted += e.at("received")[j].get<std::uint64_t>() + e.at("lost")[j].get<std::uint64_t>() +
+        accounted += e.at("received")[j].get<std::uint64_t>() +
+                     e.at("lost")[j].get<std::uint64_t>() +
                      e.at("dropped_by_network")[j].get<std::uint64_t>();
       }
     }
@@ -377,8 +379,8 @@ TEST(SweepCli, EmulatedCellsAreTheRunsOfSensornetLaunch) {
       std::ifstream planned(plan), used(schedule);
       EXPECT_EQ(json::parse(planned).at("rates"), json::parse(used).at("rates"));
       const ProcessResult native = runProcess(
-          {kLauncher, "launch", scenario, "--schedule", plan, "--episodes", "2", "--time-scale", "4",
-           "--seed", "7", "--run-id", "native-" + std::to_string(::getpid()), "--report",
+          {kLauncher, "launch", scenario, "--schedule", plan, "--episodes", "2", "--time-scale",
+           "4", "--seed", "7", "--run-id", "native-" + std::to_string(::getpid()), "--report",
            dir.file("native/report.json"), "--log-dir", dir.file("native/logs"), "--no-html"},
           std::chrono::minutes(2));
       ASSERT_EQ(native.exit_code, 0) << native.err;

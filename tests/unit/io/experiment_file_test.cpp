@@ -17,6 +17,11 @@ namespace {
 
 const std::string kSource = std::string(SENSORNET_SOURCE_DIR) + "/examples/experiments/test.yaml";
 
+// Matrices of the same size and entries (Eigen's == needs the same size).
+bool same(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
+}
+
 std::string errorOf(const std::string& yaml) {
   try {
     (void)parseExperimentYaml(yaml, kSource);
@@ -176,16 +181,16 @@ emulate:
     EXPECT_EQ(c.key().find(";runs="), std::string::npos);
     const Scenario loaded = c.scenario.load("test");
     const Scenario written = parseScenarioYaml(c.scenarioYaml(), "written");
-    EXPECT_EQ(written.plant.A, loaded.plant.A);
-    EXPECT_EQ(written.plant.Q, loaded.plant.Q);
+    EXPECT_TRUE(same(written.plant.A, loaded.plant.A));
+    EXPECT_TRUE(same(written.plant.Q, loaded.plant.Q));
     ASSERT_EQ(written.sensorCount(), loaded.sensorCount());
     for (int j = 0; j < loaded.sensorCount(); ++j) {
-      EXPECT_EQ(written.sensors[j].H, loaded.sensors[j].H);
-      EXPECT_EQ(written.sensors[j].R, loaded.sensors[j].R);
+      EXPECT_TRUE(same(written.sensors[j].H, loaded.sensors[j].H));
+      EXPECT_TRUE(same(written.sensors[j].R, loaded.sensors[j].R));
     }
-    EXPECT_EQ(written.constraints.C, loaded.constraints.C);
-    EXPECT_EQ(written.constraints.b, loaded.constraints.b);
-    EXPECT_EQ(written.constraints.energy, loaded.constraints.energy);
+    EXPECT_TRUE(same(written.constraints.C, loaded.constraints.C));
+    EXPECT_TRUE(same(written.constraints.b, loaded.constraints.b));
+    EXPECT_TRUE(same(written.constraints.energy, loaded.constraints.energy));
     EXPECT_EQ(written.horizon_s, loaded.horizon_s);
     if (c.emulate->network_name == "lossy") {
       ASSERT_TRUE(written.network.has_value());
@@ -204,31 +209,50 @@ emulate:
   EXPECT_TRUE(e.cells[0].scenario.load("test").constraints.energy.isApprox(
       Eigen::VectorXd::Constant(6, 2.5)));
   // The same name with another section is another cell (a digest of it is in the key).
-  const std::string other = parseExperimentYaml(
-      "scenarios: [{random: {states: 3, sensors: 4, seed: 5}}]\nplanners: [cov]\n"
-      "emulate: {network: {lossy: {default: {loss: 0.5}}}}\n", kSource).cells[0].key();
-  const std::string first = parseExperimentYaml(
-      "scenarios: [{random: {states: 3, sensors: 4, seed: 5}}]\nplanners: [cov]\n"
-      "emulate: {network: {lossy: {default: {loss: 0.25}}}}\n", kSource).cells[0].key();
+  const std::string other =
+      parseExperimentYaml(
+          "scenarios: [{random: {states: 3, sensors: 4, seed: 5}}]\nplanners: [cov]\n"
+          "emulate: {network: {lossy: {default: {loss: 0.5}}}}\n",
+          kSource)
+          .cells[0]
+          .key();
+  const std::string first =
+      parseExperimentYaml(
+          "scenarios: [{random: {states: 3, sensors: 4, seed: 5}}]\nplanners: [cov]\n"
+          "emulate: {network: {lossy: {default: {loss: 0.25}}}}\n",
+          kSource)
+          .cells[0]
+          .key();
   EXPECT_NE(other, first);
   EXPECT_NE(first.find("network=lossy#"), std::string::npos) << first;
 }
 
 TEST(ExperimentFile, BadEmulatedRunsAreOneLineNamingTheSection) {
-  const std::string head = "scenarios: [{random: {states: 2, sensors: 3, seed: 1}}]\nplanners: [info]\n";
-  EXPECT_NE(errorOf(head + "runs: 100\nemulate: {episodes: 2}\n").find("test.yaml:3: runs: expected no runs: beside emulate:"),
-            std::string::npos) << errorOf(head + "runs: 100\nemulate: {episodes: 2}\n");
-  EXPECT_NE(errorOf(head + "emulate: {episodes: 0}\n").find("emulate.episodes: expected an integer from 1"),
+  const std::string head =
+      "scenarios: [{random: {states: 2, sensors: 3, seed: 1}}]\nplanners: [info]\n";
+  EXPECT_NE(errorOf(head + "runs: 100\nemulate: {episodes: 2}\n")
+                .find("test.yaml:3: runs: expected no runs: beside emulate:"),
+            std::string::npos)
+      << errorOf(head + "runs: 100\nemulate: {episodes: 2}\n");
+  EXPECT_NE(errorOf(head + "emulate: {episodes: 0}\n")
+                .find("emulate.episodes: expected an integer from 1"),
             std::string::npos);
-  EXPECT_NE(errorOf(head + "emulate: {time_scale: [1, 0]}\n").find("emulate.time_scale: expected a number from 0.001"),
+  EXPECT_NE(errorOf(head + "emulate: {time_scale: [1, 0]}\n")
+                .find("emulate.time_scale: expected a number from 0.001"),
             std::string::npos);
-  EXPECT_NE(errorOf(head + "emulate: {on_sensor_failure: ignore}\n").find("emulate.on_sensor_failure: expected replan, continue or stop"),
+  EXPECT_NE(errorOf(head + "emulate: {on_sensor_failure: ignore}\n")
+                .find("emulate.on_sensor_failure: expected replan, continue or stop"),
             std::string::npos);
   EXPECT_NE(errorOf(head + "emulate: {episode: 3}\n").find("episode"), std::string::npos);
   const std::string loss = errorOf(head + "emulate:\n  network:\n    bad: {default: {loss: 2}}\n");
-  EXPECT_NE(loss.find("test.yaml:5: emulate.network.bad (network.default.loss): expected"), std::string::npos) << loss;
-  const std::string sensor = errorOf(head + "emulate:\n  faults:\n    far: [{kind: crash, sensor: 7, episode: 0, at: 1}]\n");
-  EXPECT_NE(sensor.find("test.yaml:5: emulate.faults.far (faults[0].sensor): expected"), std::string::npos) << sensor;
+  EXPECT_NE(loss.find("test.yaml:5: emulate.network.bad (network.default.loss): expected"),
+            std::string::npos)
+      << loss;
+  const std::string sensor = errorOf(
+      head + "emulate:\n  faults:\n    far: [{kind: crash, sensor: 7, episode: 0, at: 1}]\n");
+  EXPECT_NE(sensor.find("test.yaml:5: emulate.faults.far (faults[0].sensor): expected"),
+            std::string::npos)
+      << sensor;
   EXPECT_EQ(sensor.find('\n'), std::string::npos);
 }
 
