@@ -1,0 +1,332 @@
+#!/usr/bin/env bash
+# A swarm of three nodes on this machine, each its own Docker Engine in a container of the host
+# Engine (docker/node.Dockerfile), and the sensornet stack across them: the coordinator and the
+# fusion center on the manager, one sensor task on each worker, so that every measurement and
+# every plan crosses the overlay network between two Engines. A prototype: CI does not run it.
+#
+#   scripts/test-swarm.sh                 everything below
+#   scripts/test-swarm.sh --image NAME    an image built from docker/Dockerfile before (kept)
+#   scripts/test-swarm.sh --keep          keep the image it built
+#
+# 1. the host Engine and a bare Debian 12 base image (scripts/docker-host.sh); the runtime image
+#    (docker/Dockerfile unless --image: built under nice, its build containers in a cgroup of low
+#    CPU weight) and the node image (Debian's docker.io and iptables over the base image);
+# 2. the nodes: three containers on one internal bridge network of the host Engine (no way out
+#    of this machine), each running dockerd (overlay2 on a volume at /var/lib/docker); the
+#    manager `docker swarm init --advertise-addr` its address there, the two workers join with
+#    the token; every node is Ready, the manager labelled sensornet.role=hub, the workers
+#    sensornet.role=sensors (docker/compose.swarm-nodes.yaml places the services by them);
+# 3. the runtime image is loaded into every node (`docker save | docker exec -i NODE docker
+#    load`), there tagged with a registry on 127.0.0.1 where nothing listens, so that the pull a
+#    swarm task tries first fails at once and nothing is looked up outside this machine;
+# 4. `docker stack deploy` of docker/compose.yaml + compose.swarm.yaml + compose.swarm-nodes.yaml
+#    from inside the manager (docker/ mounted read-only; the CLI is this machine's `docker`,
+#    mounted too: Debian 12's 20.10 CLI refuses compose files without a `version`), 4 episodes,
+#    time scale 5, seed 7: the coordinator's task completes; `docker stack ps` shows where every
+#    task ran: the coordinator and the fusion center on the manager, the two sensor tasks on
+#    the two workers, one each;
+# 5. the report in the reports volume on the fusion center's node says completed, 4 complete
+#    episodes, every measurement sent was fused; every episode's realized cost equals that of a
+#    native `sensornet launch` of the same scenario and seed (build/, relative 1e-9: the image
+#    is built without -march=native);
+# 6. prints the timings: node setup, image load into the nodes, deploy to "every peer ready"
+#    (the coordinator's log), deploy to the coordinator's completion, and the total;
+# 7. on every exit (also failure, Ctrl-C): leaves the stack and the swarm, removes the node
+#    containers, their volumes, the network, the node image, the runtime image unless --image
+#    or --keep, the base image and the dockerd scripts/docker-host.sh started; then checks that
+#    `docker ps -a`, `docker network ls` and `docker volume ls` show nothing of this run and that
+#    neither the network's bridge nor any dockerd or containerd it started is left.
+# Needs root, a cgroup v1 host (docker/node.Dockerfile) and about 3 GB under /var/lib/docker.
+# Exit status 0 when every check passed, 1 otherwise.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+docker_host_log_prefix=test-swarm
+source scripts/docker-host.sh
+log() { docker_host_log "$*"; }
+fail() { log "FAIL: $*"; exit 1; }
+
+keep=false
+given_image=""
+while (($# > 0)); do
+  case "$1" in
+    --keep) keep=true ;;
+    --image) given_image=${2:?--image needs a name}; shift ;;
+    *) echo "usage: scripts/test-swarm.sh [--keep] [--image NAME]" >&2; exit 2 ;;
+  esac
+  shift
+done
+
+now() { date +%s.%N; }
+since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }'; }
+engine_processes() { pgrep -x 'dockerd|containerd|containerd-shim' 2>/dev/null | sort || true; }
+
+t_total=$(now)
+work=$(mktemp -d /tmp/sensornet-swarm.XXXXXX)
+engine_processes >"$work/processes-before"
+id="snswarm$$"                     # the prefix of every name of this run on the host Engine
+net="$id-net"
+manager="$id-mgr"
+workers=("$id-w1" "$id-w2")
+nodes=("$manager" "${workers[@]}")
+node_image="sensornet-swarm-node:$$"
+tag=${given_image:-sensornet-test:$$}
+node_tag="127.0.0.1:5999/sensornet:swarm-$$"   # the image's name inside the nodes
+stack=sensornet
+made_nodes=false
+load_pids=()
+net_bridge=""
+build_cgroup=""
+cleanup() {
+  local status=$? t_cleanup
+  t_cleanup=$(now)
+  trap - EXIT INT TERM
+  set +e
+  # The image loads under way (not `jobs -p`: the dockerd docker_host_up started is a job too).
+  ((${#load_pids[@]} > 0)) && kill "${load_pids[@]}" 2>/dev/null
+  if $made_nodes; then
+    log "cleaning up: the stack, the swarm, the nodes"
+    timeout 60 docker exec "$manager" docker stack rm "$stack" >/dev/null 2>&1
+    local node
+    for node in "${workers[@]}" "$manager"; do
+      timeout 60 docker exec "$node" docker swarm leave --force >/dev/null 2>&1
+    done
+    # dockerd stops the nested containers on SIGTERM (docker-init forwards it).
+    docker stop -t 30 "${nodes[@]}" >/dev/null 2>&1
+    docker rm -fv "${nodes[@]}" >/dev/null 2>&1
+    for node in "${nodes[@]}"; do docker volume rm "$node" >/dev/null 2>&1; done
+  fi
+  docker network rm "$net" >/dev/null 2>&1
+  docker rmi -f "$node_image" >/dev/null 2>&1
+  if ! $keep && [[ -z "$given_image" ]]; then
+    docker rmi -f "$tag" >/dev/null 2>&1
+    if [[ -f "$work/images-before" ]]; then  # the build stage's untagged layers too
+      docker images -aq --no-trunc | sort -u | comm -13 "$work/images-before" - \
+        | xargs -r docker rmi -f >/dev/null 2>&1
+    fi
+  fi
+  if docker info >/dev/null 2>&1; then
+    local left
+    left=$( { docker ps -aq -f "name=$id"; docker network ls -q -f "name=$id";
+              docker volume ls -q -f "name=$id"; docker images -q "$node_image"; } 2>&1)
+    if [[ -n "$left" ]]; then
+      log "FAIL: left behind on the host Engine: $(echo "$left" | xargs)"
+      status=1
+    fi
+  elif $made_nodes; then
+    log "FAIL: the host Engine no longer answers: what this run made there is not removed"
+    status=1
+  fi
+  docker_host_down
+  # The build's cgroup, in every hierarchy runc made it in (the build's containers are gone).
+  [[ -n "$build_cgroup" ]] && rmdir /sys/fs/cgroup/*/"$build_cgroup" 2>/dev/null
+  if [[ -n "$net_bridge" && -e "/sys/class/net/$net_bridge" ]]; then
+    log "FAIL: the network's bridge $net_bridge is left on this machine"
+    status=1
+  fi
+  local started_here _
+  for _ in $(seq 1 50); do  # the Engine's containerd may outlive its dockerd for a moment
+    started_here=$(engine_processes | comm -13 "$work/processes-before" -)
+    [[ -z "$started_here" ]] && break
+    sleep 0.2
+  done
+  if [[ -n "$started_here" ]]; then
+    log "FAIL: Engine processes left running: $(echo "$started_here" | xargs -r ps -o pid=,comm= -p | xargs)"
+    status=1
+  fi
+  rm -rf "$work"
+  ((status == 0)) && log "cleaned up in $(since "$t_cleanup") s: no container, network, volume or Engine of this run is left; total $(since "$t_total") s"
+  exit "$status"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+docker_host_up "$work" docker.io debootstrap || fail "no Docker Engine"
+docker_base_image "$work" || fail "no Debian 12 base image"
+
+# ---- 1. the images ----------------------------------------------------------------------------
+if [[ -z "$given_image" ]]; then
+  docker images -aq --no-trunc | sort -u >"$work/images-before"
+  # `nice docker build` alone would nice only the client: the compilers run in the Engine's build
+  # containers. Those go into a cgroup of their own with a small CPU weight (cgroup v1 cpu.shares
+  # 128, where a process at nice 0 weighs 1024), which is what keeps them behind other work.
+  build_cgroup="sensornet-build-$$"
+  mkdir "/sys/fs/cgroup/cpu/$build_cgroup" || fail "no cgroup v1 cpu controller at /sys/fs/cgroup/cpu"
+  echo 128 >"/sys/fs/cgroup/cpu/$build_cgroup/cpu.shares"
+  log "building the image $tag (docker/Dockerfile, at low CPU weight; log: $work/build.log)"
+  started=$SECONDS
+  nice docker build --force-rm --cgroup-parent "/$build_cgroup" -f docker/Dockerfile \
+    --build-arg "BASE_IMAGE=$docker_host_image" -t "$tag" . >"$work/build.log" 2>&1 \
+    || { tail -n 30 "$work/build.log" >&2; fail "the image did not build"; }
+  log "image built in $((SECONDS - started)) s"
+fi
+docker image inspect "$tag" >/dev/null 2>&1 || fail "no image $tag"
+t=$(now)
+docker build -q --build-arg "BASE_IMAGE=$docker_host_image" -t "$node_image" - \
+  <docker/node.Dockerfile >"$work/node-build.log" 2>&1 \
+  || { tail -n 20 "$work/node-build.log" >&2; fail "the node image did not build"; }
+time_node_image=$(since "$t")
+log "node image $node_image built in $time_node_image s"
+
+# ---- 2. the nodes -----------------------------------------------------------------------------
+# --privileged where this machine allows it; where its capability bounding set lacks some (then
+# runc cannot grant every capability and --privileged cannot start), every capability there is,
+# with seccomp and the /proc masks off (docker/node.Dockerfile's command makes /sys and the cgroup
+# hierarchies writable).
+last_cap=$(cat /proc/sys/kernel/cap_last_cap)
+bounding=$((16#$(awk '/^CapBnd/ { print $2 }' /proc/self/status)))
+if ((bounding == (1 << (last_cap + 1)) - 1)); then
+  node_privileges=(--privileged)
+else
+  node_privileges=(--cap-add ALL --security-opt seccomp=unconfined --security-opt apparmor=unconfined
+                   --security-opt systempaths=unconfined --device-cgroup-rule 'a *:* rwm')
+  lacking=""
+  for ((cap = 0; cap <= last_cap; cap++)); do
+    if (( !(bounding >> cap & 1) )); then
+      name=$(capsh --decode="$(printf '%x' $((1 << cap)))" 2>/dev/null | sed 's/.*=cap_//')
+      [[ -n "$name" ]] || fail "capability $cap is missing from the bounding set (and capsh is not there to name it)"
+      node_privileges+=(--cap-drop "${name^^}")
+      lacking+=" ${name^^}"
+    fi
+  done
+  log "this machine's capability bounding set lacks$lacking: the nodes run with every other capability instead of --privileged"
+fi
+
+t_nodes=$(now)
+net_bridge="br-$(docker network create --internal "$net" | cut -c1-12)"  # its Linux bridge
+made_nodes=true
+cli=$(command -v docker)
+for node in "${nodes[@]}"; do
+  mounts=(-v "$node:/var/lib/docker")
+  [[ "$node" == "$manager" ]] && mounts+=(-v "$PWD/docker:/stack:ro" -v "$cli:/usr/local/bin/docker:ro")
+  docker run -d --init --cgroupns private "${node_privileges[@]}" --name "$node" --hostname "$node" \
+    --network "$net" "${mounts[@]}" "$node_image" >/dev/null
+done
+for node in "${nodes[@]}"; do
+  for _ in $(seq 1 300); do docker exec "$node" docker info >/dev/null 2>&1 && break; sleep 0.2; done
+  docker exec "$node" docker info >/dev/null 2>&1 \
+    || { docker logs "$node" 2>&1 | tail -n 20 >&2; fail "the Engine in $node did not answer within 60 s"; }
+done
+address_of() { docker inspect -f "{{(index .NetworkSettings.Networks \"$net\").IPAddress}}" "$1"; }
+on_manager() { docker exec "$manager" docker "$@"; }
+on_manager swarm init --advertise-addr "$(address_of "$manager")" >/dev/null || fail "docker swarm init"
+token=$(on_manager swarm join-token -q worker)
+for node in "${workers[@]}"; do
+  docker exec "$node" docker swarm join --token "$token" --advertise-addr "$(address_of "$node")" \
+    "$(address_of "$manager"):2377" >/dev/null || fail "$node did not join the swarm"
+done
+for _ in $(seq 1 150); do
+  (($(on_manager node ls -q -f role=worker | wc -l) == 2)) && \
+    [[ "$(on_manager node ls --format '{{.Status}}' | sort -u)" == Ready ]] && break
+  sleep 0.2
+done
+[[ "$(on_manager node ls --format '{{.Status}}' | sort -u)" == Ready ]] || fail "not every node is Ready"
+on_manager node update --label-add sensornet.role=hub "$manager" >/dev/null
+for node in "${workers[@]}"; do on_manager node update --label-add sensornet.role=sensors "$node" >/dev/null; done
+time_nodes=$(since "$t_nodes")
+log "three nodes, one swarm, in $time_nodes s:"
+on_manager node ls --format '  {{.Hostname}} {{.Status}} {{.ManagerStatus}} {{.EngineVersion}}' >&2
+
+# ---- 3. the image into every node -------------------------------------------------------------
+t=$(now)
+docker save -o "$work/image.tar" "$tag"
+for node in "${nodes[@]}"; do
+  docker exec -i "$node" sh -c "docker load -q && docker tag '$tag' '$node_tag'" <"$work/image.tar" \
+    >"$work/load-$node.log" 2>&1 &
+  load_pids+=($!)
+done
+for i in "${!load_pids[@]}"; do
+  wait "${load_pids[$i]}" || { cat "$work/load-${nodes[$i]}.log" >&2; fail "loading the image into ${nodes[$i]}"; }
+done
+load_pids=()
+time_load=$(since "$t")
+log "image $tag ($(($(stat -c %s "$work/image.tar") / 1000000)) MB saved) loaded into the three nodes in $time_load s"
+rm -f "$work/image.tar"
+
+# ---- 4. the stack -----------------------------------------------------------------------------
+log "docker stack deploy $stack inside $manager: 4 episodes, time scale 5, seed 7"
+deployed_at=$(now)
+docker exec -e SENSORNET_IMAGE="$node_tag" -e SENSORNET_RUN_ID="swarm3-$$" -e SENSORNET_EPISODES=4 \
+  -e SENSORNET_TIME_SCALE=5 -e SENSORNET_SEED=7 "$manager" docker stack deploy --resolve-image never \
+  -c /stack/compose.yaml -c /stack/compose.swarm.yaml -c /stack/compose.swarm-nodes.yaml "$stack" \
+  >"$work/stack.log" 2>&1 || { cat "$work/stack.log" >&2; fail "docker stack deploy"; }
+task_state() { on_manager service ps --no-trunc -f desired-state=shutdown -f desired-state=running \
+  --format '{{.CurrentState}}' "${stack}_coordinator" 2>/dev/null | head -n 1; }
+for _ in $(seq 1 600); do
+  state=$(task_state)
+  [[ "$state" == Complete* || "$state" == Failed* || "$state" == Rejected* ]] && break
+  sleep 0.5
+done
+time_run=$(since "$deployed_at")
+on_manager stack ps --no-trunc --format '{{.Name}} {{.Node}} {{.CurrentState}} {{.Error}}' "$stack" \
+  >"$work/tasks" 2>&1 || true
+log "where the tasks ran (docker stack ps $stack):"
+sed 's/^/  /' "$work/tasks" >&2
+on_manager service logs --raw --timestamps "${stack}_coordinator" >"$work/coordinator.log" 2>&1 || true
+[[ "$(task_state)" == Complete* ]] || { tail -n 20 "$work/coordinator.log" >&2; fail "the coordinator's task: $(task_state)"; }
+node_of() { awk -v s="${stack}_$1" '$1 ~ "^" s "\\." { print $2; exit }' "$work/tasks"; }
+fusion_node=$(node_of fusion-center)
+[[ "$(node_of coordinator)" == "$manager" && "$fusion_node" == "$manager" ]] \
+  || fail "the coordinator and the fusion center did not run on the manager"
+sensor_nodes=$(awk -v s="${stack}_sensors" '$1 ~ "^" s "\\." { print $2 }' "$work/tasks" | sort | xargs)
+[[ "$sensor_nodes" == "${workers[*]}" ]] || fail "the sensor tasks ran on '$sensor_nodes', not one on each worker"
+
+# ---- 5. the report, against a native run ------------------------------------------------------
+for _ in $(seq 1 60); do  # the fusion center writes the report once the run has ended
+  docker exec "$fusion_node" docker run --rm -v "${stack}_reports:/reports:ro" "$node_tag" \
+    cat /reports/report.json >"$work/swarm.json" 2>/dev/null && break
+  sleep 0.5
+done
+[[ -s "$work/swarm.json" ]] || fail "no report.json in ${stack}_reports on $fusion_node"
+native_ok=false
+for attempt in 1 2 3 4 5; do
+  # build/ may be mid-rebuild by someone else: wait until its launcher runs, never build it here.
+  for _ in $(seq 1 120); do build/launcher/sensornet --version >/dev/null 2>&1 && break; sleep 15; done
+  started=$SECONDS
+  if build/launcher/sensornet launch scenarios/default.yaml --episodes 4 --time-scale 5 --seed 7 \
+    --run-id "native-$$" --report "$work/native.json" --no-html >"$work/native.log" 2>&1; then
+    native_ok=true
+    break
+  fi
+  log "the native run failed (attempt $attempt; build/ being rebuilt?): retrying in 30 s"
+  tail -n 5 "$work/native.log" >&2
+  sleep 30
+done
+$native_ok || { tail -n 20 "$work/native.log" >&2; fail "the native run"; }
+log "the same run natively (sensornet launch) over after $((SECONDS - started)) s"
+/usr/bin/python3 - "$work/swarm.json" "$work/native.json" <<'PY' || fail "the swarm run's report"
+import json, sys
+c, n = (json.load(open(p)) for p in sys.argv[1:3])
+assert c["status"] == "completed", (c["status"], c["faults"])
+episodes = c["per_episode"]
+assert [e["episode"] for e in episodes] == [0, 1, 2, 3], [e["episode"] for e in episodes]
+assert all(e["complete"] for e in episodes)
+sent = sum(s["sent"] for s in c["sensors"]); received = sum(s["received"] for s in c["sensors"])
+assert sent == received > 0, (sent, received)
+assert len(n["per_episode"]) == 4
+diffs = [abs(a["realized_cost"] - b["realized_cost"]) / abs(b["realized_cost"])
+         for a, b in zip(episodes, n["per_episode"])]
+for a, b, d in zip(episodes, n["per_episode"], diffs):
+    print(f"test-swarm:   episode {a['episode']}: realized cost swarm {a['realized_cost']:.12g}, "
+          f"native {b['realized_cost']:.12g}, relative difference {d:.2g}", file=sys.stderr)
+assert max(diffs) <= 1e-9, max(diffs)
+print(f"test-swarm: the swarm's costs equal the native run's (largest relative difference "
+      f"{max(diffs):.2g}); {received} of {sent} measurements fused", file=sys.stderr)
+PY
+
+# ---- 6. timings -------------------------------------------------------------------------------
+ready=$(/usr/bin/python3 - "$work/coordinator.log" "$deployed_at" <<'PY'
+import datetime, sys
+for line in open(sys.argv[1]):
+    if "sensors and the fusion center are ready" in line:
+        stamp = line.split()[0]  # RFC 3339 with nanoseconds: cut to microseconds
+        day, frac = stamp.rstrip("Z").split(".")
+        at = datetime.datetime.fromisoformat(f"{day}.{frac[:6]}+00:00").timestamp()
+        print(f"{at - float(sys.argv[2]):.1f}")
+        break
+else:
+    print("not logged")
+PY
+)
+log "timings: node image $time_node_image s, node setup $time_nodes s, image load $time_load s, deploy to every peer ready $ready s, deploy to the coordinator's completion $time_run s; $(since "$t_total") s so far"
+log "every check passed"
