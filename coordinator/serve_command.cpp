@@ -17,6 +17,7 @@
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/forwarded_options.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/io/run_nonce.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/io/word_option.hpp"
 
@@ -39,6 +40,7 @@ struct ServeOptions {
   std::string arrivals;    // empty: the scenario's `arrivals:`; else poisson or timetable
   std::string state_path;  // the journal (empty: none)
   bool resume = false;     // start from the journal
+  std::string run_nonce;   // --run-nonce: a journal of another nonce is an earlier deployment's
   bool json = false;
   double replan_every = 0.0;  // --replan-every (0: open loop)
 };
@@ -183,7 +185,7 @@ int runServe(ServeOptions options) {
   emulator::RunScenario run;
   run.yaml = readTextFile(options.scenario_path, "scenario");  // read once: parsed and sent
   run.scenario = parseScenarioYaml(run.yaml, options.scenario_path);
-  run.digest = emulator::digestOf(run.yaml);
+  run.digest = digestOf(run.yaml);
   run.seed = options.seed;
   if (!options.arrivals.empty()) {
     run.scenario.arrivals = parseWord<ArrivalMode>(options.arrivals, "--arrivals", "arrivals");
@@ -196,8 +198,14 @@ int runServe(ServeOptions options) {
   // The journal is written before anything is published: with --resume, none means the last
   // coordinator died before it announced anything, and the run starts afresh (chaos seed 69).
   std::error_code error;
-  const bool journaled = !options.state_path.empty() && fs::exists(options.state_path, error);
-  if (options.resume && !journaled) {
+  const bool journal_file = !options.state_path.empty() && fs::exists(options.state_path, error);
+  const bool journaled = journal_file && writtenUnderNonce(options.state_path, options.run_nonce);
+  if (options.resume && journal_file && !journaled) {
+    spdlog::info("the journal at {} is an earlier deployment's (run nonce '{}', this one '{}'): "
+                 "starting the run afresh over it",
+                 options.state_path, recordedNonce(options.state_path).value_or(""),
+                 options.run_nonce);
+  } else if (options.resume && !journaled) {
     spdlog::info("no journal at {}: the coordinator before this one announced nothing; starting "
                  "the run afresh",
                  options.state_path);
@@ -216,6 +224,8 @@ int runServe(ServeOptions options) {
   if (!options.state_path.empty() && !(options.resume && journaled)) {
     try {
       emulator::saveJournal(options.state_path, journal);
+      recordNonce(options.state_path, options.run_nonce);  // after: a journal is never taken
+                                                          // for this deployment's too early
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
@@ -296,6 +306,7 @@ Subcommand addServeCommand(CLI::App& app) {
                 "scenario and --seed must be the run's; republishes the scenario and every "
                 "version, waits for the report of the episode announced last, then goes on")
       ->needs(state);
+  addRunNonceOption(*cmd, options->run_nonce, "a journal in --state");
   cmd->add_flag("--json", options->json, "print a one-line JSON summary at the end");
   return {cmd, [options] { return runServe(*options); }};
 }

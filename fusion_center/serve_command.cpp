@@ -26,6 +26,7 @@
 #include "sensornet/report/report_page.hpp"
 #include "sensornet/emulator/stop_signal.hpp"
 #include "sensornet/io/output_path.hpp"
+#include "sensornet/io/run_nonce.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/report/report_files.hpp"
@@ -49,6 +50,7 @@ struct ServeOptions {
   bool json = false;
   bool resume = false;           // restarted by the launcher: go on from the episode log
   bool resume_unfinished = false;  // --resume when an episode log has no final report beside it
+  std::string run_nonce;           // --run-nonce: a log of another nonce is an earlier deployment's
   bool page = false;               // --page: the report page beside the final report
   bool reference = false;        // beside an external fusion center: write in P/reference
   std::string metrics_address;   // --metrics: serve /metrics (Prometheus) here while the run lives
@@ -62,6 +64,8 @@ constexpr auto kScenarioAfterAbort = 5s;
 // How often the fusion center probes the sensor processes' clocks (docs/wire-protocol.md,
 // "Clocks").
 constexpr std::int64_t kProbePeriodNs = 500'000'000;
+// How often a fusion center not yet present says which sensors' writers it waits for (wall).
+constexpr std::int64_t kAbsenceLogPeriodNs = 5'000'000'000;
 // How often the metrics are rebuilt while the run lives (wall).
 constexpr auto kMetricsPeriod = 250ms;
 
@@ -91,6 +95,14 @@ class FusionCenter {
       episode_log_.emplace(log_path, mode);
       spdlog::info("episode log: {}", log_path.string());
       fault_log_.emplace(sensornet::report::faultLogPath(options_.report_path), mode);
+      // After the logs are truncated: a crash between the two starts afresh again.
+      if (!options_.resume) {
+        try {
+          recordNonce(options_.report_path, options_.run_nonce);
+        } catch (const std::exception& e) {  // a full disk costs a restart's resume, not the run
+          spdlog::warn("{}: a restart of this process will start afresh", e.what());
+        }
+      }
     }
   }
 
@@ -116,8 +128,12 @@ class FusionCenter {
       readTallies(now);
       readStatuses(now);
       readReplies(now);
+      // Under a launcher the launcher names a coordinator it restarted; without one (containers,
+      // a process manager) only this process can tell, by the new coordinator's writer.
+      if (launcher_ == 0) core_.onCoordinatorProcesses(dds_.inputs.coordinatorProcessesSeen(), now);
       core_.tick(now);
       carryOut();
+      presentOnceHeld(now);
     }
     // A run the coordinator aborted at once (a journal it could not write) may end here before
     // its scenario did (discovery matches the topics one by one, slowly on a loaded machine):
@@ -151,7 +167,7 @@ class FusionCenter {
       metrics_->publish(emulator::fusionCenterMetrics(core_, dds_.inputs.book()));
       std::this_thread::sleep_for(kMetricsLinger);
     }
-    if (!launcher_gone) (void)dds_.report_writer.waitForAcks(2s);
+    if (!launcher_gone && dds_.present()) (void)dds_.report_writer->waitForAcks(2s);
     spdlog::info("run {}: {}", options_.run.run_id, wordOf(status));
     if (launcher_gone) emulator::leaveNow(kExitFailure);
     // The report carries the run's status; the exit code says whether this process did its job
@@ -205,6 +221,28 @@ class FusionCenter {
     }
   }
 
+  // The Report and FusionState writers, whose match makes this process present to the
+  // coordinator, once its readers hold every sensor process's writers (FusionCenterEndpoints).
+  // A restarted process is present at once: the run it rejoins is under way.
+  void presentOnceHeld(std::int64_t now) {
+    if (dds_.present()) return;
+    if (options_.resume || core_.holdsEverySensorProcess()) {
+      becomePresent(options_.resume ? "it rejoins a run" : "it holds every sensor's writers");
+    } else if (core_.hasScenario() && now >= next_absence_log_ns_) {
+      if (next_absence_log_ns_ != 0) {
+        spdlog::info("not yet present to the coordinator: this process's readers have not "
+                     "matched the Measurement and EpisodeTally writers of sensors {}",
+                     json(core_.sensorsLackingWriters()).dump());
+      }
+      next_absence_log_ns_ = now + kAbsenceLogPeriodNs;
+    }
+  }
+  void becomePresent(const char* why) {
+    if (dds_.present()) return;
+    dds_.makePresent();
+    spdlog::info("present to the coordinator (its Report and FusionState writers made): {}", why);
+  }
+
   // Until none is left: carrying one out may make more (a refused write's fault).
   void carryOut() {
     for (auto actions = core_.takeActions(); !actions.empty(); actions = core_.takeActions()) {
@@ -220,16 +258,18 @@ class FusionCenter {
     }
     std::vector<sensornet_SensorCounts> counts;
     const sensornet_Report r = wire::reportSample(options_.run.run_id, a.result, a.summary, counts);
-    if (dds_.report_writer.write(r) == dds::WriteResult::TimedOut) {
+    becomePresent("it reports an episode");
+    if (dds_.report_writer->write(r) == dds::WriteResult::TimedOut) {
       spdlog::warn("the report of episode {} timed out on the wire (kept in the file)",
                    a.result.episode);
     }
-    report_instances_.written(a.result.episode);
+    report_instances_.written(*dds_.report_writer, a.result.episode);
   }
   void carryOut(const emulator::PublishState& a) {
     std::vector<double> values;
     // Keep-last 1: a timeout only loses a superseded estimate.
-    (void)dds_.state_writer.write(
+    becomePresent("an episode runs");
+    (void)dds_.state_writer->write(
         wire::fusionStateSample(options_.run.run_id, a, values, wallNowNs()));
   }
   // A log the disk refuses (full) costs its later lines, not the run: the core holds them.
@@ -316,7 +356,8 @@ class FusionCenter {
   std::vector<Arrival> drained_;  // the main loop's (main thread only)
   wire::ClockProbes probes_;
   std::int64_t next_probe_ns_ = 0;
-  wire::ReportInstances report_instances_{dds_.report_writer, options_.run.run_id};
+  wire::ReportInstances report_instances_{options_.run.run_id};
+  std::int64_t next_absence_log_ns_ = 0;
   // After what its callback touches (reader, waitset, inbox): it is destroyed before them, and
   // its destructor waits for a callback in progress.
   dds::DataAvailableListener arrivals_listener_;
@@ -384,10 +425,22 @@ Subcommand addServeCommand(CLI::App& app) {
                 "report does not (an earlier process of the run died), else start afresh")
       ->needs(report)
       ->excludes("--resume");
+  addRunNonceOption(*cmd, options->run_nonce,
+                    "with --resume-unfinished: an episode log beside --report");
   return {cmd, [options] {
             if (options->resume_unfinished) {
-              options->resume = sensornet::report::unfinishedRunAt(options->report_path);
-              if (options->resume) spdlog::info("no final report yet: --resume-unfinished resumes");
+              const bool unfinished = sensornet::report::unfinishedRunAt(options->report_path);
+              options->resume =
+                  unfinished && writtenUnderNonce(options->report_path, options->run_nonce);
+              if (options->resume) {
+                spdlog::info("no final report yet: --resume-unfinished resumes");
+              } else if (unfinished) {
+                spdlog::info("the episode log beside {} is an earlier deployment's (run nonce "
+                             "'{}', this one '{}'): starting afresh over it",
+                             options->report_path,
+                             recordedNonce(options->report_path).value_or(""),
+                             options->run_nonce);
+              }
             }
             (void)options->run.domainConfig();
             // A folder the report cannot go in is bad input now, not after the run.

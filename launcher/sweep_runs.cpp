@@ -6,8 +6,6 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -15,6 +13,7 @@
 #include "sensornet/io/output_file.hpp"
 #include "sensornet/io/scenario_file.hpp"
 #include "sensornet/launcher/process_group.hpp"
+#include "sensornet/report/report_files.hpp"
 #include "sensornet/report/run_record.hpp"
 
 namespace sensornet::launcher {
@@ -96,12 +95,9 @@ void runCell(const fs::path& out, const SweepCell& cell, const RateSchedule& sch
   row["exit_code"] = exit->exit_code;
 
   std::optional<report::RunRecord> run;
-  std::ifstream in(dir / "report.json", std::ios::binary);
-  if (in) {
-    std::ostringstream text;
-    text << in.rdbuf();
+  if (const report::ReportFile file = report::readReport(dir / "report.json"); file.ok()) {
     try {
-      run = report::decodeRunRecord(json::parse(text.str()));
+      run = report::decodeRunRecord(file.report);
     } catch (const std::exception&) {
       run.reset();  // no report to read: the reason says what the launcher said
     }

@@ -13,6 +13,19 @@
 #   otherwise builds a bare Debian 12 with `debootstrap --variant=minbase bookworm` from this
 #   machine's Debian mirror (no registry is needed), imports it and names that;
 # - docker_host_down: removes the base image it made and stops the dockerd it started.
+# And what the container tests share:
+# - docker_test_options USAGE ARGS...: reads --keep and --image NAME into `keep` and
+#   `given_image` (exit 2 with USAGE on anything else);
+# - docker_runtime_image WORK TAG [DOCKER BUILD OPTIONS...]: builds docker/Dockerfile as TAG over
+#   the base image (the client under nice), noting the images there were before (docker_runtime_image_remove WORK TAG removes TAG
+#   and the build's untagged layers again);
+# - docker_native_report WORK: runs the containers' run natively once (build/launcher/sensornet,
+#   scenarios/default.yaml, 4 episodes, time scale 5, seed 7) into WORK/native.json;
+# - docker_costs_match_native WORK REPORT [STATUS]: checks that REPORT has STATUS (completed), all
+#   4 episodes complete, fused every measurement it sent and has the native run's realized costs
+#   (relative 1e-9: the image is built without -march=native);
+# - docker_ready_after LOG DEPLOYED_AT: seconds from DEPLOYED_AT (epoch) to the coordinator's
+#   "ready" line in LOG (`docker service logs --timestamps`), or "not logged".
 # Messages go to stderr, prefixed with $docker_host_log_prefix.
 
 docker_host_log_prefix=${docker_host_log_prefix:-docker-host}
@@ -89,4 +102,106 @@ docker_host_down() {
     local _
     for _ in $(seq 1 100); do kill -0 "$docker_host_dockerd_pid" 2>/dev/null || break; sleep 0.1; done
   fi
+}
+
+docker_test_options() {
+  local usage=$1
+  shift
+  keep=false
+  given_image=""
+  while (($# > 0)); do
+    case "$1" in
+      --keep) keep=true ;;
+      --image) given_image=${2:?--image needs a name}; shift ;;
+      *) echo "usage: $usage" >&2; exit 2 ;;
+    esac
+    shift
+  done
+}
+
+docker_runtime_image() {
+  local work=$1 tag=$2
+  shift 2
+  docker images -aq --no-trunc | sort -u >"$work/images-before"
+  docker_host_log "building the image $tag (docker/Dockerfile; log: $work/build.log)"
+  local started=$SECONDS
+  if ! nice docker build --force-rm "$@" -f docker/Dockerfile --build-arg "BASE_IMAGE=$docker_host_image" \
+    -t "$tag" . >"$work/build.log" 2>&1; then
+    tail -n 30 "$work/build.log" >&2
+    docker_host_log "the image did not build"
+    return 1
+  fi
+  docker_host_log "image built in $((SECONDS - started)) s"
+}
+
+docker_runtime_image_remove() {
+  local work=$1 tag=$2
+  docker rmi -f "$tag" >/dev/null 2>&1 || true
+  [[ -f "$work/images-before" ]] || return 0
+  docker images -aq --no-trunc | sort -u | comm -13 "$work/images-before" - \
+    | xargs -r docker rmi -f >/dev/null 2>&1 || true
+}
+
+docker_native_report() {
+  local work=$1 attempt _ started ok=false
+  [[ -s "$work/native.json" ]] && return 0
+  for attempt in 1 2 3; do
+    # build/ may be mid-rebuild by someone else: wait until its launcher runs, never build it here.
+    for _ in $(seq 1 120); do build/launcher/sensornet --version >/dev/null 2>&1 && break; sleep 15; done
+    started=$SECONDS
+    if build/launcher/sensornet launch scenarios/default.yaml --episodes 4 --time-scale 5 --seed 7 \
+      --run-id "native-$$" --report "$work/native.json" --no-html >"$work/native.log" 2>&1; then
+      ok=true
+      break
+    fi
+    docker_host_log "the native run failed (attempt $attempt): retrying in 30 s"
+    tail -n 5 "$work/native.log" >&2
+    sleep 30
+  done
+  if ! $ok; then
+    tail -n 20 "$work/native.log" >&2
+    docker_host_log "the native run failed"
+    return 1
+  fi
+  docker_host_log "the same run natively (sensornet launch) over after $((SECONDS - started)) s"
+}
+
+docker_costs_match_native() {
+  local work=$1 report=$2 status=${3:-completed}
+  docker_native_report "$work" || return 1
+  /usr/bin/python3 - "$report" "$work/native.json" "$docker_host_log_prefix" "$status" <<'PY'
+import json, sys
+c, n = (json.load(open(p)) for p in sys.argv[1:3])
+who = sys.argv[3]
+assert c["status"] == sys.argv[4], (c["status"], c["faults"])
+episodes = c["per_episode"]
+assert [e["episode"] for e in episodes] == [0, 1, 2, 3], [e["episode"] for e in episodes]
+assert all(e["complete"] for e in episodes)
+sent = sum(s["sent"] for s in c["sensors"]); received = sum(s["received"] for s in c["sensors"])
+assert sent == received > 0, (sent, received)
+assert len(n["per_episode"]) == 4
+diffs = [abs(a["realized_cost"] - b["realized_cost"]) / abs(b["realized_cost"])
+         for a, b in zip(episodes, n["per_episode"])]
+for a, b, d in zip(episodes, n["per_episode"], diffs):
+    print(f"{who}:   episode {a['episode']}: realized cost {a['realized_cost']:.12g}, "
+          f"native {b['realized_cost']:.12g}, relative difference {d:.2g}", file=sys.stderr)
+assert max(diffs) <= 1e-9, max(diffs)
+print(f"{who}: the costs equal the native run's (largest relative difference {max(diffs):.2g}); "
+      f"{received} of {sent} measurements fused", file=sys.stderr)
+PY
+}
+
+docker_ready_after() {
+  /usr/bin/python3 - "$1" "$2" <<'PY'
+import datetime, sys
+for line in open(sys.argv[1]):
+    if "sensors and the fusion center are ready" in line:
+        stamp = line.split()[0]  # RFC 3339 with nanoseconds: cut to microseconds
+        day, frac = stamp.rstrip("Z").split(".")
+        at = datetime.datetime.fromisoformat(f"{day}.{frac[:6]}+00:00").timestamp()
+        print(f"{at - float(sys.argv[2]):.1f}")
+        break
+else:
+    print("not logged")
+PY
 }

@@ -8,17 +8,26 @@
 #   scripts/test-containers.sh --image NAME    test an image built before instead of building
 #
 # 1. builds the image and prints its size;
-# 2. compose, a clean run (4 episodes, seed 7): every container leaves the run, the coordinator
-#    exits 0, the report in the volume says completed with every episode complete and every
-#    measurement fused, report.jsonl and report.html beside it, and every realized cost equals
-#    that of a native `sensornet launch` of the same scenario and seed (build/, relative 1e-9:
-#    the image is built without -march=native);
+# 2. compose, a clean run over the files of an interrupted one: a first `up` (run nonce A) is
+#    killed whole (`compose kill`) once episode 1 is reported, leaving an episode log without a
+#    report and a coordinator journal in the volume; a second `up` of the same project (run nonce
+#    B) must not resume them: both programs log that they start afresh over an earlier
+#    deployment's files, every container leaves the run, the coordinator exits 0, the report in
+#    the volume says completed with no fault, every episode complete and every measurement fused,
+#    report.jsonl and report.html beside it, and every realized cost equals that of a native
+#    `sensornet launch` of the same scenario and seed (build/, relative 1e-9: the image is built
+#    without -march=native);
 # 3. compose with faults (8 episodes): once episode 2 is reported, the container of sensors 3-5
 #    is killed (a sensor death: the coordinator learns it from DDS liveliness and re-plans, so
 #    a later version gives sensors 3-5 rate zero) and the fusion center's process is killed (its
 #    restart policy brings it back, and it resumes from the episode log: every episode is in the
 #    report, the one it missed marked fusion_center_restarted); the report is degraded, exit 3
 #    in the run-outcome table, and names sensor_died for 3, 4 and 5 and the restart;
+# 3b. compose with the coordinator killed (4 episodes): once episode 1 is reported its process is
+#    killed; `restart: on-failure` brings it back and it resumes from its journal in the volume
+#    (same run nonce): it restarted once and exits 0, the report is degraded (exit 3 in the
+#    run-outcome table) with exactly one fault, the coordinator's `restarted`, and every episode
+#    is complete with the native run's cost, as when the launcher restarts a killed coordinator;
 # 4. a single-node swarm (made for the test when this Engine is in none, and left again):
 #    `docker stack deploy` runs 4 episodes to the end over the overlay network with the sensors
 #    as one replicated service of two tasks; the report says completed; the time from deploy to
@@ -34,16 +43,7 @@ source scripts/docker-host.sh
 log() { docker_host_log "$*"; }
 fail() { log "FAIL: $*"; exit 1; }
 
-keep=false
-given_image=""
-while (($# > 0)); do
-  case "$1" in
-    --keep) keep=true ;;
-    --image) given_image=${2:?--image needs a name}; shift ;;
-    *) echo "usage: scripts/test-containers.sh [--keep] [--image NAME]" >&2; exit 2 ;;
-  esac
-  shift
-done
+docker_test_options "scripts/test-containers.sh [--keep] [--image NAME]" "$@"
 
 work=$(mktemp -d /tmp/sensornet-containers.XXXXXX)
 tag=${given_image:-sensornet-test:$$}
@@ -74,13 +74,7 @@ cleanup() {
     $gwbridge_made && docker network rm docker_gwbridge >/dev/null 2>&1 || true
   fi
   if ! $keep && [[ -z "$given_image" ]]; then
-    docker rmi -f "$tag" >/dev/null 2>&1 || true
-    # The build stage's layers too (untagged images the build left): every image that was not
-    # there before the build.
-    if [[ -f "$work/images-before" ]]; then
-      docker images -aq --no-trunc | sort -u | comm -13 "$work/images-before" - \
-        | xargs -r docker rmi -f >/dev/null 2>&1 || true
-    fi
+    docker_runtime_image_remove "$work" "$tag"
   fi
   docker_host_down
   rm -rf "$work"
@@ -99,12 +93,7 @@ compose() {
 
 # ---- 1. the image ------------------------------------------------------------------------------
 if [[ -z "$given_image" ]]; then
-  docker images -aq --no-trunc | sort -u >"$work/images-before"
-  log "building the image $tag (docker/Dockerfile; log: $work/build.log)"
-  started=$SECONDS
-  docker build -f docker/Dockerfile --build-arg "BASE_IMAGE=$docker_host_image" -t "$tag" . \
-    >"$work/build.log" 2>&1 || { tail -n 30 "$work/build.log" >&2; fail "the image did not build"; }
-  log "image built in $((SECONDS - started)) s"
+  docker_runtime_image "$work" "$tag" || fail "the image"
 fi
 size=$(docker image inspect -f '{{.Size}}' "$tag")
 log "image $tag: $((size / 1000000)) MB"
@@ -149,39 +138,51 @@ if [[ ! -x build/launcher/sensornet ]]; then
   cmake -S . -B build -G Ninja >/dev/null && cmake --build build --target sensornet coordinator \
     fusion_center sensor_agent >/dev/null
 fi
-log "compose: a clean run of 4 episodes"
-started=$SECONDS
+# The episode log's count in PROJECT's volume.
+reported() {
+  docker run --rm -v "$1_reports:/reports:ro" "$tag" sh -c 'cat /reports/report.jsonl 2>/dev/null | wc -l'
+}
+# Waits until PROJECT's episode log has N entries (at most 120 s).
+await_reported() {
+  local _
+  for _ in $(seq 1 120); do
+    (($(reported "$1") >= $2)) && return 0
+    sleep 1
+  done
+  fail "episode $(($2 - 1)) of $1 was not reported within 120 s"
+}
+# The PID, on this machine, of PROGRAM in SERVICE's container of PROJECT (PID 1 there is tini).
+program_pid() { pgrep -P "$(docker inspect -f '{{.State.Pid}}' "$(container_of "$1" "$2")")"; }
+
 project="sntclean$$"
 projects+=("$project")
+log "compose: a first up (run nonce A) killed whole once episode 1 is reported"
+(compose_up "$project" SENSORNET_RUN_ID="compose-clean-$$" SENSORNET_EPISODES=4 \
+  SENSORNET_TIME_SCALE=2 SENSORNET_SEED=7 SENSORNET_RUN_NONCE="first-$$") &
+up_pid=$!
+await_reported "$project" 2
+compose -p "$project" -f docker/compose.yaml kill >/dev/null 2>&1
+wait "$up_pid" || true
+mv "$work/$project.log" "$work/$project-first.log"
+log "compose: a clean run of 4 episodes over its files (run nonce B)"
+started=$SECONDS
 compose_up "$project" SENSORNET_RUN_ID="compose-clean-$$" SENSORNET_EPISODES=4 \
-  SENSORNET_TIME_SCALE=5 SENSORNET_SEED=7 || { tail -n 30 "$work/$project.log" >&2; fail "compose up"; }
+  SENSORNET_TIME_SCALE=5 SENSORNET_SEED=7 SENSORNET_RUN_NONCE="second-$$" \
+  || { tail -n 30 "$work/$project.log" >&2; fail "compose up"; }
 log "compose run over after $((SECONDS - started)) s"
+grep -q "coordinator.*journal at .* is an earlier deployment's (run nonce 'first-$$', this one 'second-$$')" \
+  "$work/$project.log" || fail "the coordinator did not say it started afresh over the first up's journal"
+grep -q "fusion-center.*episode log beside .* is an earlier deployment's (run nonce 'first-$$'" \
+  "$work/$project.log" || fail "the fusion center did not say it started afresh over the first up's log"
 code=$(docker inspect -f '{{.State.ExitCode}}' "$(container_of "$project" coordinator)")
 [[ "$code" == 0 ]] || { tail -n 30 "$work/$project.log" >&2; fail "the coordinator exited $code"; }
 from_volume "${project}_reports" report.json >"$work/clean.json"
 from_volume "${project}_reports" report.jsonl >/dev/null || fail "no report.jsonl in the volume"
 from_volume "${project}_reports" report.html >"$work/clean.html" || fail "no report page in the volume"
 grep -q "<svg" "$work/clean.html" || fail "the report page in the volume has no plot"
-started=$SECONDS
-build/launcher/sensornet launch scenarios/default.yaml --episodes 4 --time-scale 5 --seed 7 \
-  --run-id "native-$$" --report "$work/native.json" --no-html >"$work/native.log" 2>&1 \
-  || { tail -n 20 "$work/native.log" >&2; fail "the native run"; }
-log "the same run natively (sensornet launch) over after $((SECONDS - started)) s"
-python3 - "$work/clean.json" "$work/native.json" <<'PY' || fail "the compose run's report"
-import json, sys
-c, n = (json.load(open(p)) for p in sys.argv[1:3])
-assert c["status"] == "completed", (c["status"], c["faults"])
-episodes = c["per_episode"]
-assert [e["episode"] for e in episodes] == [0, 1, 2, 3], [e["episode"] for e in episodes]
-assert all(e["complete"] for e in episodes)
-sent = sum(s["sent"] for s in c["sensors"]); received = sum(s["received"] for s in c["sensors"])
-assert sent == received > 0, (sent, received)
-worst = max(abs(a["realized_cost"] - b["realized_cost"]) / abs(b["realized_cost"])
-            for a, b in zip(episodes, n["per_episode"]))
-assert len(n["per_episode"]) == 4 and worst <= 1e-9, worst
-print(f"test-containers: compose costs equal the native run's (largest relative difference "
-      f"{worst:.2g}); {received} measurements fused", file=sys.stderr)
-PY
+docker_costs_match_native "$work" "$work/clean.json" || fail "the compose run's report"
+check_report "$work/clean.json" 'assert r["faults"] == [], r["faults"]' \
+  || fail "the clean run over an earlier up's files has faults"
 
 # ---- 3. compose with faults -------------------------------------------------------------------
 log "compose: 8 episodes, sensors 3-5 killed and the fusion center killed after episode 2"
@@ -191,20 +192,12 @@ run_id="compose-faults-$$"
 (compose_up "$project" SENSORNET_RUN_ID="$run_id" SENSORNET_EPISODES=8 SENSORNET_TIME_SCALE=2 \
   SENSORNET_SEED=7) &
 up_pid=$!
-reported() {  # the episode log's count in the volume
-  docker run --rm -v "${project}_reports:/reports:ro" "$tag" sh -c \
-    'cat /reports/report.jsonl 2>/dev/null | wc -l'
-}
-for _ in $(seq 1 120); do
-  (($(reported) >= 3)) && break
-  sleep 1
-done
-(($(reported) >= 3)) || fail "episode 2 was not reported within 120 s"
+await_reported "$project" 3
 docker kill "$(container_of "$project" sensors-3-5)" >/dev/null
 fusion=$(container_of "$project" fusion-center)
 # The fusion center's own process dies (not a `docker kill`, which the Engine takes as an
 # operator's stop and does not restart): PID 1 is tini, the program its child.
-kill -9 "$(pgrep -P "$(docker inspect -f '{{.State.Pid}}' "$fusion")")"
+kill -9 "$(program_pid "$project" fusion-center)"
 wait "$up_pid" || { tail -n 30 "$work/$project.log" >&2; fail "compose up with faults"; }
 restarts=$(docker inspect -f '{{.RestartCount}}' "$fusion")
 ((restarts == 1)) || fail "the fusion center restarted $restarts times, not once"
@@ -224,6 +217,31 @@ assert zero, "no version after the death gives sensors 3-5 rate zero"
 print("test-containers: faults:", ", ".join(sorted(set(kinds))), "; re-planned in version(s)", zero,
       "; complete episodes", sum(e["complete"] for e in r["per_episode"]), "of 8", file=sys.stderr)
 ' || fail "the report of the run with faults"
+
+# ---- 3b. compose with the coordinator killed --------------------------------------------------
+log "compose: 4 episodes, the coordinator killed after episode 1"
+project="sntcoord$$"
+projects+=("$project")
+(compose_up "$project" SENSORNET_RUN_ID="compose-coordinator-$$" SENSORNET_EPISODES=4 \
+  SENSORNET_TIME_SCALE=2 SENSORNET_SEED=7 SENSORNET_RUN_NONCE="coordinator-$$") &
+up_pid=$!
+await_reported "$project" 2
+coordinator=$(container_of "$project" coordinator)
+kill -9 "$(program_pid "$project" coordinator)"
+wait "$up_pid" || { tail -n 30 "$work/$project.log" >&2; fail "compose up with the coordinator killed"; }
+restarts=$(docker inspect -f '{{.RestartCount}}' "$coordinator")
+((restarts == 1)) || fail "the coordinator restarted $restarts times, not once"
+code=$(docker inspect -f '{{.State.ExitCode}}' "$coordinator")
+[[ "$code" == 0 ]] || { tail -n 30 "$work/$project.log" >&2; fail "the restarted coordinator exited $code"; }
+grep -q "coordinator.*resuming from /reports/coordinator-state.json" "$work/$project.log" || fail "the restarted coordinator did not resume"
+from_volume "${project}_reports" report.json >"$work/coordinator.json"
+docker_costs_match_native "$work" "$work/coordinator.json" degraded \
+  || fail "the run with the coordinator killed"
+check_report "$work/coordinator.json" '
+kinds = [(f["kind"], f["process"], f.get("survived")) for f in r["faults"]]
+assert kinds == [("restarted", "coordinator", True)], kinds
+print("test-containers: the coordinator killed:", r["faults"][0]["detail"], file=sys.stderr)
+' || fail "the faults of the run with the coordinator killed"
 
 # ---- 4. a swarm -------------------------------------------------------------------------------
 if [[ "$(docker info -f '{{.Swarm.LocalNodeState}}')" != active ]]; then
@@ -254,18 +272,6 @@ check_report "$work/swarm.json" '
 assert r["status"] == "completed", (r["status"], r["faults"])
 assert len(r["per_episode"]) == 4 and all(e["complete"] for e in r["per_episode"])
 ' || fail "the swarm run's report"
-ready=$(python3 - "$work/swarm-coordinator.log" "$deployed_at" <<'PY'
-import datetime, sys
-for line in open(sys.argv[1]):
-    if "sensors and the fusion center are ready" in line:
-        stamp = line.split()[0]  # RFC 3339 with nanoseconds: cut to microseconds
-        day, frac = stamp.rstrip("Z").split(".")
-        at = datetime.datetime.fromisoformat(f"{day}.{frac[:6]}+00:00").timestamp()
-        print(f"{at - float(sys.argv[2]):.1f} s")
-        break
-else:
-    print("not logged")
-PY
-)
-log "swarm run completed in $((SECONDS - started)) s; every peer ready $ready after the deploy"
+ready=$(docker_ready_after "$work/swarm-coordinator.log" "$deployed_at")
+log "swarm run completed in $((SECONDS - started)) s; every peer ready $ready s after the deploy"
 log "every check passed"

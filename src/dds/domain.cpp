@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cstdint>
 
+#include "sensornet/core/digest.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/dds/dds_error.hpp"
 
@@ -57,12 +58,7 @@ void validateRunId(std::string_view run_id, const std::string& source) {
 }
 
 dds_domainid_t domainIdForRun(std::string_view run_id) {
-  std::uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a, 64 bit
-  for (char c : run_id) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001b3ULL;
-  }
-  return static_cast<dds_domainid_t>(1 + hash % kMaxDomainId);
+  return static_cast<dds_domainid_t>(1 + fnv1a64(run_id) % kMaxDomainId);
 }
 
 dds_domainid_t parseDomainId(std::string_view text, const std::string& source) {

@@ -78,6 +78,14 @@ std::vector<ParticipantKey> participantsOfMatchedWriters(const detail::ReaderCor
                         dds_get_matched_publication_data);
 }
 
+std::optional<ParticipantKey> participantOfMatchedWriter(const detail::ReaderCore& reader,
+                                                         dds_instance_handle_t publication) {
+  const std::vector<ParticipantKey> keys =
+      participantsOf(reader.handle(), {publication}, dds_get_matched_publication_data);
+  if (keys.empty()) return std::nullopt;
+  return keys.front();
+}
+
 bool sharesParticipant(const std::vector<std::vector<ParticipantKey>>& sets) {
   if (sets.empty()) return false;
   std::vector<ParticipantKey> common = sets.front();

@@ -270,7 +270,9 @@ void CoordinatorCore::tickAwaitingPeers(std::int64_t now_ns) {
                          config_.ready_timeout_s, readySensorsInService(), sensorsInService(),
                          silent.empty() ? std::string()
                                         : " (not ready: sensors " + formatSensorIds(silent) + ")",
-                         fusion_matched_ ? "present" : "missing"));
+                         fusion_matched_ ? "present"
+                                         : "missing (not started, or not yet holding every "
+                                           "sensor's writers: its log names whose)"));
     phase_ = Phase::Ended;
     exit_code_ = kCoordinatorExitFailed;
     act(ExitProgram{kCoordinatorExitFailed, std::nullopt});

@@ -224,8 +224,16 @@ void FusionCenterCore::recordDeaths(const SensorFailure& failure) {
       return f.kind == FaultKind::SensorDied && f.sensor == j;
     });
     if (known) continue;
+    // Which process (and so which host) it lived in, as that process answered the clock probes:
+    // across machines, which machine went.
+    std::string hosted_by;
+    for (const ClockOffsets::Process& p : clocks_.processes()) {
+      if (std::find(p.sensors.begin(), p.sensors.end(), j) != p.sensors.end()) {
+        hosted_by = " (hosted by " + p.name + ")";
+      }
+    }
     recordFault(faultEntry(FaultKind::SensorDied, "sensor_agent", j, failure.episode, failure.at_s,
-                           "the coordinator announced it failed: " + failure.detail));
+                           "the coordinator announced it failed: " + failure.detail + hosted_by));
   }
 }
 
@@ -765,14 +773,15 @@ void FusionCenterCore::giveUpUnheldStarts(std::int64_t now) {
   }
 }
 
-bool FusionCenterCore::holdsEverySensorProcess() const { return sensorsLackingWriters().empty(); }
+bool FusionCenterCore::holdsEverySensorProcess() const {
+  return hasScenario() && sensorsLackingWriters().empty();
+}
 
 // A live sensor (not declared failed, not failed nor stopped by its own word) whose process this
 // fusion center does not hold: no status of it came to this process (its status writer has not
-// matched this process's reader, or the process is stalled), or the Measurement reader has not
-// matched a writer of the process that wrote its status. A status that came proves that the
-// process's participant has discovered this one's readers: they are announced together, the
-// Measurement reader first, so its writers match the Measurement reader no later than that.
+// matched this process's reader, or the process is stalled), or the Measurement or EpisodeTally
+// reader has not matched a writer of the process that wrote its status. That is this side of the
+// match; the process's READY says only that its writers matched these readers on its side.
 std::vector<int> FusionCenterCore::sensorsLackingWriters() const {
   std::vector<int> lacking;
   if (!hasScenario()) return lacking;
@@ -785,9 +794,26 @@ std::vector<int> FusionCenterCore::sensorsLackingWriters() const {
     }
     const SensorState state = process->second.state;
     if (state == SensorState::Failed || state == SensorState::Stopped) continue;
-    if (!writers_.measurementWriterMatchedWith(process->second.status_writer)) lacking.push_back(j);
+    if (!writers_.writersMatchedWith(process->second.status_writer)) lacking.push_back(j);
   }
   return lacking;
+}
+
+void FusionCenterCore::onCoordinatorProcesses(std::size_t seen, std::int64_t /*now*/) {
+  for (; coordinators_seen_ < seen; ++coordinators_seen_) {
+    if (coordinators_seen_ == 0) continue;  // the first is the run's own
+    const std::optional<std::uint32_t> episode =
+        open_.empty() ? std::nullopt : std::optional<std::uint32_t>(open_.begin()->first);
+    report::FaultRecord fault = faultEntry(
+        FaultKind::Restarted, "coordinator", std::nullopt, episode, std::nullopt,
+        "coordinator process " + std::to_string(coordinators_seen_ + 1) +
+            " of the run took over (its EpisodeControl writer matched): the coordinator was "
+            "restarted, by a restart policy or by hand (no launcher supervises this run), and "
+            "resumed from its journal or started the run again");
+    fault.survived = true;
+    log(spdlog::level::warn, fault.detail);
+    recordFault(std::move(fault));
+  }
 }
 
 // The entry and Report of an episode this process could not fuse (it restarted during it).

@@ -2,22 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
-#include <cstdio>
-
 #include "sensornet/core/input_error.hpp"
 
 namespace sensornet::emulator {
-
-std::string digestOf(std::string_view text) {
-  std::uint64_t hash = 0xcbf29ce484222325ULL;
-  for (const char c : text) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001b3ULL;
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
-  return hex;
-}
 
 void RunInputState::reject(RejectionReason reason, std::string_view detail) {
   ++rejected_[std::string(wordOf(reason))];

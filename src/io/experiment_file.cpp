@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "sensornet/core/digest.hpp"
 #include "sensornet/core/input_error.hpp"
 #include "sensornet/core/words.hpp"
 #include "sensornet/emulator/vocabulary.hpp"
@@ -29,15 +30,6 @@ std::string exact(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", value);
   return text;
-}
-
-// A short digest of a section's text, so that a key changes when the section under a name does.
-std::string digest(const std::string& text) {
-  std::uint64_t h = 14695981039346656037ULL;  // FNV-1a, 64 bits
-  for (const unsigned char c : text) h = (h ^ c) * 1099511628211ULL;
-  char hex[24];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
 }
 
 std::string flowYaml(const YAML::Node& node) {
@@ -366,7 +358,7 @@ std::string SweepCell::key() const {
   if (!emulate) return k + ";runs=" + std::to_string(runs);
   const EmulatedRuns& e = *emulate;
   const auto section = [](const std::string& name, const std::string& yaml) {
-    return name.empty() ? std::string("scenario") : name + "#" + digest(yaml).substr(0, 8);
+    return name.empty() ? std::string("scenario") : name + "#" + digestOf(yaml).substr(0, 8);
   };
   return k + ";emulate(episodes=" + std::to_string(e.episodes) +
          ",time_scale=" + exact(e.time_scale) +
@@ -375,7 +367,7 @@ std::string SweepCell::key() const {
          (e.on_sensor_failure.empty() ? "default" : e.on_sensor_failure) + ")";
 }
 
-std::string SweepCell::id() const { return digest(key()); }
+std::string SweepCell::id() const { return digestOf(key()); }
 
 std::string SweepCell::scenarioYaml() const {
   YAML::Node root;

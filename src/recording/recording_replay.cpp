@@ -47,7 +47,7 @@ class RecordedWriters final : public WriterFacts {
   [[nodiscard]] std::uint32_t matchedMeasurementWriters() const override {
     return measurement_writers_;
   }
-  [[nodiscard]] bool measurementWriterMatchedWith(WriterId) const override { return true; }
+  [[nodiscard]] bool writersMatchedWith(WriterId) const override { return true; }
   [[nodiscard]] const std::vector<int>& sensorsOf(SensorTopic, WriterId w) const override {
     static const std::vector<int> none;
     const auto it = sensors_.find(w);

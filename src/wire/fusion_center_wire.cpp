@@ -7,29 +7,13 @@
 #include <limits>
 #include <optional>
 
+#include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/dds/wire.hpp"
 #include "sensornet/emulator/run_partitions.hpp"
 #include "sensornet/emulator/episode_controls.hpp"  // wallNowNs
 #include "sensornet/wire/fusion_center_events.hpp"
 
 namespace sensornet::wire {
-namespace {
-
-// The participant (process) of a writer the reader has matched; nullopt when it has not.
-std::optional<dds_guid_t> participantOf(const dds::detail::ReaderCore& reader,
-                                        dds_instance_handle_t writer) {
-  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader.handle(), writer);
-  if (endpoint == nullptr) return std::nullopt;
-  const dds_guid_t participant = endpoint->participant_key;
-  dds_builtintopic_free_endpoint(endpoint);
-  return participant;
-}
-
-bool sameGuid(const dds_guid_t& a, const dds_guid_t& b) {
-  return std::equal(std::begin(a.v), std::end(a.v), std::begin(b.v));
-}
-
-}  // namespace
 
 const std::vector<int>& ReaderFacts::sensorsOf(emulator::SensorTopic topic,
                                                emulator::WriterId w) const {
@@ -53,28 +37,40 @@ std::uint32_t ReaderFacts::matchedMeasurementWriters() const {
   return measurements_.matchedWriters();
 }
 
-bool ReaderFacts::measurementWriterMatchedWith(emulator::WriterId status_writer) const {
-  const std::optional<dds_guid_t> process = participantOf(statuses_, status_writer);
+bool ReaderFacts::writersMatchedWith(emulator::WriterId status_writer) const {
+  const std::optional<dds::ParticipantKey> process =
+      dds::participantOfMatchedWriter(statuses_, status_writer);
   if (!process) return false;
-  std::vector<dds_instance_handle_t> writers(measurements_.matchedWriters() + 8);
-  const dds_return_t n =
-      dds_get_matched_publications(measurements_.handle(), writers.data(), writers.size());
-  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, static_cast<dds_return_t>(writers.size()));
-       ++i) {
-    const auto writer = participantOf(measurements_, writers[static_cast<std::size_t>(i)]);
-    if (writer && sameGuid(*writer, *process)) return true;
-  }
-  return false;
+  const auto holds = [&process](const std::vector<dds::ParticipantKey>& participants) {
+    return std::binary_search(participants.begin(), participants.end(), *process);
+  };
+  return holds(measurement_processes_.of(measurements_)) && holds(tally_processes_.of(tallies_));
 }
 
-void ReportInstances::written(std::uint32_t episode) {
+const std::vector<dds::ParticipantKey>& ReaderFacts::MatchedProcesses::of(
+    const dds::detail::ReaderCore& reader) {
+  dds_subscription_matched_status_t status{};
+  if (dds_get_subscription_matched_status(reader.handle(), &status) < 0) {
+    participants_.clear();
+    return participants_;
+  }
+  // A match or an unmatch since the last look changes one of the two counts.
+  if (status.total_count != total_ || status.current_count != current_) {
+    total_ = status.total_count;
+    current_ = status.current_count;
+    participants_ = dds::participantsOfMatchedWriters(reader);
+  }
+  return participants_;
+}
+
+void ReportInstances::written(dds::Writer<sensornet_Report>& writer, std::uint32_t episode) {
   registered_.push_back(episode);
   if (registered_.size() <= kKept) return;
   sensornet_Report key{};
   key.run_id = dds::borrowString(run_id_);
   key.episode = registered_.front();
   registered_.pop_front();
-  (void)writer_.unregisterWrittenInstance(key);  // a timeout keeps the report longer
+  (void)writer.unregisterWrittenInstance(key);  // a timeout keeps the report longer
 }
 
 namespace {
@@ -99,21 +95,26 @@ FusionCenterEndpoints::FusionCenterEndpoints(const dds::DomainConfig& config, bo
       status_reader(participant, status_topic,
                     dds::readerQosMatching<sensornet_SensorStatus>(
                         emulator::sensorPartitionPattern(participant.partition()))),
-      report_writer(participant, report_topic,
-                    outputQos(dds::reportWriterQos(), participant, reference)),
-      state_writer(participant, state_topic,
-                   outputQos(dds::defaultEndpointQos<sensornet_FusionState>(), participant,
-                             reference)),
       probe_writer(participant, probe_topic,
                    outputQos(dds::defaultEndpointQos<sensornet_ClockProbe>(), participant,
                              reference)),
       echo_reader(participant, echo_topic,
                   dds::readerQosMatching<sensornet_ClockEcho>(
-                      emulator::sensorPartitionPattern(participant.partition()))) {
+                      emulator::sensorPartitionPattern(participant.partition()))),
+      reference_(reference) {
   inputs.attachTo(waitset);
   waitset.attach(tally_ready, 1);
   waitset.attach(status_ready, 2);
   waitset.attach(echo_ready, 3);
+}
+
+void FusionCenterEndpoints::makePresent() {
+  if (present()) return;
+  report_writer.emplace(participant, report_topic,
+                        outputQos(dds::reportWriterQos(), participant, reference_));
+  state_writer.emplace(participant, state_topic,
+                       outputQos(dds::defaultEndpointQos<sensornet_FusionState>(), participant,
+                                 reference_));
 }
 
 void ClockProbes::send(dds::Writer<sensornet_ClockProbe>& writer, const std::string& run_id,

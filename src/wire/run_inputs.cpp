@@ -53,6 +53,18 @@ void RunInputs::attachTo(dds::WaitSet& waitset) {
   waitset.attach(control_ready_, kScenarioToken + 2);
 }
 
+std::size_t RunInputs::coordinatorProcessesSeen() {
+  dds_subscription_matched_status_t status{};
+  if (dds_get_subscription_matched_status(control_reader_.handle(), &status) >= 0 &&
+      status.total_count != control_matches_) {
+    control_matches_ = status.total_count;
+    for (const dds::ParticipantKey& p : dds::participantsOfMatchedWriters(control_reader_)) {
+      coordinators_.insert(p);
+    }
+  }
+  return coordinators_.size();
+}
+
 RunInputs::Update RunInputs::poll() {
   Update update;
   for (auto& received : scenario_reader_.take(4).samples) {

@@ -42,6 +42,10 @@ using ParticipantKey = std::array<std::uint8_t, 16>;
 // The participants of the writers `reader` matches now, sorted, without repeats.
 [[nodiscard]] std::vector<ParticipantKey> participantsOfMatchedWriters(
     const detail::ReaderCore& reader);
+// The participant of the writer `publication` that `reader` matches; nullopt when it does not
+// (or no longer).
+[[nodiscard]] std::optional<ParticipantKey> participantOfMatchedWriter(
+    const detail::ReaderCore& reader, dds_instance_handle_t publication);
 
 // True when a participant is in every one of `sets` (each sorted, as the two above return).
 [[nodiscard]] bool sharesParticipant(const std::vector<std::vector<ParticipantKey>>& sets);

@@ -84,9 +84,11 @@ class WriterFacts {
   [[nodiscard]] virtual bool live(SensorTopic topic, WriterId w) const = 0;
   // How many Measurement writers the reader has matched.
   [[nodiscard]] virtual std::uint32_t matchedMeasurementWriters() const = 0;
-  // The Measurement reader has matched a writer of the participant (process) whose SensorStatus
-  // writer is `status_writer`.
-  [[nodiscard]] virtual bool measurementWriterMatchedWith(WriterId status_writer) const = 0;
+  // The Measurement and the EpisodeTally reader have each matched a writer of the participant
+  // (process) whose SensorStatus writer is `status_writer`: what it writes from now reaches
+  // this process. (Under DDS Security each side matches when the other's crypto tokens come,
+  // so that a writer has matched this reader says nothing of this reader's side.)
+  [[nodiscard]] virtual bool writersMatchedWith(WriterId status_writer) const = 0;
   // The sensors the writer `w` of `topic` speaks for, as the partition it writes in says
   // (run_partitions.hpp; in a secured run its authenticated identity), sorted; empty when it
   // names none or is not known. Asked for every sample: answered from a cache.
@@ -200,6 +202,11 @@ class FusionCenterCore {
   // The coordinator refused command `command_id` because its sender had no right to send it
   // (a CommandReply whose reason begins with kNotPermitted): a fault, once per command.
   void onCommandRefused(std::uint64_t command_id, const std::string& reason, std::int64_t now);
+  // `seen` coordinator processes have driven the run so far (their EpisodeControl writers): each
+  // beyond the first is a coordinator restarted (by a restart policy: no launcher supervises
+  // this run, or the launcher's own fault would name it), a `restarted` fault of the
+  // coordinator that survived. Call it only when no launcher supervises the run.
+  void onCoordinatorProcesses(std::size_t seen, std::int64_t now);
   // The launcher that started this process died (kill -9), and its parent-death signal is what
   // stops this one: the run ends interrupted with that death as its cause, recorded here since
   // no launcher is left to add it to the report (issue 31).
@@ -228,8 +235,14 @@ class FusionCenterCore {
   [[nodiscard]] const RunReport& report() const { return *report_; }
   [[nodiscard]] const std::vector<report::FaultRecord>& faults() const { return faults_; }
   [[nodiscard]] const nlohmann::json& stalls() const { return stalls_; }
-  // Live sensor processes whose Measurement writer this process does not hold (by identity).
+  // Live sensor processes whose Measurement and EpisodeTally writers this process does not hold
+  // (by identity).
   [[nodiscard]] std::vector<int> sensorsLackingWriters() const;
+  // It has the scenario and holds the writers of every live sensor process: what a fusion
+  // center waits for before it makes itself present to the coordinator, which then starts the
+  // first episode (docs/wire-protocol.md, "Fusion center"); a restarted one waits for it before
+  // it fuses.
+  [[nodiscard]] bool holdsEverySensorProcess() const;
 
  private:
   struct OpenEpisode;
@@ -268,7 +281,6 @@ class FusionCenterCore {
   [[nodiscard]] double awakeSince(std::int64_t from_ns, std::int64_t now_ns) const;
   void giveUpUnheldStarts(std::int64_t now);
   void answerRestarted(std::int64_t now);
-  [[nodiscard]] bool holdsEverySensorProcess() const;
   [[nodiscard]] std::set<std::int32_t> liveSensorProcesses() const;
   void finishRestarted(std::uint32_t episode, std::int64_t now);
   [[nodiscard]] bool silentTooLong(const OpenEpisode& open, std::int64_t now) const;
@@ -327,6 +339,7 @@ class FusionCenterCore {
   std::map<std::uint32_t, std::int64_t> restarted_;  // not fusable here -> end wall time (0: past)
   std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses
   bool holds_writers_ = false;          // restarted: held every sensor process's writers once
+  std::size_t coordinators_seen_ = 0;   // onCoordinatorProcesses
   std::set<std::uint32_t> began_unheld_;  // episodes that began before that: not fused
   std::set<int> answered_without_;  // sensors whose writers a restarted episode's answer lacked
   // (episode, sensor) closed with no tally -> when it was closed (the stall limit), or

@@ -26,6 +26,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sensornet/core/digest.hpp"  // digestOf: processes agree on the scenario by it
 #include "sensornet/core/emulated_plant.hpp"
 #include "sensornet/core/scenario.hpp"
 #include "sensornet/emulator/episode_controls.hpp"
@@ -41,9 +42,6 @@ struct RunScenario {
   std::string yaml;
   std::uint64_t seed = 0;
 };
-
-// A 16-hex-digit digest of a text (FNV-1a 64), to check that processes agree on the scenario.
-[[nodiscard]] std::string digestOf(std::string_view text);
 
 class RunInputState {
  public:

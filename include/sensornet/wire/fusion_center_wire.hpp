@@ -6,8 +6,10 @@
 //
 //   FusionCenterEndpoints dds(run.domainConfig(), /*reference=*/false);
 //   FusionCenterCore core(config, dds.facts, now);
-//   dds.report_instances.written(episode);   // after each Report: unregisters the oldest
-//   dds.state_writer.write(fusionStateSample(run_id, action, values, now));
+//   if (!dds.present() && core.holdsEverySensorProcess()) dds.makePresent();
+//   dds.report_writer->write(sample);
+//   report_instances.written(*dds.report_writer, episode);  // unregisters the oldest
+//   dds.state_writer->write(fusionStateSample(run_id, action, values, now));
 
 #include <cstdint>
 #include <deque>
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "sensornet/dds/domain.hpp"
+#include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
@@ -47,16 +50,31 @@ class ReaderFacts final : public emulator::WriterFacts {
                                                   emulator::WriterId w) const override;
   [[nodiscard]] bool live(emulator::SensorTopic topic, emulator::WriterId w) const override;
   [[nodiscard]] std::uint32_t matchedMeasurementWriters() const override;
-  // Whether a Measurement writer of the process (participant) of `status_writer` is matched.
-  [[nodiscard]] bool measurementWriterMatchedWith(emulator::WriterId status_writer) const override;
+  // Whether the Measurement and EpisodeTally readers have each matched a writer of the process
+  // (participant) of `status_writer`.
+  [[nodiscard]] bool writersMatchedWith(emulator::WriterId status_writer) const override;
 
  private:
   [[nodiscard]] const dds::detail::ReaderCore& readerOf(emulator::SensorTopic topic) const;
 
+  // The participants of the writers a reader has matched, looked up again only when its match
+  // changed (a fusion center waiting to be present asks for every sensor, every turn).
+  class MatchedProcesses {
+   public:
+    const std::vector<dds::ParticipantKey>& of(const dds::detail::ReaderCore& reader);
+
+   private:
+    std::uint32_t total_ = 0;
+    std::uint32_t current_ = 0;
+    std::vector<dds::ParticipantKey> participants_;  // sorted
+  };
+
   const dds::detail::ReaderCore& measurements_;
   const dds::detail::ReaderCore& tallies_;
   const dds::detail::ReaderCore& statuses_;
-  mutable SensorSpeakers speakers_;  // main thread only
+  mutable SensorSpeakers speakers_;                 // main thread only
+  mutable MatchedProcesses measurement_processes_;  // likewise
+  mutable MatchedProcesses tally_processes_;
 };
 
 // The Report topic keeps the last report of each episode for late joiners: an instance per
@@ -67,13 +85,11 @@ class ReaderFacts final : public emulator::WriterFacts {
 class ReportInstances {
  public:
   static constexpr std::size_t kKept = 64;
-  ReportInstances(dds::Writer<sensornet_Report>& writer, std::string run_id)
-      : writer_(writer), run_id_(std::move(run_id)) {}
-  // After the Report of `episode` was written.
-  void written(std::uint32_t episode);
+  explicit ReportInstances(std::string run_id) : run_id_(std::move(run_id)) {}
+  // After `writer` wrote the Report of `episode`.
+  void written(dds::Writer<sensornet_Report>& writer, std::uint32_t episode);
 
  private:
-  dds::Writer<sensornet_Report>& writer_;
   std::string run_id_;
   std::deque<std::uint32_t> registered_;
 };
@@ -86,10 +102,20 @@ class ReportInstances {
 // it); the CommandReply reader; the Report and FusionState writers, in the run's partition or,
 // as the reference (`reference`), in P/reference, where neither the coordinator nor the
 // launcher reads them. The waitset wakes on the inputs, tallies and statuses.
+//
+// The Report and FusionState writers are made by makePresent(), not with the rest: once they
+// match, the coordinator counts this fusion center present and may start the first episode
+// (docs/wire-protocol.md, "The readiness handshake"), so they wait until this process's readers
+// hold every sensor process's writers (FusionCenterCore::holdsEverySensorProcess). A sensor's
+// READY covers only its side: under DDS Security, and on a lossy link, this side can match
+// seconds later, and a volatile reader never gets what was written before it matched.
 struct FusionCenterEndpoints {
   FusionCenterEndpoints(const dds::DomainConfig& config, bool reference);
   FusionCenterEndpoints(const FusionCenterEndpoints&) = delete;
   FusionCenterEndpoints& operator=(const FusionCenterEndpoints&) = delete;
+
+  void makePresent();
+  [[nodiscard]] bool present() const { return report_writer.has_value(); }
 
   dds::Domain domain;
   dds::Participant participant;
@@ -104,8 +130,8 @@ struct FusionCenterEndpoints {
   dds::Reader<sensornet_SensorStatus> status_reader;
   dds::Topic<sensornet_CommandReply> reply_topic{participant};
   dds::Reader<sensornet_CommandReply> reply_reader{participant, reply_topic};
-  dds::Writer<sensornet_Report> report_writer;
-  dds::Writer<sensornet_FusionState> state_writer;
+  std::optional<dds::Writer<sensornet_Report>> report_writer;       // makePresent()
+  std::optional<dds::Writer<sensornet_FusionState>> state_writer;  // likewise
   // Clocks (docs/wire-protocol.md, "Clocks"): probes in P (P/reference for a reference, where
   // no sensor answers), the sensor processes' echoes from P/sensors/*.
   dds::Topic<sensornet_ClockProbe> probe_topic{participant};
@@ -117,6 +143,9 @@ struct FusionCenterEndpoints {
   dds::ReadCondition status_ready{status_reader};
   dds::ReadCondition echo_ready{echo_reader};
   ReaderFacts facts{measurement_reader, tally_reader, status_reader, participant.partition()};
+
+ private:
+  bool reference_;
 };
 
 // Takes every Measurement the reader holds (in batches: a small one keeps the loan and its info

@@ -20,6 +20,7 @@
 #include <set>
 #include <string>
 
+#include "sensornet/dds/matched_endpoints.hpp"
 #include "sensornet/dds/participant.hpp"
 #include "sensornet/dds/reader.hpp"
 #include "sensornet/dds/topics.hpp"
@@ -66,6 +67,10 @@ class RunInputs {
   // True once the EpisodeControl reader matched a writer (the coordinator's): before that an
   // episode's announcement may be missed, since a late joiner gets only the latest control.
   [[nodiscard]] bool controlMatched() const { return control_reader_.matchedWriters() > 0; }
+  // How many coordinator processes (participants) have had their EpisodeControl writer matched
+  // with this reader so far: more than one means the coordinator was restarted (or replaced)
+  // while the run went on. Cheap when nothing changed: call it every turn.
+  [[nodiscard]] std::size_t coordinatorProcessesSeen();
   // Samples refused, by reason: malformed scenario or schedule, stale schedule, bad episode
   // control.
   [[nodiscard]] const std::map<std::string, std::uint64_t>& rejected() const {
@@ -79,6 +84,8 @@ class RunInputs {
   dds::Reader<sensornet_Scenario> scenario_reader_;
   dds::Reader<sensornet_Schedule> schedule_reader_;
   dds::Reader<sensornet_EpisodeControl> control_reader_;
+  std::uint32_t control_matches_ = 0;             // the reader's total match count, last looked
+  std::set<dds::ParticipantKey> coordinators_;   // every participant of a matched writer
   dds::ReadCondition scenario_ready_;
   dds::ReadCondition schedule_ready_;
   dds::ReadCondition control_ready_;

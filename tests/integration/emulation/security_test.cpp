@@ -150,7 +150,7 @@ dds::WriteResult writeHijackingSchedule(dds::Writer<sensornet_Schedule>& writer,
   rates.col(0).setConstant(12.0);
   v.schedule = RateSchedule(scenario.horizon_s, rates);
   v.surrogate = SurrogateKind::File;
-  return wire::publishSchedule(writer, run_id, emulator::digestOf(yaml), v);
+  return wire::publishSchedule(writer, run_id, digestOf(yaml), v);
 }
 
 // Makes the security files of a run of the default scenario in `dir` with `sensornet pki init`

@@ -40,7 +40,7 @@ class FakeWriters final : public WriterFacts {
  public:
   [[nodiscard]] bool live(SensorTopic, WriterId w) const override { return dead.count(w) == 0; }
   [[nodiscard]] std::uint32_t matchedMeasurementWriters() const override { return matched; }
-  [[nodiscard]] bool measurementWriterMatchedWith(WriterId status_writer) const override {
+  [[nodiscard]] bool writersMatchedWith(WriterId status_writer) const override {
     return held.count(status_writer) > 0;
   }
   // A writer not listed in speaks_for writes in a partition of every sensor (as anyone can
@@ -495,6 +495,52 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   runUntil(endOf(1) + 100 * kMs);
   ASSERT_EQ(reports_.size(), 2u);
   EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
+}
+
+// Across machines the report says which machine's sensors went: a death names the process that
+// hosted the sensor, as it answered the clock probes (its name ends in its host).
+TEST_F(FusionCenterCoreTest, ADeathNamesTheProcessAndHostThatHostedTheSensor) {
+  begin(0);
+  const auto echo = [this](const std::string& process, std::vector<int> sensors) {
+    core_->onClockEcho({kRun, process, std::move(sensors), now_, now_ + kMs / 10, now_ + kMs / 5},
+                       now_ + kMs / 4);
+  };
+  echo("sensor_agent 7@sensors-1-on-node-a", {0, 1});
+  echo("sensor_agent 9@sensors-2-on-node-b", {2, 3});
+  core_->onSensorFailure({0, 1.0, {2, 3}, "liveliness lost"}, now_);
+  const json faults = faultsJson();
+  ASSERT_EQ(faults.size(), 2u) << faults.dump();
+  for (const json& f : faults) {
+    EXPECT_EQ(f.at("kind"), "sensor_died");
+    const std::string detail = f.at("detail");
+    EXPECT_NE(detail.find("liveliness lost (hosted by sensor_agent 9@sensors-2-on-node-b)"),
+              std::string::npos)
+        << detail;
+  }
+}
+
+// Without a launcher (containers) a restarted coordinator is known only by its new writer: each
+// coordinator process beyond the run's first is a `restarted` fault of the coordinator that the
+// run survived (so the run is degraded, as under the launcher), named once.
+TEST_F(FusionCenterCoreTest, EachNewCoordinatorProcessIsARestartTheRunSurvived) {
+  begin(0);
+  core_->onCoordinatorProcesses(1, now_);
+  EXPECT_TRUE(core_->faults().empty()) << "the run's own coordinator";
+  core_->onCoordinatorProcesses(2, now_);
+  core_->onCoordinatorProcesses(2, now_);
+  ASSERT_EQ(faultsJson().size(), 1u) << faultsJson().dump();
+  EXPECT_EQ(faultsJson()[0].at("kind"), "restarted");
+  EXPECT_EQ(faultsJson()[0].at("process"), "coordinator");
+  EXPECT_EQ(faultsJson()[0].at("survived"), true);
+  EXPECT_EQ(faultsJson()[0].at("episode"), 0) << "the episode open when it came";
+  core_->onCoordinatorProcesses(3, now_);
+  EXPECT_EQ(faultsJson().size(), 2u);
+  const auto all = measurements(0);
+  deliver(all);
+  closeEpisode0(all);
+  ASSERT_EQ(reports_.size(), 1u);
+  EXPECT_TRUE(reports_[0].result.complete) << "a restart of the coordinator loses nothing";
+  EXPECT_EQ(finish(RunEnd{1, false, ""}), RunStatus::Degraded);
 }
 
 // Issue 31, finding 4: the launcher, stalled, told of a death late. Sensor 1 died 2.5 s into
@@ -990,6 +1036,35 @@ TEST_F(FusionCenterCoreTest, StatusesOfASensorStillRunningTheEpisodeHoldItOpen) 
   runUntil(endOf(0) + 26 * kS + 100 * kMs);  // silent from 14 s: the limit from there
   ASSERT_EQ(reports_.size(), 1u);
   EXPECT_EQ(faultKinds(), std::vector<std::string>{"stall"});
+}
+
+// A fresh fusion center makes itself present to the coordinator (which then starts episode 0)
+// only once its own readers hold the writers of every live sensor process, by identity: a
+// sensor's READY says only that the sensor's writers matched on the sensor's side (under DDS
+// Security and loss this side can follow seconds later, and a volatile reader never gets what
+// came before: TrustUnderLoss lost a whole episode 0 that way). A sensor declared failed, or
+// stopped by its own word, is not waited for.
+TEST_F(FusionCenterCoreTest, AFreshCenterHoldsEverySensorProcessOnlyWhenItsReadersMatchedThem) {
+  make();
+  EXPECT_FALSE(core_->holdsEverySensorProcess()) << "before the scenario";
+  announce();
+  EXPECT_FALSE(core_->holdsEverySensorProcess()) << "no sensor heard";
+  EXPECT_EQ(core_->sensorsLackingWriters(), (std::vector<int>{0, 1, 2, 3}));
+  hearStatuses(*core_, 0, now_, {0, 1, 2, 3}, SensorState::Ready);
+  EXPECT_FALSE(core_->holdsEverySensorProcess()) << "every sensor READY, no writer matched here";
+  writers_.matched = 2;               // two Measurement writers matched ...
+  writers_.held = {statusWriter(0)};  // ... both of the first process
+  EXPECT_FALSE(core_->holdsEverySensorProcess());
+  EXPECT_EQ(core_->sensorsLackingWriters(), (std::vector<int>{2, 3}));
+  writers_.held.insert(statusWriter(2));
+  EXPECT_TRUE(core_->holdsEverySensorProcess());
+
+  // The second process's sensors: one declared failed, the other stopped by its own word.
+  writers_.held = {statusWriter(0)};
+  core_->onSensorFailure({0, 0.0, {2}, "sensor 2's process exited"}, now_);
+  EXPECT_EQ(core_->sensorsLackingWriters(), (std::vector<int>{3}));
+  hearStatuses(*core_, 0, now_, {3}, SensorState::Stopped);
+  EXPECT_TRUE(core_->holdsEverySensorProcess());
 }
 
 // Defect (c): restarted 1 s into episode 4 (its start replayed by durability), the fusion center
