@@ -14,8 +14,14 @@
 #   machine's Debian mirror (no registry is needed), imports it and names that;
 # - docker_host_down: removes the base image it made and stops the dockerd it started.
 # And what the container tests share:
-# - docker_test_options USAGE ARGS...: reads --keep and --image NAME into `keep` and
-#   `given_image` (exit 2 with USAGE on anything else);
+# - docker_test_options USAGE ARGS...: reads the image options (exit 2 with USAGE on anything
+#   else) and sets `test_image` (the image the test runs), `build_image` (true: build it first)
+#   and `remove_image` (true: remove it at the end):
+#     (none)           build sensornet-test:PID, remove it at the end
+#     --keep           build sensornet-test:PID, keep it
+#     --tag NAME       build NAME, keep it (for the next test: CI hands it to test-swarm.sh)
+#     --image NAME     use NAME, built before, and keep it
+#     --image NAME --drop-image   use NAME and remove it at the end;
 # - docker_runtime_image WORK TAG [DOCKER BUILD OPTIONS...]: builds docker/Dockerfile as TAG over
 #   the base image (the client under nice), noting the images there were before (docker_runtime_image_remove WORK TAG removes TAG
 #   and the build's untagged layers again);
@@ -105,18 +111,35 @@ docker_host_down() {
 }
 
 docker_test_options() {
-  local usage=$1
+  local usage=$1 keep=false given="" tag="" drop=false
   shift
-  keep=false
-  given_image=""
   while (($# > 0)); do
     case "$1" in
       --keep) keep=true ;;
-      --image) given_image=${2:?--image needs a name}; shift ;;
+      --image) given=${2:?--image needs a name}; shift ;;
+      --tag) tag=${2:?--tag needs a name}; shift ;;
+      --drop-image) drop=true ;;
       *) echo "usage: $usage" >&2; exit 2 ;;
     esac
     shift
   done
+  if [[ -n "$given" && -n "$tag" ]] || { $drop && [[ -z "$given" ]]; }; then
+    echo "usage: $usage (--tag builds, --image uses one built before; --drop-image needs --image)" >&2
+    exit 2
+  fi
+  build_image=true
+  remove_image=true
+  test_image="sensornet-test:$$"
+  if [[ -n "$given" ]]; then
+    build_image=false
+    test_image=$given
+    remove_image=$drop
+  elif [[ -n "$tag" ]]; then
+    test_image=$tag
+    remove_image=false
+  elif $keep; then
+    remove_image=false
+  fi
 }
 
 docker_runtime_image() {

@@ -5,7 +5,10 @@
 #
 #   scripts/test-containers.sh                 everything below
 #   scripts/test-containers.sh --keep          leave the images it built for a look
+#   scripts/test-containers.sh --tag NAME      build the image as NAME and keep it (CI passes it
+#                                              on to scripts/test-swarm.sh)
 #   scripts/test-containers.sh --image NAME    test an image built before instead of building
+#                                              (kept; removed too with --drop-image)
 #
 # 1. builds the image and prints its size;
 # 2. compose, a clean run over the files of an interrupted one: a first `up` (run nonce A) is
@@ -43,10 +46,10 @@ source scripts/docker-host.sh
 log() { docker_host_log "$*"; }
 fail() { log "FAIL: $*"; exit 1; }
 
-docker_test_options "scripts/test-containers.sh [--keep] [--image NAME]" "$@"
+docker_test_options "scripts/test-containers.sh [--keep | --tag NAME | --image NAME [--drop-image]]" "$@"
 
 work=$(mktemp -d /tmp/sensornet-containers.XXXXXX)
-tag=${given_image:-sensornet-test:$$}
+tag=$test_image
 projects=()
 stack=""
 swarm_made=false
@@ -73,9 +76,7 @@ cleanup() {
     # The bridge `swarm init` made for the tasks' way out, unless it was there before.
     $gwbridge_made && docker network rm docker_gwbridge >/dev/null 2>&1 || true
   fi
-  if ! $keep && [[ -z "$given_image" ]]; then
-    docker_runtime_image_remove "$work" "$tag"
-  fi
+  $remove_image && docker_runtime_image_remove "$work" "$tag"
   docker_host_down
   rm -rf "$work"
   exit "$status"
@@ -92,7 +93,7 @@ compose() {
 }
 
 # ---- 1. the image ------------------------------------------------------------------------------
-if [[ -z "$given_image" ]]; then
+if $build_image; then
   docker_runtime_image "$work" "$tag" || fail "the image"
 fi
 size=$(docker image inspect -f '{{.Size}}' "$tag")
@@ -271,6 +272,10 @@ done
 check_report "$work/swarm.json" '
 assert r["status"] == "completed", (r["status"], r["faults"])
 assert len(r["per_episode"]) == 4 and all(e["complete"] for e in r["per_episode"])
+lat = r.get("latency_s") or {}
+if lat.get("median") is not None:
+    print(f"test-containers: latency publish to fusion on one node: median "
+          f"{lat['median'] * 1e3:.3f} ms, p99 {lat['p99'] * 1e3:.3f} ms", file=sys.stderr)
 ' || fail "the swarm run's report"
 ready=$(docker_ready_after "$work/swarm-coordinator.log" "$deployed_at")
 log "swarm run completed in $((SECONDS - started)) s; every peer ready $ready s after the deploy"

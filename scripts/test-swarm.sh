@@ -2,18 +2,23 @@
 # A swarm of three nodes on this machine, each its own Docker Engine in a container of the host
 # Engine (docker/node.Dockerfile), and the sensornet stack across them: the coordinator and the
 # fusion center on the manager, one sensor task on each worker, so that every measurement and
-# every plan crosses the overlay network between two Engines. A prototype: CI does not run it.
+# every plan crosses the overlay network between two Engines; a coordinator killed and a worker
+# lost mid-run. CI runs it after scripts/test-containers.sh, with the image that one built.
 #
 #   scripts/test-swarm.sh                 everything below
-#   scripts/test-swarm.sh --image NAME    an image built from docker/Dockerfile before (kept)
-#   scripts/test-swarm.sh --keep          keep the image it built
+#   scripts/test-swarm.sh --image NAME    an image built from docker/Dockerfile before (kept;
+#                                         removed too with --drop-image)
+#   scripts/test-swarm.sh --keep          keep the image it built (--tag NAME: build it as NAME)
+#   scripts/test-swarm.sh --workers 3     four nodes: three workers, three sensor tasks of two
+#                                         sensors (default 2 workers, two tasks of three)
 #
 # 1. the host Engine and a bare Debian 12 base image (scripts/docker-host.sh); the runtime image
 #    (docker/Dockerfile unless --image: built under nice, its build containers in a cgroup of low
 #    CPU weight) and the node image (Debian's docker.io and iptables over the base image);
-# 2. the nodes: three containers on one internal bridge network of the host Engine (no way out
-#    of this machine), each running dockerd (overlay2 on a volume at /var/lib/docker); the
-#    manager `docker swarm init --advertise-addr` its address there, the two workers join with
+# 2. the nodes: three containers (four with --workers 3) on one internal bridge network of the
+#    host Engine (no way out of this machine), each running dockerd (overlay2 on a volume at
+#    /var/lib/docker); the manager `docker swarm init --advertise-addr` its address there, the
+#    workers join with
 #    the token; every node is Ready, the manager labelled sensornet.role=hub, the workers
 #    sensornet.role=sensors (docker/compose.swarm-nodes.yaml places the services by them);
 # 3. the runtime image is loaded into every node (`docker save | docker exec -i NODE docker
@@ -26,7 +31,7 @@
 #    - once episode 1 is reported, the coordinator's process is killed: its restart policy starts
 #      a new task on the manager, which resumes from its journal in the volume (the run nonce is
 #      the service's id, the same for both tasks);
-#    - once episode 3 is reported, the second worker's node is killed whole (its Engine and the
+#    - once episode 3 is reported, the last worker's node is killed whole (its Engine and the
 #      sensor task on it): the coordinator declares its sensors dead by liveliness and re-plans;
 #    the coordinator's task completes; `docker stack ps` shows where every task ran: the
 #    coordinator's two tasks and the fusion center on the manager, the two sensor tasks one on
@@ -41,8 +46,8 @@
 # 6. prints the timings: node setup, image load into the nodes, deploy to "every peer ready"
 #    (the coordinator's log), deploy to the coordinator's completion, and the total;
 # 7. on every exit (also failure, Ctrl-C): leaves the stack and the swarm, removes the node
-#    containers, their volumes, the network, the node image, the runtime image unless --image
-#    or --keep, the base image and the dockerd scripts/docker-host.sh started; then checks that
+#    containers, their volumes, the network, the node image, the runtime image (as the image
+#    options say), the base image and the dockerd scripts/docker-host.sh started; then checks that
 #    `docker ps -a`, `docker network ls` and `docker volume ls` show nothing of this run and that
 #    neither the network's bridge nor any dockerd or containerd it started is left.
 # Needs root, a cgroup v1 host (docker/node.Dockerfile) and about 3 GB under /var/lib/docker.
@@ -55,7 +60,19 @@ source scripts/docker-host.sh
 log() { docker_host_log "$*"; }
 fail() { log "FAIL: $*"; exit 1; }
 
-docker_test_options "scripts/test-swarm.sh [--keep] [--image NAME]" "$@"
+worker_count=2
+args=()
+while (($# > 0)); do
+  case "$1" in
+    --workers) worker_count=${2:?--workers needs 2 or 3}; shift ;;
+    *) args+=("$1") ;;
+  esac
+  shift
+done
+usage="scripts/test-swarm.sh [--keep | --tag NAME | --image NAME [--drop-image]] [--workers 2|3]"
+[[ "$worker_count" == 2 || "$worker_count" == 3 ]] || { echo "usage: $usage" >&2; exit 2; }
+docker_test_options "$usage" "${args[@]}"
+per_task=$((6 / worker_count))  # the default scenario's 6 sensors, one task per worker
 
 now() { date +%s.%N; }
 since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }'; }
@@ -67,10 +84,11 @@ engine_processes >"$work/processes-before"
 id="snswarm$$"                     # the prefix of every name of this run on the host Engine
 net="$id-net"
 manager="$id-mgr"
-workers=("$id-w1" "$id-w2")
+workers=()
+for ((w = 1; w <= worker_count; w++)); do workers+=("$id-w$w"); done
 nodes=("$manager" "${workers[@]}")
 node_image="sensornet-swarm-node:$$"
-tag=${given_image:-sensornet-test:$$}
+tag=$test_image
 node_tag="127.0.0.1:5999/sensornet:swarm-$$"   # the image's name inside the nodes
 stack=sensornet
 made_nodes=false
@@ -98,9 +116,7 @@ cleanup() {
   fi
   docker network rm "$net" >/dev/null 2>&1
   docker rmi -f "$node_image" >/dev/null 2>&1
-  if ! $keep && [[ -z "$given_image" ]]; then
-    docker_runtime_image_remove "$work" "$tag"
-  fi
+  $remove_image && docker_runtime_image_remove "$work" "$tag"
   if docker info >/dev/null 2>&1; then
     local left
     left=$( { docker ps -aq -f "name=$id"; docker network ls -q -f "name=$id";
@@ -141,7 +157,7 @@ docker_host_up "$work" docker.io debootstrap || fail "no Docker Engine"
 docker_base_image "$work" || fail "no Debian 12 base image"
 
 # ---- 1. the images ----------------------------------------------------------------------------
-if [[ -z "$given_image" ]]; then
+if $build_image; then
   # `nice docker build` alone would nice only the client: the compilers run in the Engine's build
   # containers. Those go into a cgroup of their own with a small CPU weight (cgroup v1 cpu.shares
   # 128, where a process at nice 0 weighs 1024), which is what keeps them behind other work.
@@ -206,7 +222,7 @@ for node in "${workers[@]}"; do
     "$(address_of "$manager"):2377" >/dev/null || fail "$node did not join the swarm"
 done
 for _ in $(seq 1 150); do
-  (($(on_manager node ls -q -f role=worker | wc -l) == 2)) && \
+  (($(on_manager node ls -q -f role=worker | wc -l) == worker_count)) && \
     [[ "$(on_manager node ls --format '{{.Status}}' | sort -u)" == Ready ]] && break
   sleep 0.2
 done
@@ -214,7 +230,7 @@ done
 on_manager node update --label-add sensornet.role=hub "$manager" >/dev/null
 for node in "${workers[@]}"; do on_manager node update --label-add sensornet.role=sensors "$node" >/dev/null; done
 time_nodes=$(since "$t_nodes")
-log "three nodes, one swarm, in $time_nodes s:"
+log "${#nodes[@]} nodes, one swarm, in $time_nodes s:"
 on_manager node ls --format '  {{.Hostname}} {{.Status}} {{.ManagerStatus}} {{.EngineVersion}}' >&2
 
 # ---- 3. the image into every node -------------------------------------------------------------
@@ -230,14 +246,15 @@ for i in "${!load_pids[@]}"; do
 done
 load_pids=()
 time_load=$(since "$t")
-log "image $tag ($(($(stat -c %s "$work/image.tar") / 1000000)) MB saved) loaded into the three nodes in $time_load s"
+log "image $tag ($(($(stat -c %s "$work/image.tar") / 1000000)) MB saved) loaded into the ${#nodes[@]} nodes in $time_load s"
 rm -f "$work/image.tar"
 
 # ---- 4. the stack, and its faults -------------------------------------------------------------
-log "docker stack deploy $stack inside $manager: 8 episodes, time scale 2, seed 7"
+log "docker stack deploy $stack inside $manager: 8 episodes, time scale 2, seed 7, $worker_count sensor tasks of $per_task sensors"
 deployed_at=$(now)
 docker exec -e SENSORNET_IMAGE="$node_tag" -e SENSORNET_RUN_ID="swarm3-$$" -e SENSORNET_EPISODES=8 \
-  -e SENSORNET_TIME_SCALE=2 -e SENSORNET_SEED=7 "$manager" docker stack deploy --resolve-image never \
+  -e SENSORNET_TIME_SCALE=2 -e SENSORNET_SEED=7 -e SENSORNET_SENSOR_REPLICAS="$worker_count" \
+  -e SENSORNET_SENSORS_PER_TASK="$per_task" "$manager" docker stack deploy --resolve-image never \
   -c /stack/compose.yaml -c /stack/compose.swarm.yaml -c /stack/compose.swarm-nodes.yaml "$stack" \
   >"$work/stack.log" 2>&1 || { cat "$work/stack.log" >&2; fail "docker stack deploy"; }
 # The episode log's count in the reports volume on the manager (where the fusion center runs).
@@ -260,8 +277,8 @@ await_reported 2
 docker exec "$manager" pkill -9 -x coordinator || fail "no coordinator process on $manager"
 log "killed the coordinator's process on $manager after episode 1"
 await_reported 4
-# A whole machine goes: the second worker's Engine and every container on it, at once.
-lost=${workers[1]}
+# A whole machine goes: the last worker's Engine and every container on it, at once.
+lost=${workers[-1]}
 on_manager service ps --format '{{.Name}} {{.Node}}' "${stack}_sensors" >"$work/sensor-tasks-before"
 lost_slot=$(awk -v n="$lost" '$2 == n { sub(".*\\.", "", $1); print $1; exit }' "$work/sensor-tasks-before")
 [[ -n "$lost_slot" ]] || fail "no sensor task on $lost"
@@ -307,11 +324,12 @@ for _ in $(seq 1 60); do  # the fusion center writes the report once the run has
 done
 [[ -s "$work/swarm.json" ]] || fail "no report.json in ${stack}_reports on $fusion_node"
 docker_native_report "$work" || fail "the native run"
-/usr/bin/python3 - "$work/swarm.json" "$work/native.json" "$lost" "$lost_slot" <<'PY' || fail "the swarm run's report"
+/usr/bin/python3 - "$work/swarm.json" "$work/native.json" "$lost" "$lost_slot" "$per_task" <<'PY' \
+  || fail "the swarm run's report"
 import json, sys
 r, n = (json.load(open(p)) for p in sys.argv[1:3])
-lost, slot = sys.argv[3], int(sys.argv[4])
-lost_sensors = list(range(3 * (slot - 1), 3 * slot))  # SENSORNET_SENSORS_PER_TASK = 3
+lost, slot, per_task = sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+lost_sensors = list(range(per_task * (slot - 1), per_task * slot))
 # The outcome table: sensors died and a coordinator restarted, all survived: degraded (exit 3).
 assert r["status"] == "degraded", r["status"]
 faults = r["faults"]
@@ -342,6 +360,10 @@ zero = [v["version"] for v in r["schedule_versions"]
         if v["version"] > 1 and all(max(row[j] for row in v["rates"]) == 0 for j in lost_sensors)]
 assert zero, "no version after the loss gives the lost sensors rate zero"
 complete = sum(e["complete"] for e in episodes)
+lat = r.get("latency_s") or {}
+if lat.get("median") is not None:
+    print(f"test-swarm: latency publish to fusion across nodes: median {lat['median'] * 1e3:.3f} ms, "
+          f"p99 {lat['p99'] * 1e3:.3f} ms", file=sys.stderr)
 print(f"test-swarm: degraded as the outcome table says; the coordinator restarted once; sensors "
       f"{lost_sensors} died with {lost}; re-planned in version(s) {zero}; {complete} of 8 "
       f"episodes complete", file=sys.stderr)

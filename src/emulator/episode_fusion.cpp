@@ -374,6 +374,11 @@ bool EpisodeFusion::failed(int sensor) const {
   return failed_before_[j] || failed_at_[j].has_value();
 }
 
+bool EpisodeFusion::failedBefore(int sensor) const {
+  return sensor >= 0 && sensor < scenario_.sensorCount() &&
+         failed_before_[static_cast<std::size_t>(sensor)];
+}
+
 bool EpisodeFusion::settled(int sensor) const {
   if (failed(sensor)) return true;
   const SensorTally& t = tallies_[static_cast<std::size_t>(sensor)];

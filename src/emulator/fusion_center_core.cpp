@@ -405,6 +405,19 @@ void FusionCenterCore::releaseClaims(const std::set<int>& sensors) {
 void FusionCenterCore::route(OpenEpisode& open, FusedMeasurement m, WriterId writer,
                              std::int64_t now) {
   const int sensor = m.sensor;
+  // A sensor declared dead before this episode that publishes again (its process started anew,
+  // or an outside one that ignores failed_sensors) is refused and counted: no rejoin.
+  if (open.fusion->failedBefore(sensor)) {
+    countOutside(RejectionReason::FailedSensor);
+    if (returned_.insert(sensor).second) {
+      log(spdlog::level::warn,
+          "sensor " + std::to_string(sensor) + " was declared failed, and a writer (publication " +
+              std::to_string(writer) + ") publishes for it again in episode " +
+              std::to_string(open.fusion->episode()) +
+              ": its measurements are refused (failed_sensor), a dead sensor does not rejoin");
+    }
+    return;
+  }
   m.received_s = open.clock.emulatedAt(m.receive_wall_ns);
   // A foreign writer's sample that is malformed anyway is counted under that more telling
   // reason by the fusion.

@@ -219,6 +219,9 @@ class EpisodeFusion {
   // `sensor` was dead before this episode began.
   void sensorFailedBefore(int sensor);
   [[nodiscard]] bool failed(int sensor) const;
+  // Dead since before the episode began (sensorFailedBefore): nothing of it can be this
+  // episode's.
+  [[nodiscard]] bool failedBefore(int sensor) const;
   // Its tally is in and every measurement it sent was received or dropped by the network, or it
   // failed (a dead sensor is not awaited).
   [[nodiscard]] bool settled(int sensor) const;

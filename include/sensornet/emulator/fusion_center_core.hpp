@@ -340,6 +340,7 @@ class FusionCenterCore {
   std::map<std::uint32_t, SensorProcess> sensor_processes_;  // by sensor, from their statuses
   bool holds_writers_ = false;          // restarted: held every sensor process's writers once
   std::size_t coordinators_seen_ = 0;   // onCoordinatorProcesses
+  std::set<int> returned_;              // failed sensors that published again (logged once)
   std::set<std::uint32_t> began_unheld_;  // episodes that began before that: not fused
   std::set<int> answered_without_;  // sensors whose writers a restarted episode's answer lacked
   // (episode, sensor) closed with no tally -> when it was closed (the stall limit), or

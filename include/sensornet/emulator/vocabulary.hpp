@@ -80,6 +80,7 @@ enum class RejectionReason {
   MalformedEpisodeControl,  // an EpisodeControl sample that does not parse
   BeyondTally,              // a sequence number at or past its sensor's tally: never sent by it
   WrongIdentity,            // from a writer whose identity (partition) does not name its sensor
+  FailedSensor,             // a measurement of a sensor declared failed before its episode began
 };
 
 // What the coordinator does when the launcher reports that sensors died
@@ -154,7 +155,7 @@ struct Words<emulator::FaultKind> {
 template <>
 struct Words<emulator::RejectionReason> {
   using R = emulator::RejectionReason;
-  static constexpr std::array<WordOf<R>, 15> kTable{
+  static constexpr std::array<WordOf<R>, 16> kTable{
       {{R::Malformed, "malformed"},
        {R::UnknownSensor, "unknown_sensor"},
        {R::Duplicate, "duplicate"},
@@ -169,7 +170,8 @@ struct Words<emulator::RejectionReason> {
        {R::MalformedSchedule, "malformed_schedule"},
        {R::MalformedEpisodeControl, "malformed_episode_control"},
        {R::BeyondTally, "beyond_tally"},
-       {R::WrongIdentity, "wrong_identity"}}};
+       {R::WrongIdentity, "wrong_identity"},
+       {R::FailedSensor, "failed_sensor"}}};
 };
 
 }  // namespace sensornet

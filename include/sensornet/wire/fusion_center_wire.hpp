@@ -105,7 +105,7 @@ class ReportInstances {
 //
 // The Report and FusionState writers are made by makePresent(), not with the rest: once they
 // match, the coordinator counts this fusion center present and may start the first episode
-// (docs/wire-protocol.md, "The readiness handshake"), so they wait until this process's readers
+// (docs/wire-protocol.md, "Fusion center"), so they wait until this process's readers
 // hold every sensor process's writers (FusionCenterCore::holdsEverySensorProcess). A sensor's
 // READY covers only its side: under DDS Security, and on a lossy link, this side can match
 // seconds later, and a volatile reader never gets what was written before it matched.

@@ -497,6 +497,40 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
 }
 
+// A sensor declared dead does not rejoin (issue 51): a process that publishes for it in a later
+// episode (started again after the death, or one that ignores failed_sensors) has its
+// measurements refused and counted as failed_sensor; the episode is fused without them, and is
+// complete.
+TEST_F(FusionCenterCoreTest, ASensorDeclaredDeadThatPublishesAgainIsRefusedAndCounted) {
+  begin(0);
+  auto all = measurements(0);
+  std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 1; });
+  deliver(all);
+  core_->onSensorFailure({0, 0.0, {1}, "sensor 1's process exited"}, now_);
+  runUntil(endOf(0) + 10 * kMs);
+  deliverTallies(sentBy(all), 0, {0, 2, 3});
+  runUntil(endOf(0) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 1u);
+
+  core_->onEpisodeStart({1, {startOf(1), 1.0}, 8, {1}}, now_);
+  const auto next = measurements(1);  // sensor 1's among them: it came back
+  std::vector<MeasurementArrival> survivors = next;
+  std::erase_if(survivors, [](const auto& m) { return m.measurement.sensor == 1; });
+  const std::uint64_t returned = next.size() - survivors.size();
+  ASSERT_GT(returned, 0u);
+  deliver(next);
+  runUntil(endOf(1) + 10 * kMs);
+  deliverTallies(sentBy(survivors), 1, {0, 2, 3});
+  runUntil(endOf(1) + 100 * kMs);
+  ASSERT_EQ(reports_.size(), 2u);
+  EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
+  EXPECT_NEAR(reports_[1].result.realized_cost, inOrderCost(survivors),
+              1e-9 * inOrderCost(survivors))
+      << "fused without the returned sensor's measurements";
+  finish(RunEnd{2, false, ""});
+  EXPECT_EQ(final_.at("summary").at("rejected_by_reason").at("failed_sensor"), returned);
+}
+
 // Across machines the report says which machine's sensors went: a death names the process that
 // hosted the sensor, as it answered the clock probes (its name ends in its host).
 TEST_F(FusionCenterCoreTest, ADeathNamesTheProcessAndHostThatHostedTheSensor) {
