@@ -171,10 +171,12 @@ compose_up "$project" SENSORNET_RUN_ID="compose-clean-$$" SENSORNET_EPISODES=4 \
   SENSORNET_TIME_SCALE=5 SENSORNET_SEED=7 SENSORNET_RUN_NONCE="second-$$" \
   || { tail -n 30 "$work/$project.log" >&2; fail "compose up"; }
 log "compose run over after $((SECONDS - started)) s"
-grep -q "coordinator.*journal at .* is an earlier deployment's (run nonce 'first-$$', this one 'second-$$')" \
-  "$work/$project.log" || fail "the coordinator did not say it started afresh over the first up's journal"
-grep -q "fusion-center.*episode log beside .* is an earlier deployment's (run nonce 'first-$$'" \
-  "$work/$project.log" || fail "the fusion center did not say it started afresh over the first up's log"
+docker logs "$(container_of "$project" coordinator)" >"$work/second-coordinator.log" 2>&1
+docker logs "$(container_of "$project" fusion-center)" >"$work/second-fusion.log" 2>&1
+grep -q "journal at .* is an earlier deployment's (run nonce 'first-$$', this one 'second-$$')" \
+  "$work/second-coordinator.log" || fail "the coordinator did not say it started afresh over the first up's journal"
+grep -q "episode log beside .* is an earlier deployment's (run nonce 'first-$$'" \
+  "$work/second-fusion.log" || fail "the fusion center did not say it started afresh over the first up's log"
 code=$(docker inspect -f '{{.State.ExitCode}}' "$(container_of "$project" coordinator)")
 [[ "$code" == 0 ]] || { tail -n 30 "$work/$project.log" >&2; fail "the coordinator exited $code"; }
 from_volume "${project}_reports" report.json >"$work/clean.json"
@@ -234,7 +236,10 @@ restarts=$(docker inspect -f '{{.RestartCount}}' "$coordinator")
 ((restarts == 1)) || fail "the coordinator restarted $restarts times, not once"
 code=$(docker inspect -f '{{.State.ExitCode}}' "$coordinator")
 [[ "$code" == 0 ]] || { tail -n 30 "$work/$project.log" >&2; fail "the restarted coordinator exited $code"; }
-grep -q "coordinator.*resuming from /reports/coordinator-state.json" "$work/$project.log" || fail "the restarted coordinator did not resume"
+# The container's log holds both lives (compose's own output may miss a restarted one's lines).
+docker logs "$coordinator" >"$work/coordinator-lives.log" 2>&1
+grep -q "resuming from /reports/coordinator-state.json" "$work/coordinator-lives.log" \
+  || { tail -n 20 "$work/coordinator-lives.log" >&2; fail "the restarted coordinator did not resume"; }
 from_volume "${project}_reports" report.json >"$work/coordinator.json"
 docker_costs_match_native "$work" "$work/coordinator.json" degraded \
   || fail "the run with the coordinator killed"
@@ -273,9 +278,10 @@ check_report "$work/swarm.json" '
 assert r["status"] == "completed", (r["status"], r["faults"])
 assert len(r["per_episode"]) == 4 and all(e["complete"] for e in r["per_episode"])
 lat = r.get("latency_s") or {}
-if lat.get("median") is not None:
+median, p99 = lat.get("median"), lat.get("p99")
+if median is not None:
     print(f"test-containers: latency publish to fusion on one node: median "
-          f"{lat['median'] * 1e3:.3f} ms, p99 {lat['p99'] * 1e3:.3f} ms", file=sys.stderr)
+          f"{median * 1e3:.3f} ms, p99 {p99 * 1e3:.3f} ms", file=sys.stderr)
 ' || fail "the swarm run's report"
 ready=$(docker_ready_after "$work/swarm-coordinator.log" "$deployed_at")
 log "swarm run completed in $((SECONDS - started)) s; every peer ready $ready s after the deploy"
