@@ -64,7 +64,9 @@ constexpr auto kScenarioAfterAbort = 5s;
 // How often the fusion center probes the sensor processes' clocks (docs/wire-protocol.md,
 // "Clocks").
 constexpr std::int64_t kProbePeriodNs = 500'000'000;
-// How often a fusion center not yet present says which sensors' writers it waits for (wall).
+// How often a fusion center not yet present asks whether it holds every sensor's writers, and
+// how often it says whose it waits for (wall).
+constexpr std::int64_t kPresenceCheckPeriodNs = 50'000'000;
 constexpr std::int64_t kAbsenceLogPeriodNs = 5'000'000'000;
 // How often the metrics are rebuilt while the run lives (wall).
 constexpr auto kMetricsPeriod = 250ms;
@@ -225,7 +227,10 @@ class FusionCenter {
   // coordinator, once its readers hold every sensor process's writers (FusionCenterEndpoints).
   // A restarted process is present at once: the run it rejoins is under way.
   void presentOnceHeld(std::int64_t now) {
-    if (dds_.present()) return;
+    if (dds_.present() || now < next_presence_check_ns_) return;
+    // Asking DDS about every sensor's writers costs a look-up per sensor: every 50 ms, not
+    // every turn (at 200 sensor processes a turn's worth would be thousands a second).
+    next_presence_check_ns_ = now + kPresenceCheckPeriodNs;
     if (options_.resume || core_.holdsEverySensorProcess()) {
       becomePresent(options_.resume ? "it rejoins a run" : "it holds every sensor's writers");
     } else if (core_.hasScenario() && now >= next_absence_log_ns_) {
@@ -358,6 +363,7 @@ class FusionCenter {
   std::int64_t next_probe_ns_ = 0;
   wire::ReportInstances report_instances_{options_.run.run_id};
   std::int64_t next_absence_log_ns_ = 0;
+  std::int64_t next_presence_check_ns_ = 0;
   // After what its callback touches (reader, waitset, inbox): it is destroyed before them, and
   // its destructor waits for a callback in progress.
   dds::DataAvailableListener arrivals_listener_;

@@ -162,6 +162,14 @@ class FusionCenterCoreTest : public ::testing::Test {
   }
   // Runs episode 0 past its end, hands in every sensor's tally of `all` and runs on until its
   // report is due.
+  // Runs episode e past its end, hands in the tallies of `counted` from `sensors` (the others
+  // are dead) and runs on until its report is due.
+  void closeEpisode(std::uint32_t e, const std::vector<MeasurementArrival>& counted,
+                    const std::vector<int>& sensors) {
+    runUntil(endOf(e) + 10 * kMs);
+    deliverTallies(sentBy(counted), e, sensors);
+    runUntil(endOf(e) + 100 * kMs);
+  }
   void closeEpisode0(const std::vector<MeasurementArrival>& all) {
     runUntil(endOf(0) + 10 * kMs);
     deliverTallies(sentBy(all), 0, {0, 1, 2, 3});
@@ -475,7 +483,7 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   deliver(all);
   core_->onSensorFailure({0, 1.0, {1}, "sensor 1's process exited"}, now_);
   runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sent, 0, {0, 2, 3});
+  deliverTallies(sent, 0, {0, 2, 3});  // counted before the erase: what was sent
   runUntil(endOf(0) + 100 * kMs);
   ASSERT_EQ(reports_.size(), 1u) << "waited for a dead sensor";
   EXPECT_FALSE(reports_[0].result.complete);
@@ -490,9 +498,7 @@ TEST_F(FusionCenterCoreTest, ADeadSensorIsNotAwaited) {
   auto next = measurements(1);
   std::erase_if(next, [](const auto& m) { return m.measurement.sensor == 1; });
   deliver(next);
-  runUntil(endOf(1) + 10 * kMs);
-  deliverTallies(sentBy(next), 1, {0, 2, 3});
-  runUntil(endOf(1) + 100 * kMs);
+  closeEpisode(1, next, {0, 2, 3});
   ASSERT_EQ(reports_.size(), 2u);
   EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
 }
@@ -507,9 +513,7 @@ TEST_F(FusionCenterCoreTest, ASensorDeclaredDeadThatPublishesAgainIsRefusedAndCo
   std::erase_if(all, [](const auto& m) { return m.measurement.sensor == 1; });
   deliver(all);
   core_->onSensorFailure({0, 0.0, {1}, "sensor 1's process exited"}, now_);
-  runUntil(endOf(0) + 10 * kMs);
-  deliverTallies(sentBy(all), 0, {0, 2, 3});
-  runUntil(endOf(0) + 100 * kMs);
+  closeEpisode(0, all, {0, 2, 3});
   ASSERT_EQ(reports_.size(), 1u);
 
   core_->onEpisodeStart({1, {startOf(1), 1.0}, 8, {1}}, now_);
@@ -519,9 +523,7 @@ TEST_F(FusionCenterCoreTest, ASensorDeclaredDeadThatPublishesAgainIsRefusedAndCo
   const std::uint64_t returned = next.size() - survivors.size();
   ASSERT_GT(returned, 0u);
   deliver(next);
-  runUntil(endOf(1) + 10 * kMs);
-  deliverTallies(sentBy(survivors), 1, {0, 2, 3});
-  runUntil(endOf(1) + 100 * kMs);
+  closeEpisode(1, survivors, {0, 2, 3});
   ASSERT_EQ(reports_.size(), 2u);
   EXPECT_TRUE(reports_[1].result.complete) << reports_[1].result.incomplete_reason;
   EXPECT_NEAR(reports_[1].result.realized_cost, inOrderCost(survivors),
