@@ -78,6 +78,24 @@ std::vector<ParticipantKey> participantsOfMatchedWriters(const detail::ReaderCor
                         dds_get_matched_publication_data);
 }
 
+const std::vector<ParticipantKey>& MatchedWriterParticipants::of(const detail::ReaderCore& reader,
+                                                                 bool* changed) {
+  if (changed != nullptr) *changed = false;
+  dds_subscription_matched_status_t status{};
+  if (dds_get_subscription_matched_status(reader.handle(), &status) < 0) {
+    participants_.clear();
+    return participants_;
+  }
+  // A match or an unmatch since the last look changes one of the two counts.
+  if (status.total_count != total_ || status.current_count != current_) {
+    total_ = status.total_count;
+    current_ = status.current_count;
+    participants_ = participantsOfMatchedWriters(reader);
+    if (changed != nullptr) *changed = true;
+  }
+  return participants_;
+}
+
 std::optional<ParticipantKey> participantOfMatchedWriter(const detail::ReaderCore& reader,
                                                          dds_instance_handle_t publication) {
   const std::vector<ParticipantKey> keys =

@@ -47,22 +47,6 @@ bool ReaderFacts::writersMatchedWith(emulator::WriterId status_writer) const {
   return holds(measurement_processes_.of(measurements_)) && holds(tally_processes_.of(tallies_));
 }
 
-const std::vector<dds::ParticipantKey>& ReaderFacts::MatchedProcesses::of(
-    const dds::detail::ReaderCore& reader) {
-  dds_subscription_matched_status_t status{};
-  if (dds_get_subscription_matched_status(reader.handle(), &status) < 0) {
-    participants_.clear();
-    return participants_;
-  }
-  // A match or an unmatch since the last look changes one of the two counts.
-  if (status.total_count != total_ || status.current_count != current_) {
-    total_ = status.total_count;
-    current_ = status.current_count;
-    participants_ = dds::participantsOfMatchedWriters(reader);
-  }
-  return participants_;
-}
-
 void ReportInstances::written(dds::Writer<sensornet_Report>& writer, std::uint32_t episode) {
   registered_.push_back(episode);
   if (registered_.size() <= kKept) return;

@@ -54,14 +54,9 @@ void RunInputs::attachTo(dds::WaitSet& waitset) {
 }
 
 std::size_t RunInputs::coordinatorProcessesSeen() {
-  dds_subscription_matched_status_t status{};
-  if (dds_get_subscription_matched_status(control_reader_.handle(), &status) >= 0 &&
-      status.total_count != control_matches_) {
-    control_matches_ = status.total_count;
-    for (const dds::ParticipantKey& p : dds::participantsOfMatchedWriters(control_reader_)) {
-      coordinators_.insert(p);
-    }
-  }
+  bool changed = false;
+  const std::vector<dds::ParticipantKey>& now = control_writers_.of(control_reader_, &changed);
+  if (changed) coordinators_.insert(now.begin(), now.end());
   return coordinators_.size();
 }
 

@@ -47,6 +47,19 @@ using ParticipantKey = std::array<std::uint8_t, 16>;
 [[nodiscard]] std::optional<ParticipantKey> participantOfMatchedWriter(
     const detail::ReaderCore& reader, dds_instance_handle_t publication);
 
+// The participants of the writers a reader matches, looked up again only when its match
+// changed (the total or the current count of its matched status): cheap to ask every turn.
+class MatchedWriterParticipants {
+ public:
+  // Sorted, without repeats; `changed`, if given, says whether they were looked up anew.
+  const std::vector<ParticipantKey>& of(const detail::ReaderCore& reader, bool* changed = nullptr);
+
+ private:
+  std::uint32_t total_ = 0;
+  std::uint32_t current_ = 0;
+  std::vector<ParticipantKey> participants_;
+};
+
 // True when a participant is in every one of `sets` (each sorted, as the two above return).
 [[nodiscard]] bool sharesParticipant(const std::vector<std::vector<ParticipantKey>>& sets);
 

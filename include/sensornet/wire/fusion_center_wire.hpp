@@ -57,24 +57,12 @@ class ReaderFacts final : public emulator::WriterFacts {
  private:
   [[nodiscard]] const dds::detail::ReaderCore& readerOf(emulator::SensorTopic topic) const;
 
-  // The participants of the writers a reader has matched, looked up again only when its match
-  // changed (a fusion center waiting to be present asks for every sensor, every turn).
-  class MatchedProcesses {
-   public:
-    const std::vector<dds::ParticipantKey>& of(const dds::detail::ReaderCore& reader);
-
-   private:
-    std::uint32_t total_ = 0;
-    std::uint32_t current_ = 0;
-    std::vector<dds::ParticipantKey> participants_;  // sorted
-  };
-
   const dds::detail::ReaderCore& measurements_;
   const dds::detail::ReaderCore& tallies_;
   const dds::detail::ReaderCore& statuses_;
   mutable SensorSpeakers speakers_;                 // main thread only
-  mutable MatchedProcesses measurement_processes_;  // likewise
-  mutable MatchedProcesses tally_processes_;
+  mutable dds::MatchedWriterParticipants measurement_processes_;  // likewise
+  mutable dds::MatchedWriterParticipants tally_processes_;
 };
 
 // The Report topic keeps the last report of each episode for late joiners: an instance per

@@ -84,8 +84,8 @@ class RunInputs {
   dds::Reader<sensornet_Scenario> scenario_reader_;
   dds::Reader<sensornet_Schedule> schedule_reader_;
   dds::Reader<sensornet_EpisodeControl> control_reader_;
-  std::uint32_t control_matches_ = 0;             // the reader's total match count, last looked
-  std::set<dds::ParticipantKey> coordinators_;   // every participant of a matched writer
+  dds::MatchedWriterParticipants control_writers_;  // the participants matched now
+  std::set<dds::ParticipantKey> coordinators_;     // every one matched so far
   dds::ReadCondition scenario_ready_;
   dds::ReadCondition schedule_ready_;
   dds::ReadCondition control_ready_;
